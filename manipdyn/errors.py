@@ -1,0 +1,26 @@
+"""The one error hierarchy of manipdyn: every message names the file, link, joint or array at fault."""
+from __future__ import annotations
+
+
+class ManipdynError(Exception):
+    """Base class of every error manipdyn raises on purpose."""
+
+
+class URDFError(ManipdynError, ValueError):
+    """The URDF (or D-H table) cannot be turned into a model: names the file and the element at fault."""
+
+
+class ModelError(ManipdynError, ValueError):
+    """A model is inconsistent (bad inertia, unknown name, ...): names the link or joint at fault."""
+
+
+class InputError(ManipdynError, ValueError):
+    """An argument has the wrong shape, a non-finite value or an unknown name: names the array at fault."""
+
+
+class SingularError(ManipdynError, ArithmeticError):
+    """A matrix that must be inverted is singular: names the joints or closures involved."""
+
+
+class DivergenceError(ManipdynError, ArithmeticError):
+    """A simulation produced a non-finite state: names the time at which it happened."""
