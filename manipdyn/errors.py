@@ -24,3 +24,7 @@ class SingularError(ManipdynError, ArithmeticError):
 
 class DivergenceError(ManipdynError, ArithmeticError):
     """A simulation produced a non-finite state: names the time at which it happened."""
+
+
+class InertiaWarning(UserWarning):
+    """A link's inertia is physically inconsistent (triangle inequality) but loadable."""

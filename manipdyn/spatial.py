@@ -1,0 +1,68 @@
+"""3-D helpers shared by every algorithm: rotations, cross products, rigid-body inertia algebra.
+
+Convention owned here: a batch of 3-vectors is an array of shape (N, 3) and a batch of rotations
+(N, 3, 3); ``R`` maps coordinates of the child frame into the parent frame (x_parent = R x_child),
+so ``rot_t(R, x)`` is the chapter's R^i_{i-1} x (parent coordinates into the child frame).
+URDF ``rpy`` means R = Rz(yaw) Ry(pitch) Rx(roll), about fixed axes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def rot(R: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """R x for batches: R (N, 3, 3) or (3, 3), x (N, 3) -> (N, 3)."""
+    return x @ np.swapaxes(R, -1, -2) if R.ndim == 2 else np.einsum("nij,nj->ni", R, x)
+
+
+def rot_t(R: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Rᵀ x for batches: R (N, 3, 3) or (3, 3), x (N, 3) -> (N, 3)."""
+    return x @ R if R.ndim == 2 else np.einsum("nji,nj->ni", R, x)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b for (..., 3) arrays, written out (np.cross is several times slower on small batches)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+
+
+def skew(w: np.ndarray) -> np.ndarray:
+    """[w]× such that [w]× x = w × x; w (..., 3) -> (..., 3, 3)."""
+    S = np.zeros(w.shape[:-1] + (3, 3))
+    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
+    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
+    return S
+
+
+def axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues: R = I + sin(θ) [k]× + (1 − cos θ) [k]×²; unit axis (3,), angle (N,) -> (N, 3, 3)."""
+    K = skew(np.asarray(axis, float))
+    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
+    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """URDF roll-pitch-yaw (3,) -> R = Rz(y) Ry(p) Rx(r), (3, 3)."""
+    r, p, y = (float(x) for x in rpy)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def parallel_axis(mass: float, d: np.ndarray) -> np.ndarray:
+    """Inertia of a point mass at offset d about the origin: m (|d|² 1 − d dᵀ), (3, 3)."""
+    return mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+
+
+def combine_inertias(parts):
+    """Merge rigid parts [(m, c (3,), I_c (3, 3))] given in one frame into (m, c, I about c).
+
+    I about the common CoM = Σ I_k + m_k (|d_k|² 1 − d_k d_kᵀ), d_k = c_k − c (parallel-axis theorem).
+    A massless union keeps its CoM at the origin.
+    """
+    m = sum(p[0] for p in parts)
+    c = sum(p[0] * np.asarray(p[1]) for p in parts) / m if m > 0 else np.zeros(3)
+    I = sum(np.asarray(Ik) + parallel_axis(mk, np.asarray(ck) - c) for mk, ck, Ik in parts)
+    return m, c, 0.5 * (I + I.T)
