@@ -1,0 +1,152 @@
+"""Term-by-term comparison of our Newton–Euler terms with Pinocchio's, and the report it produces.
+
+Error measure (DESIGN.md §3), used by the tests and the bench too: for a term x against reference y,
+err = max|x − y| / max(max|y|, 1), over the whole term (every link, every component) of one state;
+a run reports the worst state. Random states: q uniform in [−π, π] (revolute) or within the limits
+(prismatic; [−0.5, 0.5] m when unbounded), q̇ ~ N(0, 2²), q̈ ~ N(0, 5²), seeded.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..dynamics.rnea import rnea_terms
+from ..model import PRISMATIC
+from .reference import Reference
+
+# term key -> (label, kind); kinematics and inertial terms are a link's own, transmitted ones are not
+TERMS = {
+    "w": ("angular velocity ω'", "kinematics"), "v": ("linear velocity v'", "kinematics"),
+    "dw": ("angular acceleration ω̇'", "kinematics"), "acc": ("linear acceleration v̇' (no g)", "kinematics"),
+    "fc": ("inertial force m v̇'_C", "inertial"), "nO": ("inertial moment about origin", "inertial"),
+    "f": ("joint force f'", "transmitted"), "n": ("joint moment n'", "transmitted"),
+    "tau": ("torque τ", "torque"),
+    "f_ext": ("joint force f' with f_ext", "transmitted"), "n_ext": ("joint moment n' with f_ext", "transmitted"),
+    "tau_ext": ("torque τ with f_ext", "torque"),
+}
+
+
+def error(x, y) -> float:
+    """DESIGN.md's measure: max|x − y| / max(max|y|, 1)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1.0)) if y.size else 0.0
+
+
+@dataclass
+class TermResult:
+    term: str
+    label: str
+    max_abs: float
+    err: float
+    tol: float
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.err <= self.tol)
+
+
+@dataclass
+class Report:
+    """Outcome of one robot's validation; ``fault`` names the first link whose own terms diverge."""
+    name: str
+    source: str
+    nv: int
+    n_states: int
+    seed: int
+    terms: list = field(default_factory=list)
+    fault: str | None = None
+    transmitted_differ: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return all(t.passed for t in self.terms)
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        for t, td in zip(self.terms, d["terms"]):
+            td["passed"] = t.passed
+        d["passed"] = self.passed
+        return d
+
+
+def random_states(model, n, rng):
+    """Seeded random (q, q̇, q̈), each (n, nv), following DESIGN.md §3."""
+    lo = np.where(model.kind == PRISMATIC, np.where(np.isfinite(model.lower), model.lower, -0.5), -np.pi)
+    hi = np.where(model.kind == PRISMATIC, np.where(np.isfinite(model.upper), model.upper, 0.5), np.pi)
+    q = rng.uniform(lo, hi, (n, model.nv))
+    return q, rng.normal(0.0, 2.0, (n, model.nv)), rng.normal(0.0, 5.0, (n, model.nv))
+
+
+def random_wrenches(model, rng, k=3):
+    """Up to k random external wrenches on random non-base frames (merged frames included)."""
+    names = sorted(n for n, fr in model.frames.items() if fr.body >= 0)
+    pick = rng.choice(len(names), size=min(k, len(names)), replace=False) if names else []
+    return {names[i]: (rng.normal(0, 10, 3), rng.normal(0, 2, 3)) for i in pick}
+
+
+def validate(model, urdf_path, *, n_states=1000, seed=0, tol=1e-12, progress=None) -> Report:
+    """Compare every Newton–Euler term of ``model`` with Pinocchio's model of ``urdf_path``.
+
+    ``model`` may differ from the file (a planted fault, a reduced model): the report then names the
+    first link, from the root outward, whose own kinematics or inertial terms diverge.
+    """
+    t0 = time.perf_counter()
+    ref, rng = Reference(model, urdf_path), np.random.default_rng(seed)
+    Q, V, A = random_states(model, n_states, rng)
+    ours = rnea_terms(model, Q, V, A)
+    ours["nO"] = ours["nc"] + np.cross(model.com, ours["fc"])     # inertial moment about the origin
+    worst = {k: [0.0, 0.0] for k in TERMS}                         # term -> [max_abs, err]
+    link_err = {k: np.zeros(model.nv) for k in TERMS if TERMS[k][1] != "torque" and not k.endswith("ext")}
+    for s in range(n_states):
+        theirs = ref.terms(Q[s], V[s], A[s])
+        fx, frame = random_wrenches(model, rng), ("local", "world")[s % 2]
+        ext_ours = rnea_terms(model, Q[s], V[s], A[s], f_ext=fx, f_ext_frame=frame)
+        ext_theirs = ref.terms(Q[s], V[s], A[s], f_ext=fx, f_ext_frame=frame)
+        pairs = {k: (ours[k][s], theirs[k]) for k in link_err}
+        pairs["tau"] = (ours["tau"][s], theirs["tau"])
+        for k in ("f", "n", "tau"):
+            pairs[k + "_ext"] = (ext_ours[k], ext_theirs[k])
+        for k, (x, y) in pairs.items():
+            worst[k][0] = max(worst[k][0], float(np.max(np.abs(x - y))))
+            worst[k][1] = max(worst[k][1], error(x, y))
+            if k in link_err:   # per link, scaled by the whole term as the measure is
+                scale = max(np.max(np.abs(y)), 1.0)
+                link_err[k] = np.maximum(link_err[k], np.max(np.abs(x - y), axis=-1) / scale)
+        if progress is not None:
+            progress(1)
+    rep = Report(model.name, str(urdf_path), model.nv, n_states, seed, seconds=0.0)
+    rep.terms = [TermResult(k, TERMS[k][0], worst[k][0], worst[k][1], tol) for k in TERMS]
+    rep.fault, rep.transmitted_differ = _locate(model, link_err, tol)
+    rep.seconds = time.perf_counter() - t0
+    return rep
+
+
+def _locate(model, link_err, tol):
+    """First link (q order: root outward) whose own terms fail: kinematics first, then inertial."""
+    fault = None
+    for i, body in enumerate(model.body_names):
+        for kind in ("kinematics", "inertial"):
+            bad = [TERMS[k][0] for k, e in link_err.items() if TERMS[k][1] == kind and e[i] > tol]
+            if bad and fault is None:
+                fault = f"link {body!r} (joint {model.joint_names[i]!r}): {kind} terms differ: {', '.join(bad)}"
+    differ = [b for i, b in enumerate(model.body_names)
+              if max(link_err["f"][i], link_err["n"][i]) > tol]
+    return fault, differ
+
+
+def format_report(rep: Report) -> str:
+    """A readable table: term, max abs err, err measure, tolerance, pass/fail."""
+    lines = [f"{rep.name}  ({rep.source})  nv={rep.nv}  states={rep.n_states}  seed={rep.seed}  "
+             f"{rep.seconds:.1f} s",
+             f"  {'term':<34} {'max abs err':>12} {'err measure':>12} {'tol':>8}  result"]
+    for t in rep.terms:
+        lines.append(f"  {t.label:<34} {t.max_abs:12.3e} {t.err:12.3e} {t.tol:8.0e}  "
+                     f"{'pass' if t.passed else 'FAIL'}")
+    if rep.fault:
+        lines.append(f"  first divergence: {rep.fault}")
+        lines.append(f"  transmitted forces differ on: {', '.join(rep.transmitted_differ)} (ancestors confirm)")
+    lines.append(f"  => {'PASS' if rep.passed else 'FAIL'}")
+    return "\n".join(lines)

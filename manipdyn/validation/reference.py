@@ -1,0 +1,83 @@
+"""Pinocchio as the referee: building its model, and converting our conventions to its conventions.
+
+This is the one place where manipdyn's conventions meet Pinocchio's:
+- q: Pinocchio stores a continuous joint as (cos q, sin q) (nq = 2); ``to_pin_q`` maps our angle.
+- spatial vectors: Pinocchio's are [linear; angular]; data.v[i], data.a[i] in joint i's frame, with
+  data.a the *spatial* acceleration (classical linear acceleration = a.linear + ω × v.linear).
+- rnea fills data.a_gf (with gravity), never data.a: the gravity-free one comes from forwardKinematics.
+- fext is per joint, in the joint's frame, about the joint origin.
+Pinocchio is imported lazily: ``import manipdyn`` never loads it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ManipdynError
+
+
+def pin():
+    """The pinocchio module, imported on first use."""
+    try:
+        import pinocchio
+    except ImportError as exc:  # pragma: no cover - pin is a declared dependency
+        raise ManipdynError("validation needs Pinocchio: pip install pin") from exc
+    return pinocchio
+
+
+class Reference:
+    """A Pinocchio model of the same URDF, checked to have our joint order."""
+
+    def __init__(self, model, urdf_path):
+        P = pin()
+        self.model = model
+        self.pm = P.buildModelFromUrdf(str(urdf_path))
+        self.pd = self.pm.createData()
+        names = tuple(self.pm.names[1:])
+        if names != model.joint_names:
+            raise ManipdynError(f"{urdf_path}: joint order differs from Pinocchio's: ours "
+                                f"{model.joint_names}, Pinocchio {names}")
+        self.pm.gravity.linear = np.asarray(model.gravity, float)
+        self.idx_q = np.array([self.pm.joints[i + 1].idx_q for i in range(model.nv)])
+        self.nq_j = np.array([self.pm.joints[i + 1].nq for i in range(model.nv)])
+
+    def to_pin_q(self, q):
+        """Our q (nv,) -> Pinocchio's q (nq,): continuous joints as (cos, sin)."""
+        pq = np.zeros(self.pm.nq)
+        for i, (k, n) in enumerate(zip(self.idx_q, self.nq_j)):
+            pq[k:k + n] = (np.cos(q[i]), np.sin(q[i])) if n == 2 else q[i]
+        return pq
+
+    def fext(self, q, f_ext, f_ext_frame="local"):
+        """Our {frame: (force, moment)} -> Pinocchio's per-joint fext, via Pinocchio's own frame placements."""
+        P, pm, pd = pin(), self.pm, self.pd
+        P.framesForwardKinematics(pm, pd, self.to_pin_q(q))
+        out = [P.Force.Zero() for _ in range(pm.njoints)]
+        for name, (f, m) in f_ext.items():
+            fid = pm.getFrameId(name, P.FrameType.BODY)
+            fr = pm.frames[fid]
+            f, m = np.asarray(f, float), np.asarray(m, float)
+            if f_ext_frame == "world":           # world axes about the frame origin -> frame axes
+                Rw = pd.oMf[fid].rotation
+                f, m = Rw.T @ f, Rw.T @ m
+            out[fr.parentJoint] += fr.placement.act(P.Force(f, m))
+        return out
+
+    def terms(self, q, v, a, f_ext=None, f_ext_frame="local"):
+        """Pinocchio's per-link terms for one state, in our names (see rnea_terms), arrays (nv, 3)."""
+        P, pm, pd, nv = pin(), self.pm, self.pd, self.model.nv
+        pq = self.to_pin_q(q)
+        ext = self.fext(q, f_ext, f_ext_frame) if f_ext else None
+        tau = (P.rnea(pm, pd, pq, v, a, ext) if ext else P.rnea(pm, pd, pq, v, a)).copy()
+        J = range(1, nv + 1)
+        out = dict(
+            w=[pd.v[i].angular for i in J], v=[pd.v[i].linear for i in J],
+            f=[pd.f[i].linear for i in J], n=[pd.f[i].angular for i in J])
+        inertial = [pm.inertias[i] * pd.a_gf[i] + pd.v[i].cross(pm.inertias[i] * pd.v[i]) for i in J]
+        out["fc"] = [x.linear for x in inertial]
+        out["nO"] = [x.angular for x in inertial]          # about the link frame origin
+        P.forwardKinematics(pm, pd, pq, v, a)              # gravity-free spatial accelerations
+        out["dw"] = [pd.a[i].angular for i in J]
+        out["acc"] = [pd.a[i].linear + np.cross(pd.v[i].angular, pd.v[i].linear) for i in J]
+        out = {k: np.array(x, float).reshape(nv, 3) for k, x in out.items()}
+        out["tau"] = tau
+        return out
