@@ -1,7 +1,25 @@
-"""manipdyn: manipulator dynamics you can read and trust."""
+"""manipdyn: manipulator dynamics you can read and trust.
+
+Public API (names follow Pinocchio's where the meaning is the same). Every dynamics function takes one
+state (nv,) or a batch (N, nv) and returns the matching shape. Pinocchio is never imported here.
+"""
 from __future__ import annotations
 
-from .errors import (DivergenceError, InputError, ManipdynError, ModelError, SingularError,
-                     URDFError)
+from .dynamics.rnea import rnea, rnea_terms
+from .errors import (DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
+                     SingularError, URDFError)
+from .io.urdf import load_urdf, load_urdf_string
+from .model import PRISMATIC, REVOLUTE, Frame, Model
 
 __version__ = "0.1.0"
+
+
+def dh_to_urdf(*args, **kwargs):
+    """D-H table -> URDF text; see manipdyn.io.dh.dh_to_urdf."""
+    from .io.dh import dh_to_urdf as _dh_to_urdf
+    return _dh_to_urdf(*args, **kwargs)
+
+
+__all__ = ["rnea", "rnea_terms", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
+           "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
+           "SingularError", "DivergenceError", "InertiaWarning"]

@@ -49,7 +49,11 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
                                    build_collision_scene_graph=False, load_collision_meshes=False).robot
     except Exception as exc:  # yourdfpy raises bare KeyError/ValueError on malformed elements
         raise URDFError(f"{source}: cannot read URDF elements: {exc!r}") from exc
-    return _build(robot, source, np.asarray(gravity, float), strict)
+    model = _build(robot, source, np.asarray(gravity, float), strict)
+    for note in model.notes:
+        if "triangle inequality" in note:
+            warnings.warn(f"{source}: {note}", InertiaWarning, stacklevel=3)
+    return model
 
 
 def _parse_xml(data: bytes, source: str):
@@ -139,11 +143,12 @@ def _tree(robot, source):
 def _build(robot, source, gravity, strict) -> Model:
     """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links."""
     links, children, root = _tree(robot, source)
-    joints, parts, frames, merged = [], {-1: []}, {}, {root: []}
+    joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
 
     def visit(link, body, R, p):          # (R, p): pose of `link` in the frame of `body`
         frames[link] = Frame(link, body, R, p)
         parts[body].append(_link_inertia(links[link], R, p, source, strict))
+        notes.extend(_triangle(parts[body][-1][2], link, source, strict))
         for j in children[link]:          # sorted by joint name
             Ro, po = (np.eye(3), np.zeros(3)) if j.origin is None else (j.origin[:3, :3], j.origin[:3, 3])
             if j.type == "fixed":
@@ -155,7 +160,7 @@ def _build(robot, source, gravity, strict) -> Model:
                 visit(j.child, len(joints) - 1, np.eye(3), np.zeros(3))
 
     visit(root, -1, np.eye(3), np.zeros(3))
-    nv, notes = len(joints), []
+    nv = len(joints)
     axes = [_unit_axis(j, source, notes) for j, *_ in joints]
     inertias = [combine_inertias(parts[i]) for i in range(nv)]
     _check_psd(combine_inertias(parts[-1])[2], f"fixed base {root!r} (with merged links "
@@ -215,7 +220,6 @@ def _link_inertia(link, R, p, source, strict):
         raise URDFError(f"{source}: link {link.name!r}: negative mass {m}")
     To = inertial.origin if inertial.origin is not None else np.eye(4)
     I = To[:3, :3] @ np.asarray(inertial.inertia, float) @ To[:3, :3].T
-    _check_triangle(I, link.name, source, strict)
     return m, p + R @ To[:3, 3], R @ I @ R.T
 
 
@@ -227,12 +231,14 @@ def _check_psd(I, what, source):
                          f"(eigenvalues {lam.tolist()})")
 
 
-def _check_triangle(I, link, source, strict):
-    """Principal moments of a physical body satisfy I1 + I2 >= I3; warn (or refuse if strict)."""
+def _triangle(I, link, source, strict):
+    """Principal moments of a physical body satisfy I1 + I2 >= I3: a note (or ModelError if strict)."""
     lam = np.sort(np.linalg.eigvalsh(I))
-    if lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300):
-        msg = (f"{source}: link {link!r}: principal moments {lam.tolist()} violate the triangle "
-               f"inequality I1 + I2 >= I3 ({lam[0] + lam[1]:.6g} < {lam[2]:.6g})")
-        if strict:
-            raise ModelError(msg)
-        warnings.warn(msg, InertiaWarning, stacklevel=4)
+    tol = 1e-9 * max(np.sum(np.abs(lam)), 1e-300)
+    if lam[0] < -tol or lam[0] + lam[1] >= lam[2] - tol:   # non-PSD is reported per body, later
+        return []
+    msg = (f"link {link!r}: principal moments {lam.tolist()} violate the triangle inequality "
+           f"I1 + I2 >= I3 ({lam[0] + lam[1]:.6g} < {lam[2]:.6g})")
+    if strict:
+        raise ModelError(f"{source}: {msg}")
+    return [msg]

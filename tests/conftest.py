@@ -1,0 +1,58 @@
+"""Shared test helpers: the one error measure (DESIGN.md §3), URDF builders, the robot zoo."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def err(x, y) -> float:
+    """err = max|x − y| / max(max|y|, 1): relative to the term's largest entry, absolute below 1."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    assert x.shape == y.shape, f"shape {x.shape} != {y.shape}"
+    return float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1.0))
+
+
+def assert_close(x, y, tol, what=""):
+    e = err(x, y)
+    assert e <= tol, f"{what}: err {e:.3e} > tol {tol:.0e}"
+
+
+def inertial_xml(mass, com=(0, 0, 0), I=(0, 0, 0, 0, 0, 0), rpy=(0, 0, 0)):
+    ixx, iyy, izz, ixy, ixz, iyz = I
+    return (f'<inertial><origin xyz="{com[0]} {com[1]} {com[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>'
+            f'<mass value="{mass}"/><inertia ixx="{ixx}" iyy="{iyy}" izz="{izz}" ixy="{ixy}" '
+            f'ixz="{ixz}" iyz="{iyz}"/></inertial>')
+
+
+def urdf(links, joints, name="test_robot"):
+    """URDF text from {link: inertial xml or ''} and [(name, type, parent, child, xyz, rpy, axis), ...]."""
+    body = [f'<link name="{n}">{x}</link>' for n, x in links.items()]
+    for jn, jt, par, ch, xyz, rpy, axis in joints:
+        lim = '<limit lower="-3" upper="3" effort="10" velocity="10"/>' if jt in ("revolute", "prismatic") else ""
+        ax = f'<axis xyz="{axis[0]} {axis[1]} {axis[2]}"/>' if axis is not None else ""
+        body.append(f'<joint name="{jn}" type="{jt}"><parent link="{par}"/><child link="{ch}"/>'
+                    f'<origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>{ax}{lim}</joint>')
+    return f'<?xml version="1.0"?>\n<robot name="{name}">\n' + "\n".join(body) + "\n</robot>\n"
+
+
+@pytest.fixture
+def write_urdf(tmp_path):
+    def _write(text, name="robot.urdf"):
+        p = tmp_path / name
+        p.write_text(text)
+        return p
+    return _write
+
+
+def zoo_paths():
+    from manipdyn.validation import arm_paths
+    return arm_paths()
+
+
+AAU = ROOT / "urdf" / "aau_arm.urdf"
