@@ -1,0 +1,147 @@
+"""Lagrange's equations of the 2nd kind: τ = M(q) q̈ + C(q, q̇) q̇ + g(q) (chapter Eqs. 22–25).
+
+M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23) — summed over links from their Jacobians
+("lagrange") or by the composite-rigid-body algorithm ("crba", the fast route). C comes from the
+Christoffel symbols of M with ∂M/∂q derived analytically from the derivatives of the link Jacobians; g
+from the potential energy V = −Σ m_b gᵀ c_b. None of these calls the Newton–Euler code.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import REVOLUTE
+from ..spatial import cross, skew
+from .kinematics import axes_world, placements, point_jacobian, supports
+from .state import as_batch, unbatch
+
+
+def _com_jacobians(model, R, p):
+    """Per body: world CoM (nv, N, 3), CoM Jacobian (nv, N, 6, nv), world inertia about CoM (nv, N, 3, 3)."""
+    z = axes_world(model, R)
+    c = p + np.einsum("bnij,bj->bni", R, model.com)
+    J = np.stack([point_jacobian(model, R, p, z, b, c[b]) for b in range(model.nv)])
+    Iw = R @ model.inertia[:, None] @ np.swapaxes(R, -1, -2)
+    return c, J, Iw, z
+
+
+def mass_matrix(model, q, method="crba"):
+    """M(q) (nv, nv) or (N, nv, nv), the joint-space inertia matrix of T = ½ q̇ᵀ M q̇ (Eq. 23).
+
+    method="crba" (default, O(n²)): composite-rigid-body algorithm. method="lagrange": the closed form
+    M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links (costly, as the chapter warns).
+    """
+    (Q,), single = as_batch(model, q=q)
+    if method == "crba":
+        M = _crba(model, Q)
+    elif method == "lagrange":
+        _, J, Iw, _ = _com_jacobians(model, *placements(model, Q))
+        Jv, Jw = J[:, :, :3], J[:, :, 3:]
+        M = np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
+    else:
+        raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
+    return unbatch(M, single)
+
+
+def _crba(model, Q):
+    """Composite-rigid-body algorithm in link frames (RBDA §6.2, written with 3-vectors).
+
+    Pass 1 (leaves → root): body i's composite = body i merged with its children's composites, each
+    carried into frame i: mass m, CoM c, inertia I_c about c. Pass 2: for joint i, the force/moment
+    (f, n about frame i's origin) needed to give the composite a unit joint acceleration (a pure rotation
+    about the axis or a translation along it); M[i, i] = its axis component, and carried to each
+    ancestor j (f_j = R f, n_j = R n + p × R f), M[i, j] = M[j, i] = that of joint j's axis.
+    """
+    N, nv = Q.shape[0], model.nv
+    Rp, pp = model.joint_transforms(Q)
+    m = model.mass.copy()
+    h = np.broadcast_to(model.mass[:, None, None] * model.com[:, None, :], (nv, N, 3)).copy()  # m c
+    Io = np.broadcast_to(model.inertia[:, None], (nv, N, 3, 3)) + \
+        model.mass[:, None, None, None] * _point(model.com)[:, None]                   # about origin
+    for i in reversed(range(nv)):                           # pass 1: composites about each frame origin
+        j = model.parent[i]
+        if j >= 0:
+            R, p = Rp[i], pp[i]
+            m[j] += m[i]
+            h_rot = np.einsum("nab,nb->na", R, h[i])
+            Io[j] += R @ Io[i] @ np.swapaxes(R, 1, 2) + _shift(m[i], h_rot, p)
+            h[j] += h_rot + m[i] * p
+    M = np.zeros((N, nv, nv))
+    for i in range(nv):                                     # pass 2: columns
+        z = model.axis[i]
+        if model.kind[i] == REVOLUTE:                       # unit rotation about z through the origin
+            f, n = cross(np.broadcast_to(z, (N, 3)), h[i]), np.einsum("nab,b->na", Io[i], z)
+        else:                                               # unit translation along z
+            f, n = m[i] * np.broadcast_to(z, (N, 3)), cross(h[i], np.broadcast_to(z, (N, 3)))
+        M[:, i, i] = (n if model.kind[i] == REVOLUTE else f) @ z
+        k = i
+        while model.parent[k] >= 0:
+            f, n = np.einsum("nab,nb->na", Rp[k], f), np.einsum("nab,nb->na", Rp[k], n)
+            n = n + cross(pp[k], f)
+            k = model.parent[k]
+            M[:, i, k] = M[:, k, i] = (n if model.kind[k] == REVOLUTE else f) @ model.axis[k]
+    return M
+
+
+def _point(c):
+    """Inertia of a unit point mass at c about the origin: |c|² 1 − c cᵀ; c (..., 3) -> (..., 3, 3)."""
+    return np.einsum("...k,...k->...", c, c)[..., None, None] * np.eye(3) - c[..., :, None] * c[..., None, :]
+
+
+def _shift(mass, h_rot, p):
+    """Change of the inertia about the origin when a body of mass m, first moment h, moves by p.
+
+    I_O(new) = I_O(old, rotated) + m(|p|²1 − p pᵀ) + (2 (p·h) 1 − p hᵀ − h pᵀ)  (parallel axis with offset).
+    """
+    ph = np.einsum("nk,nk->n", p, h_rot)[:, None, None]
+    return mass * _point(p) + 2 * ph * np.eye(3) - p[:, :, None] * h_rot[:, None, :] - h_rot[:, :, None] * p[:, None, :]
+
+
+def gravity_torques(model, q):
+    """g(q) = ∂V/∂q with V = −Σ_b m_b gᵀ c_b(q): g = −Σ_b m_b J_vbᵀ g (nv,) or (N, nv)."""
+    (Q,), single = as_batch(model, q=q)
+    _, J, _, _ = _com_jacobians(model, *placements(model, Q))
+    return unbatch(-np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)
+
+
+def mass_matrix_derivatives(model, Q):
+    """∂M/∂q_k for a batch: (N, nv(k), nv, nv), exact, from derivatives of the link Jacobians.
+
+    With z_k the axis of revolute joint k, for body b's CoM Jacobian column j (k, j supporting b):
+      k supports j (k = j included):  ∂J_j/∂q_k = z_k × J_j   (both blocks turn with joint k)
+      j supports k, k ≠ j:            ∂J_j/∂q_k = [z_j × J_v,k; 0] for revolute j, 0 for prismatic j
+    and ∂(R I Rᵀ)/∂q_k = [z_k]× I_w − I_w [z_k]× when k supports b. Prismatic k: only the second rule.
+    """
+    N, nv = Q.shape[0], model.nv
+    c, J, Iw, z = _com_jacobians(model, *placements(model, Q))
+    S = supports(model)                                     # S[b, j]: joint j moves body b
+    dM = np.zeros((N, nv, nv, nv))
+    for b in range(nv):
+        Jv, Jw = J[b, :, :3], J[b, :, 3:]                   # (N, 3, nv)
+        for k in np.flatnonzero(S[b]):
+            dJ = np.zeros((N, 6, nv))
+            for j in np.flatnonzero(S[b]):
+                if S[j, k] and model.kind[k] == REVOLUTE:   # k supports j
+                    dJ[:, :3, j], dJ[:, 3:, j] = cross(z[k], Jv[:, :, j]), cross(z[k], Jw[:, :, j])
+                elif S[k, j] and k != j and model.kind[j] == REVOLUTE:   # j supports k
+                    dJ[:, :3, j] = cross(z[j], Jv[:, :, k])
+            dJv, dJw = dJ[:, :3], dJ[:, 3:]
+            sym = model.mass[b] * np.einsum("nai,naj->nij", dJv, Jv) + np.einsum("nai,nab,nbj->nij", dJw, Iw[b], Jw)
+            dM[:, k] += sym + np.swapaxes(sym, 1, 2)
+            if model.kind[k] == REVOLUTE:
+                Z = skew(z[k])
+                dI = Z @ Iw[b] - Iw[b] @ Z
+                dM[:, k] += np.einsum("nai,nab,nbj->nij", Jw, dI, Jw)
+    return dM
+
+
+def coriolis_matrix(model, q, v):
+    """C(q, q̇) (nv, nv) or (N, nv, nv) from the Christoffel symbols of M:
+
+    C_ij = Σ_k ½ (∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k, so that Ṁ − 2C is skew-symmetric.
+    """
+    (Q, V), single = as_batch(model, q=q, v=v)
+    dM = mass_matrix_derivatives(model, Q)                   # dM[n, k, i, j] = ∂M_ij/∂q_k
+    C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
+               - np.einsum("nijk,nk->nij", dM, V))
+    return unbatch(C, single)
