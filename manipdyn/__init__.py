@@ -5,6 +5,9 @@ state (nv,) or a batch (N, nv) and returns the matching shape. Pinocchio is neve
 """
 from __future__ import annotations
 
+from .dynamics.aba import aba, forward_dynamics
+from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
+from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
 from .errors import (DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
                      SingularError, URDFError)
@@ -20,6 +23,7 @@ def dh_to_urdf(*args, **kwargs):
     return _dh_to_urdf(*args, **kwargs)
 
 
-__all__ = ["rnea", "rnea_terms", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
+__all__ = ["rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+           "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "InertiaWarning"]

@@ -34,7 +34,7 @@ def _validate(args) -> int:
     print(f"manipdyn validate: {len(paths)} model(s), {args.states} random states each, seed {args.seed}, "
           f"tolerance {args.tol:g} (err = max|x - y| / max(max|y|, 1))")
     reports = []
-    with tqdm(total=len(paths) * args.states, unit="state", disable=args.quiet or None,
+    with tqdm(total=2 * len(paths) * args.states, unit="state", disable=args.quiet or None,
               file=sys.stderr, leave=False) as bar:
         for path in paths:
             with warnings.catch_warnings(record=True) as caught:

@@ -81,3 +81,27 @@ class Reference:
         out = {k: np.array(x, float).reshape(nv, 3) for k, x in out.items()}
         out["tau"] = tau
         return out
+
+    def dynamics(self, q, v, tau):
+        """Pinocchio's M (crba, symmetric), C, g, C q̇ + g, q̈ (aba) and cond(M) for one state."""
+        P, pm, pd = pin(), self.pm, self.pd
+        pq = self.to_pin_q(q)
+        M = P.crba(pm, pd, pq).copy()
+        return dict(M=M, C=P.computeCoriolisMatrix(pm, pd, pq, v).copy(),
+                    g=P.computeGeneralizedGravity(pm, pd, pq).copy(),
+                    nle=P.nonLinearEffects(pm, pd, pq, v).copy(),
+                    qdd=P.aba(pm, pd, pq, v, tau).copy(), cond=float(np.linalg.cond(M)))
+
+    def jacobians(self, q, v):
+        """Every body frame's Jacobian and its time derivative, world-aligned and local: (nv, 6, nv) each."""
+        P, pm, pd = pin(), self.pm, self.pd
+        pq = self.to_pin_q(q)
+        P.computeJointJacobians(pm, pd, pq)
+        P.computeJointJacobiansTimeVariation(pm, pd, pq, v)
+        P.updateFramePlacements(pm, pd)
+        out = {}
+        for key, ref in (("world", P.LOCAL_WORLD_ALIGNED), ("local", P.LOCAL)):
+            ids = [pm.getFrameId(b, P.FrameType.BODY) for b in self.model.body_names]
+            out["J_" + key] = np.array([P.getFrameJacobian(pm, pd, f, ref) for f in ids])
+            out["dJ_" + key] = np.array([P.getFrameJacobianTimeVariation(pm, pd, f, ref) for f in ids])
+        return out

@@ -29,3 +29,28 @@ def test_rnea_terms_batch_and_f_ext_batch():
         for k in ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n", "tau"):
             assert one[k].shape == batch[k].shape[1:]
             assert_close(batch[k][s], one[k], 1e-14, k)
+
+
+def test_lagrange_and_forward_batch_equals_rows():
+    import manipdyn as md
+    model = load_urdf(BAXTER)
+    Q, V, A = random_states(model, 8, np.random.default_rng(9))
+    calls = {
+        "mass_matrix": lambda q, v, a: md.mass_matrix(model, q),
+        "mass_matrix_lagrange": lambda q, v, a: md.mass_matrix(model, q, method="lagrange"),
+        "coriolis_matrix": lambda q, v, a: md.coriolis_matrix(model, q, v),
+        "gravity_torques": lambda q, v, a: md.gravity_torques(model, q),
+        "aba": lambda q, v, a: md.aba(model, q, v, a),
+        "cholesky": lambda q, v, a: md.forward_dynamics(model, q, v, a, method="cholesky"),
+        "frame_jacobian": lambda q, v, a: md.frame_jacobian(model, q, model.body_names[7]),
+        "frame_jacobian_local": lambda q, v, a: md.frame_jacobian(model, q, model.body_names[7], "local"),
+        "frame_jacobian_dot": lambda q, v, a: md.frame_jacobian_dot(model, q, v, model.body_names[7], "local"),
+        "frame_placement": lambda q, v, a: np.concatenate(
+            [x.reshape(x.shape[:-2] + (-1,)) if x.ndim >= 2 and x.shape[-1] == 3 and x.shape[-2] == 3 else x
+             for x in md.frame_placement(model, q, model.body_names[7])], axis=-1),
+    }
+    for name, f in calls.items():
+        batch = f(Q, V, A)
+        rows = np.stack([f(q, v, a) for q, v, a in zip(Q, V, A)])
+        assert batch.shape == rows.shape, name
+        assert_close(batch, rows, 1e-14, name)

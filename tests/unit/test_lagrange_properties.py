@@ -1,0 +1,101 @@
+"""Physical identities of Lagrange's equations on random states (RigidBodyDynamics.jl style)."""
+import numpy as np
+import pytest
+from conftest import AAU, assert_close, inertial_xml, urdf, zoo_paths
+
+import manipdyn as md
+from manipdyn.dynamics.lagrange import mass_matrix_derivatives
+from manipdyn.validation import random_states
+
+PATHS = [AAU] + [p for p in zoo_paths() if p.name in ("baxter.urdf", "panda.urdf", "allegro_right_hand.urdf")]
+
+
+@pytest.fixture(params=PATHS, ids=lambda p: p.stem)
+def states(request):
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_urdf(request.param)
+    return model, *random_states(model, 40, np.random.default_rng(11))
+
+
+def test_mass_matrix_symmetric_positive_definite(states):
+    model, Q, _, _ = states
+    M = md.mass_matrix(model, Q)
+    assert_close(M, np.swapaxes(M, 1, 2), 1e-15, "symmetry")
+    assert np.all(np.linalg.eigvalsh(M)[:, 0] > 0)
+    assert_close(md.mass_matrix(model, Q, method="lagrange"), M, 1e-13, "Lagrange route = CRBA")
+
+
+def test_Mdot_minus_2C_is_skew(states):
+    # Ṁ = Σ_k ∂M/∂q_k q̇_k, exact; checked first against a central difference of M along q̇
+    model, Q, V, _ = states
+    Mdot = np.einsum("nkij,nk->nij", mass_matrix_derivatives(model, Q), V)
+    h = 1e-6
+    fd = (md.mass_matrix(model, Q + h * V) - md.mass_matrix(model, Q - h * V)) / (2 * h)
+    assert_close(Mdot, fd, 1e-7, "Ṁ vs central difference")
+    N = Mdot - 2 * md.coriolis_matrix(model, Q, V)
+    assert_close(N, -np.swapaxes(N, 1, 2), 1e-13, "Ṁ − 2C skew")
+
+
+def test_forward_routes_agree_and_invert_rnea(states):
+    model, Q, V, A = states
+    tau = md.rnea(model, Q, V, A)
+    for method in ("aba", "cholesky"):
+        qdd = md.forward_dynamics(model, Q, V, tau, method=method)
+        cond = np.linalg.cond(md.mass_matrix(model, Q))
+        for s in range(len(Q)):
+            assert_close(qdd[s], A[s], 1e-14 * cond[s], f"{method} inverts rnea")
+
+
+def test_f_ext_in_forward_dynamics(states):
+    # aba with f_ext must invert rnea with the same f_ext (both frames)
+    model, Q, V, A = states
+    frame = model.body_names[-1]
+    rng = np.random.default_rng(5)
+    fx = {frame: (rng.normal(size=3), rng.normal(size=3))}
+    for ff in ("local", "world"):
+        tau = md.rnea(model, Q, V, A, f_ext=fx, f_ext_frame=ff)
+        qdd = md.aba(model, Q, V, tau, f_ext=fx, f_ext_frame=ff)
+        cond = np.linalg.cond(md.mass_matrix(model, Q))
+        assert md.validation.error(qdd, A) <= 1e-14 * cond.max()
+
+
+def test_lagrange_equals_newton_euler(states):
+    model, Q, V, A = states
+    M, C, g = md.mass_matrix(model, Q), md.coriolis_matrix(model, Q, V), md.gravity_torques(model, Q)
+    lhs = np.einsum("nij,nj->ni", M, A) + np.einsum("nij,nj->ni", C, V) + g
+    assert_close(lhs, md.rnea(model, Q, V, A), 1e-13, "M q̈ + C q̇ + g = τ")
+
+
+def test_singular_mass_matrix_names_the_joint():
+    text = urdf({"base": "", "a": inertial_xml(1.0, (0, 0, 0.1), (0.1, 0.1, 0.1, 0, 0, 0)), "tip": ""},
+                [("ja", "revolute", "base", "a", (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+                 ("jtip", "revolute", "a", "tip", (0, 0, 0.2), (0, 0, 0), (0, 1, 0))])
+    model = md.load_urdf_string(text)
+    with pytest.raises(md.SingularError, match="jtip"):
+        md.aba(model, np.zeros(2), np.zeros(2), np.zeros(2))
+    with pytest.raises(md.SingularError):
+        md.forward_dynamics(model, np.zeros(2), np.zeros(2), np.zeros(2), method="cholesky")
+
+
+def test_romeo_fingers_make_forward_dynamics_raise():
+    # romeo's finger joints carry only massless bodies: rnea works, forward dynamics must refuse
+    import warnings
+    from manipdyn.validation import robots_dir
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_urdf(robots_dir() / "romeo_description/urdf/romeo.urdf")
+    q = np.zeros(model.nv)
+    assert np.all(np.isfinite(md.rnea(model, q, q, q)))
+    with pytest.raises(md.SingularError, match="mass matrix is singular"):
+        md.aba(model, q, q, q)
+
+
+def test_bad_method_and_reference():
+    model = md.load_urdf(AAU)
+    z = np.zeros(model.nv)
+    with pytest.raises(md.InputError, match="method"):
+        md.mass_matrix(model, z, method="newton")
+    with pytest.raises(md.InputError, match="reference"):
+        md.frame_jacobian(model, z, "tool", reference="LOCAL")
