@@ -22,6 +22,10 @@ class SingularError(ManipdynError, ArithmeticError):
     """A matrix that must be inverted is singular: names the joints or closures involved."""
 
 
+class ConstraintError(ManipdynError, ValueError):
+    """Loop closures cannot be satisfied (assembly fails, a state violates them): names the closure."""
+
+
 class DivergenceError(ManipdynError, ArithmeticError):
     """A simulation produced a non-finite state: names the time at which it happened."""
 

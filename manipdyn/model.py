@@ -30,6 +30,31 @@ class Frame:
 
 
 @dataclass(frozen=True, eq=False)
+class Constraint:
+    """A loop closure between two bodies (URDF ``<constraint>``), frames given in each body's frame.
+
+    type "revolute": the frames share their origin and their axis (5 equations); "spherical": the origin
+    (3); "fixed": origin and orientation (6). Axes are unit vectors in the body frames.
+    """
+    name: str
+    type: str
+    parent: int            # body index of the parent link (-1 = fixed base)
+    parent_link: str
+    Rp: np.ndarray         # (3, 3) closure frame on the parent, in the parent body's frame
+    pp: np.ndarray         # (3,)
+    axis_p: np.ndarray     # (3,) closure axis in the parent body's frame
+    child: int             # body index of the child link
+    child_link: str
+    Rc: np.ndarray         # (3, 3) closure frame on the child, in the child body's frame
+    pc: np.ndarray         # (3,)
+    axis_c: np.ndarray     # (3,) closure axis in the child body's frame
+
+    @property
+    def n_rows(self) -> int:
+        return {"revolute": 5, "spherical": 3, "fixed": 6}[self.type]
+
+
+@dataclass(frozen=True, eq=False)
 class Model:
     """Kinematic tree with merged rigid bodies; immutable (arrays are read-only)."""
     name: str
@@ -55,7 +80,8 @@ class Model:
     mimic: tuple           # ((joint, mimicked joint, multiplier, offset), ...) loaded as independent
     source: str = ""       # file the model was loaded from
     notes: tuple = ()      # what the loader did that a user should know (warnings included)
-    constraints: tuple = field(default=())  # loop closures (closed chains), empty for a tree
+    constraints: tuple = field(default=())  # (Constraint, ...) loop closures; empty for a tree
+    actuated: tuple = field(default=())     # joint names with a URDF <transmission>, q order
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -118,6 +144,10 @@ class Model:
             lines.append(f"massless bodies: {', '.join(massless)}")
         for j, src, mult, off in self.mimic:
             lines.append(f"mimic joint {j!r} (= {mult} * {src} + {off}) loaded as an independent joint")
+        for c in self.constraints:
+            lines.append(f"closure {c.name!r} ({c.type}, {c.n_rows} equations): {c.parent_link} <-> {c.child_link}")
+        if self.actuated:
+            lines.append(f"actuated joints (<transmission>): {', '.join(self.actuated)}")
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 

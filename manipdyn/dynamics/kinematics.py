@@ -99,17 +99,8 @@ def frame_jacobian_dot(model, q, v, frame, reference="world"):
     z = axes_world(model, R)
     body, Rf, pf = _frame_world(model, R, p, frame)
     J = point_jacobian(model, R, p, z, body, pf)
-    w, vel = _body_twists(model, R, p, z, V)
-    dJ = np.zeros_like(J)
-    if body >= 0:
-        vf = vel[body] + cross(w[body], pf - p[body])          # velocity of the frame origin
-        for j in np.flatnonzero(supports(model)[body]):
-            dz = cross(w[j], z[j])
-            if model.kind[j] == REVOLUTE:
-                dJ[:, :3, j] = cross(dz, pf - p[j]) + cross(z[j], vf - vel[j])
-                dJ[:, 3:, j] = dz
-            else:
-                dJ[:, :3, j] = dz
+    w, vel = body_twists(model, p, z, V)
+    dJ = point_jacobian_dot(model, p, z, w, vel, body, pf)
     if reference == "local":
         W = skew(np.einsum("nji,nj->ni", Rf, w[body]) if body >= 0 else np.zeros_like(pf))   # [ω'_f]×
         Jl = _to_local(J, Rf)
@@ -117,7 +108,23 @@ def frame_jacobian_dot(model, q, v, frame, reference="world"):
     return unbatch(dJ, single)
 
 
-def _body_twists(model, R, p, z, V):
+def point_jacobian_dot(model, p, z, w, vel, body, point):
+    """J̇ (N, 6, nv) of a point (N, 3) fixed to ``body``, world-aligned, from world twists (w, vel)."""
+    dJ = np.zeros(point.shape[:1] + (6, model.nv))
+    if body < 0:
+        return dJ
+    vp = vel[body] + cross(w[body], point - p[body])            # velocity of the point
+    for j in np.flatnonzero(supports(model)[body]):
+        dz = cross(w[j], z[j])                                  # ż_j = ω_j × z_j
+        if model.kind[j] == REVOLUTE:
+            dJ[:, :3, j] = cross(dz, point - p[j]) + cross(z[j], vp - vel[j])
+            dJ[:, 3:, j] = dz
+        else:
+            dJ[:, :3, j] = dz
+    return dJ
+
+
+def body_twists(model, p, z, V):
     """World angular velocity and world velocity of each body origin: (nv, N, 3) each."""
     w, vel = np.zeros_like(p), np.zeros_like(p)
     for i in range(model.nv):

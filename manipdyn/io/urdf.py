@@ -8,6 +8,7 @@ never imported.
 """
 from __future__ import annotations
 
+import dataclasses
 import io
 import os
 import warnings
@@ -17,8 +18,8 @@ import yourdfpy
 from lxml import etree
 
 from ..errors import InertiaWarning, ModelError, URDFError
-from ..model import PRISMATIC, REVOLUTE, Frame, Model
-from ..spatial import combine_inertias
+from ..model import PRISMATIC, REVOLUTE, Constraint, Frame, Model
+from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
 SUPPORTED = set(MOVING) | {"fixed"}
@@ -50,6 +51,8 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
     except Exception as exc:  # yourdfpy raises bare KeyError/ValueError on malformed elements
         raise URDFError(f"{source}: cannot read URDF elements: {exc!r}") from exc
     model = _build(robot, source, np.asarray(gravity, float), strict)
+    model = dataclasses.replace(model, constraints=_constraints(root, model, source),
+                                actuated=_actuated(root, model, source))
     for note in model.notes:
         if "triangle inequality" in note:
             warnings.warn(f"{source}: {note}", InertiaWarning, stacklevel=3)
@@ -242,3 +245,52 @@ def _triangle(I, link, source, strict):
     if strict:
         raise ModelError(f"{source}: {msg}")
     return [msg]
+
+
+def _vec(e, key, default, source, where):
+    """A 3-vector attribute of an XML element (default if the element or attribute is absent)."""
+    text = default if e is None or e.get(key) is None else e.get(key)
+    try:
+        x = np.array([float(t) for t in text.split()])
+    except ValueError:
+        x = np.array([np.nan])
+    if x.shape != (3,) or not np.all(np.isfinite(x)):
+        raise URDFError(f"{source}: {where}: {key}={text!r} is not three finite numbers")
+    return x
+
+
+def _constraints(root, model, source):
+    """Loop closures from <constraint> elements (yourdfpy ignores them): frames mapped into body frames."""
+    out, seen = [], set()
+    for e in root.findall("constraint"):
+        name, kind = e.get("name"), e.get("type")
+        where = f"constraint {name!r}"
+        if not name or name in seen:
+            raise URDFError(f"{source}: a <constraint> has no name or a duplicate name ({name!r})")
+        seen.add(name)
+        if kind not in ("revolute", "spherical", "fixed"):
+            raise URDFError(f"{source}: {where}: type {kind!r}; expected revolute, spherical or fixed")
+        sides = []
+        for side in ("parent", "child"):
+            link_el = e.find(side)
+            link = None if link_el is None else link_el.get("link")
+            if link not in model.frames:
+                raise URDFError(f"{source}: {where}: {side} link {link!r} is not defined")
+            fr, org = model.frames[link], e.find(f"{side}_origin")
+            R = rpy_matrix(_vec(org, "rpy", "0 0 0", source, where))
+            p = _vec(org, "xyz", "0 0 0", source, where)
+            axis = _vec(e.find(f"{side}_axis"), "xyz", "0 0 1", source, where)
+            if np.linalg.norm(axis) < 1e-12:
+                raise URDFError(f"{source}: {where}: {side}_axis has no direction")
+            sides += [fr.body, link, fr.R @ R, fr.p + fr.R @ p, fr.R @ axis / np.linalg.norm(axis)]
+        if sides[0] == sides[5]:
+            raise URDFError(f"{source}: {where}: parent and child are the same rigid body")
+        b = sides
+        out.append(Constraint(name, kind, b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8], b[9]))
+    return tuple(out)
+
+
+def _actuated(root, model, source):  # noqa: ARG001
+    """Joints named in <transmission> elements, in q order."""
+    names = {j.get("name") for t in root.findall("transmission") for j in t.findall("joint")}
+    return tuple(j for j in model.joint_names if j in names)   # others (fixed or absent) are ignored
