@@ -9,7 +9,7 @@ from .dynamics.aba import aba, forward_dynamics
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
-from .errors import (DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
+from .errors import (ConstraintError, DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
                      SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
 from .model import PRISMATIC, REVOLUTE, Frame, Model
@@ -26,4 +26,4 @@ def dh_to_urdf(*args, **kwargs):
 __all__ = ["rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
-           "SingularError", "DivergenceError", "InertiaWarning"]
+           "SingularError", "DivergenceError", "ConstraintError", "InertiaWarning"]

@@ -1,0 +1,114 @@
+"""Assembly (Newton–Raphson on Φ(q) = 0), projection of drifted states, completion of passive coordinates.
+
+Singular configurations are detected from the condition number of the closure Jacobian restricted to the
+coordinates being solved for; they raise a clear error (or, with ``damping``, take damped least-squares
+steps and flag the result) — never a silent NaN.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.lagrange import mass_matrix
+from ..dynamics.state import as_batch
+from ..errors import ConstraintError, SingularError
+from .closures import closure_terms, independent_rows, row_labels
+from .dynamics import actuation
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Result of ``assemble``: the assembled q and how it was reached."""
+    q: np.ndarray          # (nv,)
+    iterations: int
+    residual: float        # max |Φ(q)|
+    cond: float            # condition number of the solved block of Φ_q at q
+    branch: int            # sign of det of that block: ±1 label of the assembly branch
+    same_branch: bool      # the guess had the same sign: no singularity crossed
+    damped: bool           # damped least-squares steps were needed
+
+
+def _solve_block(model, q, free, rtol=1e-9):
+    """Φ, the independent rows of Φ_q restricted to the free coordinates, and its cond and det sign."""
+    Phi, Jc, _ = closure_terms(model, q[None])
+    G = Jc[0][:, free]
+    keep = independent_rows(G, rtol)
+    Gk = G[keep]
+    sv = np.linalg.svd(Gk, compute_uv=False) if keep else np.ones(1)
+    sign = int(np.sign(np.linalg.det(Gk))) if Gk.shape[0] == Gk.shape[1] and keep else 0
+    return Phi[0], keep, Gk, float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf, sign
+
+
+def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5, max_cond=1e10,
+             damping=None) -> Assembly:
+    """Newton–Raphson for Φ(q) = 0 moving only the coordinates not in ``fixed`` (default: the actuated
+    joints stay at the guess), from the guess, so the solution stays on the guess's assembly branch.
+
+    Raises ConstraintError when it does not converge, SingularError when the Jacobian block is singular
+    (cond > max_cond) unless ``damping`` (λ of damped least squares) is given, which flags ``damped``.
+    """
+    (q,), _ = as_batch(model, q=q_guess)
+    q = q[0].copy()
+    hold = actuation(model, fixed) if fixed is None or len(fixed) else []
+    free = [i for i in range(model.nv) if i not in hold]
+    _, _, _, _, sign0 = _solve_block(model, q, free)
+    damped = False
+    for it in range(max_iter + 1):
+        Phi, keep, G, cond, sign = _solve_block(model, q, free)
+        if np.max(np.abs(Phi), initial=0.0) <= tol:
+            return Assembly(q, it, float(np.max(np.abs(Phi), initial=0.0)), cond, sign, sign == sign0, damped)
+        if cond > max_cond and damping is None:
+            raise SingularError(f"assembly of {model.name!r}: closure Jacobian is singular (cond {cond:.3g}) "
+                                f"at iteration {it}; pass damping= for a damped least-squares step")
+        r = Phi[keep]
+        if damping is not None and cond > max_cond:
+            step = -G.T @ np.linalg.solve(G @ G.T + damping**2 * np.eye(len(keep)), r)
+            damped = True
+        else:
+            step = -np.linalg.lstsq(G, r, rcond=None)[0]
+        q[free] += step * min(1.0, max_step / max(np.max(np.abs(step)), 1e-300))
+    labels = row_labels(model)
+    k = int(np.argmax(np.abs(Phi)))
+    raise ConstraintError(f"assembly of {model.name!r} did not converge in {max_iter} iterations: closure row "
+                          f"{labels[k]!r} still at {Phi[k]:.3g} (the closures may not be assemblable here)")
+
+
+def project(model, q, v, *, tol=1e-12, max_iter=20):
+    """(q, v) returned to Φ = 0 (minimum-norm Newton steps) and Φ_q q̇ = 0 (kinetic-energy-minimal:
+    q̇ ← q̇ − M⁻¹Φ_qᵀ(Φ_q M⁻¹ Φ_qᵀ)⁻¹ Φ_q q̇). One state (nv,) or a batch (N, nv), row by row."""
+    (Q, V), single = as_batch(model, q=q, v=v)
+    Q, V = Q.copy(), V.copy()
+    for s in range(Q.shape[0]):
+        for _ in range(max_iter):
+            Phi, Jc, _ = closure_terms(model, Q[s:s + 1])
+            if np.max(np.abs(Phi), initial=0.0) <= tol:
+                break
+            keep = independent_rows(Jc[0])
+            Q[s] -= np.linalg.lstsq(Jc[0, keep], Phi[0, keep], rcond=None)[0]
+        else:
+            raise ConstraintError(f"projection of state {s} did not converge (|Φ| = {np.max(np.abs(Phi)):.3g})")
+        _, Jc, _ = closure_terms(model, Q[s:s + 1])
+        G = Jc[0, independent_rows(Jc[0])]
+        if G.shape[0]:
+            Minv_Gt = np.linalg.solve(mass_matrix(model, Q[s]), G.T)
+            V[s] -= Minv_Gt @ np.linalg.solve(G @ Minv_Gt, G @ V[s])
+    return (Q[0], V[0]) if single else (Q, V)
+
+
+def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw):
+    """Full (q, q̇, q̈) from the actuated joints' rates and accelerations: assemble q (actuated coordinates
+    held at the guess), then solve Φ_q q̇ = 0 and Φ_q q̈ = −Φ̇_q q̇ for the passive coordinates."""
+    idx = actuation(model, actuated)
+    asm = assemble(model, q_guess, fixed=[model.joint_names[i] for i in idx], **assemble_kw)
+    q = asm.q
+    free = [i for i in range(model.nv) if i not in idx]
+    v, a = np.zeros(model.nv), np.zeros(model.nv)
+    v[idx], a[idx] = v_act, a_act
+    _, Jc, _ = closure_terms(model, q[None])
+    keep = independent_rows(Jc[0][:, free])
+    G, Ga = Jc[0][keep][:, free], Jc[0][keep][:, idx]
+    v[free] = np.linalg.lstsq(G, -Ga @ v[idx], rcond=None)[0]
+    _, _, bias = closure_terms(model, q[None], v[None])
+    a[free] = np.linalg.lstsq(G, -Ga @ a[idx] - bias[0][keep], rcond=None)[0]
+    return q, v, a, asm

@@ -1,0 +1,141 @@
+"""Lagrange's equations of the 1st kind (chapter Eqs. 19–27) on the spanning tree plus loop closures.
+
+    M q̈ + h + Φ_qᵀ λ = τ          (Eq. 25; h = C q̇ + g − Σ Jᵀ f_ext, from the Newton–Euler code)
+    Φ_q q̈ = c,  c = −Φ̇_q q̇        (Eq. 26, corrected: a time derivative on the second Φ_q)
+    Baumgarte:  c = −Φ̇_q q̇ − 2α Φ_q q̇ − β² Φ
+The reaction generalized force is −Φ_qᵀ λ. Closures are rank-deficient as the normal case (every revolute
+closure of a spherical mechanism has rank 2 of 5), so Eq. 27 is solved on the independent rows only
+(``independent_rows``); the multipliers of redundant rows are set to zero — λ is not unique, q̈ is.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.lagrange import mass_matrix
+from ..dynamics.rnea import rnea
+from ..dynamics.state import as_batch, unbatch
+from ..errors import ConstraintError, InputError, SingularError
+from .closures import closure_terms, independent_rows, row_labels
+
+
+@dataclass(frozen=True)
+class RankReport:
+    """What a rank-revealing solve found: rank of Φ_q, its rows, and the redundant ones by name."""
+    rank: int
+    rows: int
+    redundant: tuple      # labels of rows dependent on earlier rows
+    cond: float           # condition number of Φ_q restricted to its independent rows
+
+    def __str__(self):
+        red = f"; redundant: {', '.join(self.redundant)}" if self.redundant else ""
+        return f"closure Jacobian rank {self.rank} of {self.rows} rows (cond {self.cond:.3g}){red}"
+
+
+def rank_report(model, J, rtol=1e-9) -> RankReport:
+    """Rank of one state's Φ_q (m, nv), naming the redundant rows."""
+    keep, labels = independent_rows(J, rtol), row_labels(model)
+    sv = np.linalg.svd(J[keep], compute_uv=False) if keep else np.ones(1)
+    return RankReport(len(keep), J.shape[0], tuple(l for k, l in enumerate(labels) if k not in keep),
+                      float(sv[0] / sv[-1]))
+
+
+def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None, f_ext_frame="local",
+                                 info=False):
+    """(q̈, λ) of the KKT system of Eq. 27 on the independent closure rows; ``info=True`` adds RankReports.
+
+    Parameters: q, v, tau (nv,) or (N, nv) — tau is the full generalized force of the spanning tree
+    (zero on passive joints); baumgarte=(alpha, beta) stabilises drift; f_ext as in ``rnea``.
+    Returns q̈ (nv,)/(N, nv), λ (m,)/(N, m) in the rows of ``row_labels(model)``.
+    """
+    (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    c = -bias
+    if baumgarte is not None:
+        alpha, beta = baumgarte
+        c = c - 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi
+    rhs = T - rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)   # τ − h
+    M = mass_matrix(model, Q)
+    qdd, lam, reports = np.empty_like(Q), np.zeros_like(Phi), []
+    for s in range(Q.shape[0]):
+        keep = independent_rows(Jc[s])
+        qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
+        if info:
+            reports.append(rank_report(model, Jc[s]))
+    out = (unbatch(qdd, single), unbatch(lam, single))
+    return out + ((reports[0] if single else reports),) if info else out
+
+
+def _kkt(M, G, r, c, model):
+    """Solve [M Gᵀ; G 0][q̈; λ] = [r; c] for full-row-rank G by the Schur complement with Cholesky of M."""
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite") from None
+    Minv_r = np.linalg.solve(L.T, np.linalg.solve(L, r))
+    if G.shape[0] == 0:
+        return Minv_r, np.zeros(0)
+    Minv_Gt = np.linalg.solve(L.T, np.linalg.solve(L, G.T))
+    lam = np.linalg.solve(G @ Minv_Gt, G @ Minv_r - c)
+    return Minv_r - Minv_Gt @ lam, lam
+
+
+def actuation(model, actuated=None):
+    """Indices of the actuated joints (default: joints with a <transmission>)."""
+    names = model.actuated if actuated is None else tuple(actuated)
+    if not names:
+        raise InputError(f"model {model.name!r} has no actuated joints: pass actuated=[joint names] "
+                         f"or mark them with <transmission> in the URDF")
+    return [model.joint_index(n) for n in names]
+
+
+def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local"):
+    """(τ_a, λ): actuator forces for a prescribed motion of a closed chain, τ_tree = Sᵀ τ_a − Φ_qᵀ λ.
+
+    Solves [Sᵀ, −Φ_qᵀ] [τ_a; λ] = rnea(q, q̇, q̈) in the least-squares, minimum-norm sense (rank-revealing)
+    and raises ConstraintError when (q, q̇, q̈) violates a closure (|Φ|, |Φ_q q̇| or |Φ_q q̈ + Φ̇_q q̇| above
+    tol) or when the actuators cannot produce the motion (under-actuated: residual above tol).
+    ``actuation_status(model, q)`` says whether the chain is fully, under- or over-actuated.
+    """
+    (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
+    idx = actuation(model, actuated)
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    _check_consistent(model, Phi, Jc, bias, V, A, tol)
+    tau_tree = rnea(model, Q, V, A, f_ext=f_ext, f_ext_frame=f_ext_frame)
+    ta, lam = np.empty((Q.shape[0], len(idx))), np.zeros_like(Phi)
+    for s in range(Q.shape[0]):
+        keep = independent_rows(Jc[s])
+        S = np.zeros((model.nv, len(idx)))
+        S[idx, range(len(idx))] = 1.0
+        K = np.hstack([S, -Jc[s, keep].T])
+        x, *_ = np.linalg.lstsq(K, tau_tree[s], rcond=None)
+        resid = K @ x - tau_tree[s]
+        if np.max(np.abs(resid)) > tol * max(np.max(np.abs(tau_tree[s])), 1.0):
+            raise ConstraintError(f"the actuators {[model.joint_names[i] for i in idx]} cannot produce this "
+                                  f"motion (under-actuated; residual {np.max(np.abs(resid)):.3g})")
+        ta[s], lam[s, keep] = x[:len(idx)], x[len(idx):]
+    return unbatch(ta, single), unbatch(lam, single)
+
+
+def _check_consistent(model, Phi, Jc, bias, V, A, tol):
+    """Refuse states that violate the closures, naming the worst row (tolerances scale with the rates)."""
+    labels = row_labels(model)
+    vel, acc = np.einsum("nij,nj->ni", Jc, V), np.einsum("nij,nj->ni", Jc, A) + bias
+    scale_v = max(1.0, float(np.max(np.abs(V), initial=0)))
+    scale_a = max(1.0, float(np.max(np.abs(A), initial=0)), float(np.max(np.abs(bias), initial=0)))
+    for what, res, scale in (("position Φ", Phi, 1.0), ("velocity Φ_q q̇", vel, scale_v),
+                             ("acceleration Φ_q q̈ + Φ̇_q q̇", acc, scale_a)):
+        if res.size and np.max(np.abs(res)) > tol * scale:
+            s, k = np.unravel_index(np.argmax(np.abs(res)), res.shape)
+            raise ConstraintError(f"state {s} violates closure row {labels[k]!r}: {what} = {res[s, k]:.3g} "
+                                  f"(tolerance {tol * scale:.3g}); complete it with complete_state() or assemble()")
+
+
+def actuation_status(model, q, actuated=None):
+    """"fully", "under" or "over" actuated at q: compares n_actuated + rank(Φ_q) with nv."""
+    (Q,), _ = as_batch(model, q=q)
+    _, Jc, _ = closure_terms(model, Q[:1])
+    r, na = len(independent_rows(Jc[0])), len(actuation(model, actuated))
+    dof = model.nv - r
+    return "fully" if na == dof else ("under" if na < dof else "over")
