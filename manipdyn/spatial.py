@@ -66,3 +66,25 @@ def combine_inertias(parts):
     c = sum(p[0] * np.asarray(p[1]) for p in parts) / m if m > 0 else np.zeros(3)
     I = sum(np.asarray(Ik) + parallel_axis(mk, np.asarray(ck) - c) for mk, ck, Ik in parts)
     return m, c, 0.5 * (I + I.T)
+
+
+def matrix_rpy(R) -> np.ndarray:
+    """Inverse of rpy_matrix: (3, 3) -> URDF (roll, pitch, yaw); at pitch = ±π/2 roll is set to 0."""
+    R = np.asarray(R, float)
+    p = np.arcsin(np.clip(-R[2, 0], -1.0, 1.0))
+    if abs(R[2, 0]) < 1.0 - 1e-12:
+        return np.array([np.arctan2(R[2, 1], R[2, 2]), p, np.arctan2(R[1, 0], R[0, 0])])
+    return np.array([0.0, p, np.arctan2(-R[0, 1], R[1, 1])])
+
+
+def rotation_between(a, b) -> np.ndarray:
+    """The smallest rotation R with R a = b for unit vectors a, b (3,) -> (3, 3)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    k, c = np.cross(a, b), float(np.dot(a, b))
+    s = np.linalg.norm(k)
+    if s < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        perp = np.cross(a, np.eye(3)[np.argmin(np.abs(a))])
+        return axis_angle(perp / np.linalg.norm(perp), np.array([np.pi]))[0]
+    return axis_angle(k / s, np.array([np.arctan2(s, c)]))[0]

@@ -29,11 +29,12 @@ class Assembly:
     damped: bool           # damped least-squares steps were needed
 
 
-def _solve_block(model, q, free, rtol=1e-9):
-    """Φ, the independent rows of Φ_q restricted to the free coordinates, and its cond and det sign."""
+def _solve_block(model, q, free, keep=None, rtol=1e-9):
+    """Φ, the independent rows of Φ_q restricted to the free coordinates (or the rows ``keep``), its cond
+    and the sign of its determinant."""
     Phi, Jc, _ = closure_terms(model, q[None])
     G = Jc[0][:, free]
-    keep = independent_rows(G, rtol)
+    keep = independent_rows(G, rtol) if keep is None else keep
     Gk = G[keep]
     sv = np.linalg.svd(Gk, compute_uv=False) if keep else np.ones(1)
     sign = int(np.sign(np.linalg.det(Gk))) if Gk.shape[0] == Gk.shape[1] and keep else 0
@@ -52,11 +53,12 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
     q = q[0].copy()
     hold = actuation(model, fixed) if fixed is None or len(fixed) else []
     free = [i for i in range(model.nv) if i not in hold]
-    _, _, _, _, sign0 = _solve_block(model, q, free)
+    _, rows0, _, _, sign0 = _solve_block(model, q, free)      # the branch label uses the guess's rows
     damped = False
     for it in range(max_iter + 1):
-        Phi, keep, G, cond, sign = _solve_block(model, q, free)
+        Phi, keep, G, cond, _ = _solve_block(model, q, free)
         if np.max(np.abs(Phi), initial=0.0) <= tol:
+            sign = _solve_block(model, q, free, rows0)[4]
             return Assembly(q, it, float(np.max(np.abs(Phi), initial=0.0)), cond, sign, sign == sign0, damped)
         if cond > max_cond and damping is None:
             raise SingularError(f"assembly of {model.name!r}: closure Jacobian is singular (cond {cond:.3g}) "
