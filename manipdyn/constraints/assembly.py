@@ -86,8 +86,8 @@ def project(model, q, v, *, tol=1e-12, max_iter=20):
             Phi, Jc, _ = closure_terms(model, Q[s:s + 1])
             if np.max(np.abs(Phi), initial=0.0) <= tol:
                 break
-            keep = independent_rows(Jc[0])
-            Q[s] -= np.linalg.lstsq(Jc[0, keep], Phi[0, keep], rcond=None)[0]
+            Q[s] -= np.linalg.lstsq(Jc[0], Phi[0], rcond=1e-10)[0]   # all rows: off the manifold the
+            #                                                            "redundant" ones still carry Φ
         else:
             raise ConstraintError(f"projection of state {s} did not converge (|Φ| = {np.max(np.abs(Phi)):.3g})")
         _, Jc, _ = closure_terms(model, Q[s:s + 1])
