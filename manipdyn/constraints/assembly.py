@@ -24,21 +24,28 @@ class Assembly:
     iterations: int
     residual: float        # max |Φ(q)|
     cond: float            # condition number of the solved block of Φ_q at q
-    branch: int            # sign of det of that block: ±1 label of the assembly branch
+    branch: int            # ±1: sign of det(Uᵀ Φ_q,free), U the row space of Φ_q,free at the guess
     same_branch: bool      # the guess had the same sign: no singularity crossed
     damped: bool           # damped least-squares steps were needed
 
 
-def _solve_block(model, q, free, keep=None, rtol=1e-9):
-    """Φ, the independent rows of Φ_q restricted to the free coordinates (or the rows ``keep``), its cond
-    and the sign of its determinant."""
+def _solve_block(model, q, free, rtol=1e-9):
+    """Φ, the independent rows of Φ_q restricted to the free coordinates, and that block's cond."""
     Phi, Jc, _ = closure_terms(model, q[None])
     G = Jc[0][:, free]
-    keep = independent_rows(G, rtol) if keep is None else keep
-    Gk = G[keep]
-    sv = np.linalg.svd(Gk, compute_uv=False) if keep else np.ones(1)
-    sign = int(np.sign(np.linalg.det(Gk))) if Gk.shape[0] == Gk.shape[1] and keep else 0
-    return Phi[0], keep, Gk, float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf, sign
+    keep = independent_rows(G, rtol)
+    sv = np.linalg.svd(G[keep], compute_uv=False) if keep else np.ones(1)
+    return Phi[0], keep, G[keep], float(sv[0] / sv[-1]) if sv[-1] > 0 else np.inf
+
+
+def _branch(model, q, free, U):
+    """Branch label: sign of det(Uᵀ Φ_q,free), U the row space at the guess (±1; 0 if not square).
+
+    It keeps its sign while Newton moves within one assembly branch; it flips only through a singularity.
+    """
+    G = closure_terms(model, q[None])[1][0][:, free]
+    B = U.T @ G
+    return int(np.sign(np.linalg.det(B))) if B.shape[0] == B.shape[1] and B.size else 0
 
 
 def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5, max_cond=1e10,
@@ -53,12 +60,13 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
     q = q[0].copy()
     hold = actuation(model, fixed) if fixed is None or len(fixed) else []
     free = [i for i in range(model.nv) if i not in hold]
-    _, rows0, _, _, sign0 = _solve_block(model, q, free)      # the branch label uses the guess's rows
-    damped = False
+    G0 = closure_terms(model, q[None])[1][0][:, free]
+    U0 = np.linalg.svd(G0)[0][:, :len(independent_rows(G0))]      # row space at the guess
+    sign0, damped = _branch(model, q, free, U0), False
     for it in range(max_iter + 1):
-        Phi, keep, G, cond, _ = _solve_block(model, q, free)
+        Phi, keep, G, cond = _solve_block(model, q, free)
         if np.max(np.abs(Phi), initial=0.0) <= tol:
-            sign = _solve_block(model, q, free, rows0)[4]
+            sign = _branch(model, q, free, U0)
             return Assembly(q, it, float(np.max(np.abs(Phi), initial=0.0)), cond, sign, sign == sign0, damped)
         if cond > max_cond and damping is None:
             raise SingularError(f"assembly of {model.name!r}: closure Jacobian is singular (cond {cond:.3g}) "

@@ -114,3 +114,20 @@ def _update(w, x, y):
     from .compare import error
     w[0] = max(w[0], float(np.max(np.abs(np.asarray(x) - y), initial=0.0)))
     w[1] = max(w[1], error(x, y))
+
+
+def actuator_torques_by_inversion(model, cref, q, v, a_act, actuated, gen_force=None):
+    """Pinocchio has no closed-loop inverse dynamics: invert its forward map, which is affine in τ.
+
+    q̈(τ_a) = q̈(0) + Σ_k τ_a,k (q̈(e_k) − q̈(0)); solve the actuated rows for τ_a so that the actuated
+    joints get the accelerations a_act. ``gen_force`` (nv,) is added to the joint torques (e.g. an
+    external moment m on a body as J_ωᵀ m — constraintDynamics takes no external forces).
+    """
+    base = np.zeros(model.nv) if gen_force is None else np.asarray(gen_force, float)
+    q0 = cref.qdd(q, v, base)
+    G = np.empty((len(actuated), len(actuated)))
+    for k, j in enumerate(actuated):
+        tau = base.copy()
+        tau[j] += 1.0
+        G[:, k] = (cref.qdd(q, v, tau) - q0)[actuated]
+    return np.linalg.solve(G, np.asarray(a_act) - q0[actuated])
