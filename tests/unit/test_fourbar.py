@@ -100,3 +100,8 @@ def test_inverse_dynamics_refuses_inconsistent_states():
         constrained_inverse_dynamics(MODEL, q + 0.01, np.zeros(3), np.zeros(3))
     with pytest.raises(md.ConstraintError, match="velocity"):
         constrained_inverse_dynamics(MODEL, q, np.array([1.0, 0, 0]), np.zeros(3))
+
+
+def test_spm_urdf_is_regenerated_from_its_parameters():
+    from manipdyn.examples.spm_urdf import build_urdf
+    assert (ROOT / "urdf" / "spm.urdf").read_text() == build_urdf()
