@@ -102,6 +102,34 @@ def test_inverse_dynamics_refuses_inconsistent_states():
         constrained_inverse_dynamics(MODEL, q, np.array([1.0, 0, 0]), np.zeros(3))
 
 
-def test_spm_urdf_is_regenerated_from_its_parameters():
-    from manipdyn.examples.spm_urdf import build_urdf
-    assert (ROOT / "urdf" / "spm.urdf").read_text() == build_urdf()
+def test_redundant_duplicate_closure_changes_nothing_but_the_rank():
+    # the same loop declared twice: 10 rows of rank 2; q̈ must equal the single closure's and the
+    # closed-form (non-redundant, reduced-coordinate) solution
+    text = (ROOT / "urdf" / "fourbar.urdf").read_text()
+    block = text[text.index("  <constraint"):text.index("</constraint>") + len("</constraint>")]
+    twice = md.load_urdf_string(text.replace(block, block + "\n" + block.replace('name="loop"', 'name="loop_again"')))
+    q = closed_form_q(0.9, 1)
+    N, v, n0 = reduced(q, -1.2)
+    tau = np.array([0.3, 0.0, 0.0])
+    qdd1, _ = constrained_forward_dynamics(MODEL, q, v, tau)
+    qdd2, lam2, rep = constrained_forward_dynamics(twice, q, v, tau, info=True)
+    assert (rep.rank, rep.rows) == (2, 10)
+    assert set(rep.redundant) >= {f"loop_again.{k}" for k in ("x", "y", "z", "r1", "r2")}
+    assert_close(qdd2, qdd1, 1e-12, "duplicate closure")
+    M, h = md.mass_matrix(MODEL, q), md.rnea(MODEL, q, v, np.zeros(3))
+    t1dd = (tau[0] - N @ (M @ n0 + h)) / (N @ M @ N)
+    assert_close(qdd2, N * t1dd + n0, 1e-10, "vs reduced closed form")
+
+
+def test_dead_point_is_detected_not_nan():
+    # drive the rocker: at its extreme angle crank and coupler are collinear and the passive block of
+    # the closure Jacobian is singular — assembly must say so (or damp and flag), never return NaN
+    phi = np.arccos(((a + b)**2 + d**2 - c**2) / (2 * (a + b) * d))   # crank angle with A, B, C aligned
+    C = (a + b) * e(phi)
+    t3 = np.arctan2(-(C - [d, 0])[1], (C - [d, 0])[0])
+    guess = np.array([phi + 0.05, 0.05, t3])
+    with pytest.raises((md.SingularError, md.ConstraintError), match="singular|converge"):
+        assemble(MODEL, guess, fixed=["j3_rocker"], max_cond=1e6)
+    asm = assemble(MODEL, guess, fixed=["j3_rocker"], max_cond=1e4, damping=1e-6, max_iter=500)
+    assert asm.damped and np.all(np.isfinite(asm.q)) and asm.cond > 1e4 and asm.residual <= 1e-12
+    assert abs(asm.q[1]) < 1e-5          # it found the dead point: crank and coupler collinear
