@@ -15,7 +15,8 @@ from ..model import REVOLUTE
 from ..spatial import skew
 from .lagrange import mass_matrix
 from .rnea import rnea
-from .state import as_batch, external_wrenches, unbatch
+from .fast import aba_kernel, kernel_arrays
+from .state import as_batch, external_wrenches, fast_batch, raise_kernel_error, unbatch
 
 
 def _motion_subspace(model):
@@ -58,8 +59,23 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm; f_ext as in ``rnea``.
 
     Raises SingularError naming the joints whose articulated inertia D_i = Sᵀ Iᴬ S vanishes (a moving
-    subtree without mass or inertia: M is singular there).
+    subtree without mass or inertia: M is singular there). Without f_ext this runs the compiled kernel
+    (dynamics/fast.py), held by the tests to ``aba_reference``, the readable algorithm.
     """
+    if f_ext:
+        return aba_reference(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+    names = ("q", "v", "tau")
+    (Q, V, T), single = fast_batch(model, names, q, v, tau)
+    qdd = np.empty(Q.shape)
+    code = aba_kernel(*kernel_arrays(model), Q, V, T, qdd)
+    if code != -1:
+        raise_kernel_error(model, code, names, (Q, V, T))
+    _check_D_scale(model, qdd)
+    return qdd[0] if single else qdd
+
+
+def aba_reference(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+    """The readable articulated-body algorithm (RBDA Table 7.1); same contract as ``aba``."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
     N, nv = Q.shape[0], model.nv
     Rp, pp = model.joint_transforms(Q)
@@ -103,6 +119,12 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         qdd[:, i] = (u[i] - np.einsum("na,na->n", U[i], ap)) / D[i]
         a[i] = ap + qdd[:, i, None] * S[i]
     return unbatch(qdd, single)
+
+
+def _check_D_scale(model, qdd):
+    """The kernel only refuses D = 0 exactly; a massless subtree can leave D at round-off: refuse that too."""
+    if not np.all(np.isfinite(qdd)) or np.max(np.abs(qdd), initial=0.0) > 1e200:
+        raise SingularError(f"mass matrix of {model.name!r} is singular or nearly so (q̈ not finite)")
 
 
 def _check_D(model, i, D):

@@ -13,7 +13,8 @@ from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
 from .kinematics import axes_world, placements, point_jacobian, supports
-from .state import as_batch, unbatch
+from .fast import crba_kernel, kernel_arrays
+from .state import as_batch, raise_kernel_error, unbatch
 
 
 def _com_jacobians(model, R, p):
@@ -28,18 +29,24 @@ def _com_jacobians(model, R, p):
 def mass_matrix(model, q, method="crba"):
     """M(q) (nv, nv) or (N, nv, nv), the joint-space inertia matrix of T = ½ q̇ᵀ M q̇ (Eq. 23).
 
-    method="crba" (default, O(n²)): composite-rigid-body algorithm. method="lagrange": the closed form
+    method="crba" (default, O(n²)): composite-rigid-body algorithm (compiled kernel; "crba_reference" is
+    the readable version it is tested against). method="lagrange": the closed form
     M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links (costly, as the chapter warns).
     """
     (Q,), single = as_batch(model, q=q)
-    if method == "crba":
+    if method == "crba":                                # compiled; held by the tests to crba_reference
+        M = np.empty((Q.shape[0], model.nv, model.nv))
+        code = crba_kernel(*kernel_arrays(model), Q, M)
+        if code != -1:
+            raise_kernel_error(model, code, ("q",), (Q,))
+    elif method == "crba_reference":
         M = _crba(model, Q)
     elif method == "lagrange":
         _, J, Iw, _ = _com_jacobians(model, *placements(model, Q))
         Jv, Jw = J[:, :, :3], J[:, :, 3:]
         M = np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
     else:
-        raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
+        raise InputError(f"mass_matrix method must be 'crba', 'crba_reference' or 'lagrange', not {method!r}")
     return unbatch(M, single)
 
 

@@ -11,7 +11,8 @@ import numpy as np
 
 from ..model import REVOLUTE
 from ..spatial import cross, rot, rot_t
-from .state import as_batch, external_wrenches, unbatch
+from .fast import kernel_arrays, rnea_kernel
+from .state import as_batch, external_wrenches, fast_batch, raise_kernel_error, unbatch
 
 
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -25,8 +26,21 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     Returns
     -------
     tau : (nv,) or (N, nv) joint torques (revolute) and forces (prismatic).
+
+    Without f_ext this runs the compiled kernel (dynamics/fast.py), held by the tests to ``rnea_terms``,
+    the readable recursion below; with f_ext it runs the readable recursion.
     """
-    return rnea_terms(model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)["tau"]
+    if f_ext:
+        return rnea_terms(model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)["tau"]
+    (Q, V, A), single = fast_batch(model, _QVA, q, v, a)
+    tau = np.empty(Q.shape)
+    code = rnea_kernel(*kernel_arrays(model), Q, V, A, tau)
+    if code != -1:
+        raise_kernel_error(model, code, _QVA, (Q, V, A))
+    return tau[0] if single else tau
+
+
+_QVA = ("q", "v", "a")
 
 
 def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):

@@ -73,3 +73,32 @@ def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
         F[fr.body] += f
         Mo[fr.body] += m + np.cross(fr.p, f)   # moment about the body origin
     return F, Mo
+
+
+def fast_batch(model, names, *arrays):
+    """Like as_batch, without copies or numpy passes when every array is already float64, C-contiguous,
+    (nv,) or (N, nv) of one shape — finiteness is then checked inside the compiled kernel (see
+    raise_kernel_error). Anything else takes as_batch's full checks (and conversions)."""
+    x0 = arrays[0]
+    shape = getattr(x0, "shape", None)
+    for x in arrays:
+        if (type(x) is not np.ndarray or x.dtype != np.float64 or x.shape != shape
+                or not x.flags.c_contiguous or not (1 <= x.ndim <= 2) or x.shape[-1] != model.nv):
+            return as_batch(model, **dict(zip(names, arrays)))
+    if x0.ndim == 1:
+        return [x[None] for x in arrays], True
+    return list(arrays), False
+
+
+def raise_kernel_error(model, code, names, batches):
+    """Turn a kernel's return code into the InputError/SingularError the reference code would raise."""
+    from ..errors import SingularError
+    if code <= -2:
+        i = -2 - code
+        raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
+                            f"without mass or inertia about its axis")
+    s, i = divmod(code, model.nv)
+    for name, x in zip(names, batches):
+        if not np.isfinite(x[s, i]):
+            idx = [i] if x.shape[0] == 1 else [s, i]
+            raise InputError(f"{name}{idx} (joint {model.joint_names[i]!r}) is {x[s, i]}: inputs must be finite")

@@ -1,0 +1,417 @@
+"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py, aba.py and lagrange.py
+(the readable references, which the tests hold these kernels to), written with scalar 3-vectors so that one
+state costs no numpy dispatch and a batch runs in one compiled loop.
+
+The kernels take the model as plain arrays (``kernel_arrays``), states as (N, nv) C-contiguous float64, and
+write into preallocated outputs. Finiteness is checked inside the loop: a kernel returns the flat index of
+the first non-finite input entry, or -1. Compiled code is cached on disk (numba ``cache=True``).
+"""
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+from numba import njit
+
+from ..model import REVOLUTE
+
+_ARRAYS = weakref.WeakKeyDictionary()
+
+
+def kernel_arrays(model):
+    """The model's arrays in kernel form, built once per model: (parent, revolute, axis, R0, p0, mass,
+    com, inertia, minus_g)."""
+    arr = _ARRAYS.get(model)
+    if arr is None:
+        c = np.ascontiguousarray
+        arr = (c(model.parent, np.int64), c(model.kind == REVOLUTE), c(model.axis, float), c(model.R0, float),
+               c(model.p0, float), c(model.mass, float), c(model.com, float), c(model.inertia, float),
+               c(-np.asarray(model.gravity, float)))
+        _ARRAYS[model] = arr
+    return arr
+
+
+@njit(cache=True, inline="always")
+def _joint_rotation(R0, axis, rev, q, out):
+    """out = R0 Rot(axis, q) (revolute) or R0 (prismatic): Rodrigues written out."""
+    if not rev:
+        out[:, :] = R0
+        return
+    s, c = np.sin(q), np.cos(q)
+    x, y, z = axis[0], axis[1], axis[2]
+    t = 1.0 - c
+    r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+    r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+    r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+    for i in range(3):
+        a0, a1, a2 = R0[i, 0], R0[i, 1], R0[i, 2]
+        out[i, 0] = a0 * r00 + a1 * r10 + a2 * r20
+        out[i, 1] = a0 * r01 + a1 * r11 + a2 * r21
+        out[i, 2] = a0 * r02 + a1 * r12 + a2 * r22
+
+
+@njit(cache=True)
+def rnea_kernel(parent, rev, axis, R0, p0, mass, com, inertia, mg, Q, V, A, tau):
+    """τ for every state of (Q, V, A) (N, nv) into tau (N, nv): the chapter's Eqs. 3–18. Returns -1, or the
+    flat index of the first non-finite input."""
+    N, nv = Q.shape
+    R = np.empty((nv, 3, 3))
+    p = np.empty((nv, 3))
+    w = np.empty((nv, 3))
+    dw = np.empty((nv, 3))
+    dv = np.empty((nv, 3))
+    f = np.empty((nv, 3))
+    n = np.empty((nv, 3))
+    for s in range(N):
+        for i in range(nv):                      # outward recursion
+            q, qd, qdd = Q[s, i], V[s, i], A[s, i]
+            if not (np.isfinite(q) and np.isfinite(qd) and np.isfinite(qdd)):
+                return s * nv + i
+            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
+            Ri = R[i]
+            for k in range(3):
+                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
+                                                                  + R0[i, k, 2] * axis[i, 2])
+            j = parent[i]
+            if j < 0:
+                w0x = w0y = w0z = 0.0
+                dw0x = dw0y = dw0z = 0.0
+                a0x, a0y, a0z = mg[0], mg[1], mg[2]
+            else:
+                w0x, w0y, w0z = w[j, 0], w[j, 1], w[j, 2]
+                dw0x, dw0y, dw0z = dw[j, 0], dw[j, 1], dw[j, 2]
+                # v̇_{i-1} + ω̇_{i-1} × p + ω_{i-1} × (ω_{i-1} × p)   (Eq. 6, in frame i−1)
+                px, py, pz = p[i, 0], p[i, 1], p[i, 2]
+                cx, cy, cz = w0y * pz - w0z * py, w0z * px - w0x * pz, w0x * py - w0y * px
+                a0x = dv[j, 0] + dw0y * pz - dw0z * py + w0y * cz - w0z * cy
+                a0y = dv[j, 1] + dw0z * px - dw0x * pz + w0z * cx - w0x * cz
+                a0z = dv[j, 2] + dw0x * py - dw0y * px + w0x * cy - w0y * cx
+            zx, zy, zz = axis[i, 0], axis[i, 1], axis[i, 2]
+            # rotate into frame i: x_i = Rᵀ x_{i-1}
+            wix = Ri[0, 0] * w0x + Ri[1, 0] * w0y + Ri[2, 0] * w0z
+            wiy = Ri[0, 1] * w0x + Ri[1, 1] * w0y + Ri[2, 1] * w0z
+            wiz = Ri[0, 2] * w0x + Ri[1, 2] * w0y + Ri[2, 2] * w0z
+            dwx = Ri[0, 0] * dw0x + Ri[1, 0] * dw0y + Ri[2, 0] * dw0z
+            dwy = Ri[0, 1] * dw0x + Ri[1, 1] * dw0y + Ri[2, 1] * dw0z
+            dwz = Ri[0, 2] * dw0x + Ri[1, 2] * dw0y + Ri[2, 2] * dw0z
+            dvx = Ri[0, 0] * a0x + Ri[1, 0] * a0y + Ri[2, 0] * a0z
+            dvy = Ri[0, 1] * a0x + Ri[1, 1] * a0y + Ri[2, 1] * a0z
+            dvz = Ri[0, 2] * a0x + Ri[1, 2] * a0y + Ri[2, 2] * a0z
+            if rev[i]:                           # Eqs. 3, 5
+                dwx += qdd * zx + qd * (wiy * zz - wiz * zy)
+                dwy += qdd * zy + qd * (wiz * zx - wix * zz)
+                dwz += qdd * zz + qd * (wix * zy - wiy * zx)
+                wix += qd * zx
+                wiy += qd * zy
+                wiz += qd * zz
+            else:                                # Eq. 12: + 2 ω × ḋ z + d̈ z
+                dvx += 2.0 * qd * (wiy * zz - wiz * zy) + qdd * zx
+                dvy += 2.0 * qd * (wiz * zx - wix * zz) + qdd * zy
+                dvz += 2.0 * qd * (wix * zy - wiy * zx) + qdd * zz
+            w[i, 0], w[i, 1], w[i, 2] = wix, wiy, wiz
+            dw[i, 0], dw[i, 1], dw[i, 2] = dwx, dwy, dwz
+            dv[i, 0], dv[i, 1], dv[i, 2] = dvx, dvy, dvz
+            # Eq. 7, 13, 14: inertial force and moment; moment about the frame origin (Eq. 16's p_C × f_C)
+            cx_, cy_, cz_ = com[i, 0], com[i, 1], com[i, 2]
+            ux, uy, uz = wiy * cz_ - wiz * cy_, wiz * cx_ - wix * cz_, wix * cy_ - wiy * cx_
+            ax = dvx + dwy * cz_ - dwz * cy_ + wiy * uz - wiz * uy
+            ay = dvy + dwz * cx_ - dwx * cz_ + wiz * ux - wix * uz
+            az = dvz + dwx * cy_ - dwy * cx_ + wix * uy - wiy * ux
+            m = mass[i]
+            fx, fy, fz = m * ax, m * ay, m * az
+            I = inertia[i]
+            Iwx = I[0, 0] * wix + I[0, 1] * wiy + I[0, 2] * wiz
+            Iwy = I[1, 0] * wix + I[1, 1] * wiy + I[1, 2] * wiz
+            Iwz = I[2, 0] * wix + I[2, 1] * wiy + I[2, 2] * wiz
+            f[i, 0], f[i, 1], f[i, 2] = fx, fy, fz
+            n[i, 0] = I[0, 0] * dwx + I[0, 1] * dwy + I[0, 2] * dwz + wiy * Iwz - wiz * Iwy + cy_ * fz - cz_ * fy
+            n[i, 1] = I[1, 0] * dwx + I[1, 1] * dwy + I[1, 2] * dwz + wiz * Iwx - wix * Iwz + cz_ * fx - cx_ * fz
+            n[i, 2] = I[2, 0] * dwx + I[2, 1] * dwy + I[2, 2] * dwz + wix * Iwy - wiy * Iwx + cx_ * fy - cy_ * fx
+        for i in range(nv - 1, -1, -1):          # inward recursion, Eqs. 15–18
+            if rev[i]:
+                tau[s, i] = n[i, 0] * axis[i, 0] + n[i, 1] * axis[i, 1] + n[i, 2] * axis[i, 2]
+            else:
+                tau[s, i] = f[i, 0] * axis[i, 0] + f[i, 1] * axis[i, 1] + f[i, 2] * axis[i, 2]
+            j = parent[i]
+            if j >= 0:
+                Ri = R[i]
+                rfx = Ri[0, 0] * f[i, 0] + Ri[0, 1] * f[i, 1] + Ri[0, 2] * f[i, 2]
+                rfy = Ri[1, 0] * f[i, 0] + Ri[1, 1] * f[i, 1] + Ri[1, 2] * f[i, 2]
+                rfz = Ri[2, 0] * f[i, 0] + Ri[2, 1] * f[i, 1] + Ri[2, 2] * f[i, 2]
+                px, py, pz = p[i, 0], p[i, 1], p[i, 2]
+                f[j, 0] += rfx
+                f[j, 1] += rfy
+                f[j, 2] += rfz
+                n[j, 0] += Ri[0, 0] * n[i, 0] + Ri[0, 1] * n[i, 1] + Ri[0, 2] * n[i, 2] + py * rfz - pz * rfy
+                n[j, 1] += Ri[1, 0] * n[i, 0] + Ri[1, 1] * n[i, 1] + Ri[1, 2] * n[i, 2] + pz * rfx - px * rfz
+                n[j, 2] += Ri[2, 0] * n[i, 0] + Ri[2, 1] * n[i, 1] + Ri[2, 2] * n[i, 2] + px * rfy - py * rfx
+    return -1
+
+
+@njit(cache=True, inline="always")
+def _rot3(R, x, out):
+    """out = R x (3,)."""
+    a, b, c = x[0], x[1], x[2]
+    for k in range(3):
+        out[k] = R[k, 0] * a + R[k, 1] * b + R[k, 2] * c
+
+
+@njit(cache=True, inline="always")
+def _rot3t(R, x, out):
+    """out = Rᵀ x (3,)."""
+    a, b, c = x[0], x[1], x[2]
+    for k in range(3):
+        out[k] = R[0, k] * a + R[1, k] * b + R[2, k] * c
+
+
+@njit(cache=True, inline="always")
+def _cross(a, b, out):
+    x = a[1] * b[2] - a[2] * b[1]
+    y = a[2] * b[0] - a[0] * b[2]
+    z = a[0] * b[1] - a[1] * b[0]
+    out[0], out[1], out[2] = x, y, z
+
+
+@njit(cache=True, inline="always")
+def _sandwich(R, X, tmp, out):
+    """out += R X Rᵀ for 3×3 blocks (tmp is scratch)."""
+    for i in range(3):
+        for j in range(3):
+            tmp[i, j] = R[i, 0] * X[0, j] + R[i, 1] * X[1, j] + R[i, 2] * X[2, j]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] += tmp[i, 0] * R[j, 0] + tmp[i, 1] * R[j, 1] + tmp[i, 2] * R[j, 2]
+
+
+@njit(cache=True)
+def aba_kernel(parent, rev, axis, R0, p0, mass, com, inertia, mg, Q, V, T, out):
+    """q̈ by the articulated-body algorithm (RBDA Table 7.1) for every state; spatial quantities in blocks
+    [angular; linear] of 3-vectors and 3×3 matrices: Iᴬ = [[A, B], [Bᵀ, C]], pᴬ = [pn; pf], c = [cw; cv],
+    U = [uw; uv]. Returns -1, the flat index of the first non-finite input, or -2 - i when the articulated
+    inertia D_i of joint i vanishes (singular mass matrix)."""
+    N, nv = Q.shape
+    R = np.empty((nv, 3, 3))
+    p = np.empty((nv, 3))
+    w, vl = np.empty((nv, 3)), np.empty((nv, 3))
+    cw, cv = np.empty((nv, 3)), np.empty((nv, 3))
+    A, B, C = np.empty((nv, 3, 3)), np.empty((nv, 3, 3)), np.empty((nv, 3, 3))
+    pn, pf = np.empty((nv, 3)), np.empty((nv, 3))
+    uw, uv = np.empty((nv, 3)), np.empty((nv, 3))
+    D, u = np.empty(nv), np.empty(nv)
+    aw, av = np.empty((nv, 3)), np.empty((nv, 3))
+    t1, t2, t3 = np.empty(3), np.empty(3), np.empty(3)
+    M3, Pm = np.empty((3, 3)), np.empty((3, 3))
+    Ar, Br, Cr = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    for s in range(N):
+        for i in range(nv):                                   # pass 1: velocities, bias terms
+            q, qd = Q[s, i], V[s, i]
+            if not (np.isfinite(q) and np.isfinite(qd) and np.isfinite(T[s, i])):
+                return s * nv + i
+            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
+            for k in range(3):
+                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
+                                                                  + R0[i, k, 2] * axis[i, 2])
+            j = parent[i]
+            if j < 0:
+                w[i, :] = 0.0
+                vl[i, :] = 0.0
+            else:                                             # ω_i = Rᵀ ω_λ; v_i = Rᵀ (v_λ + ω_λ × p)
+                _rot3t(R[i], w[j], w[i])
+                _cross(w[j], p[i], t1)
+                for k in range(3):
+                    t1[k] += vl[j, k]
+                _rot3t(R[i], t1, vl[i])
+            z = axis[i]
+            if rev[i]:                                        # c = v × S q̇
+                _cross(w[i], z, cw[i])
+                _cross(vl[i], z, cv[i])
+                for k in range(3):
+                    cw[i, k] *= qd
+                    cv[i, k] *= qd
+                    w[i, k] += qd * z[k]
+            else:
+                _cross(w[i], z, cv[i])
+                for k in range(3):
+                    cw[i, k] = 0.0
+                    cv[i, k] *= qd
+                    vl[i, k] += qd * z[k]
+            m, c, Ic = mass[i], com[i], inertia[i]            # rigid-body blocks about the frame origin
+            cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+            for a in range(3):
+                for b in range(3):
+                    A[i, a, b] = Ic[a, b] + m * ((cc if a == b else 0.0) - c[a] * c[b])
+                    B[i, a, b] = 0.0
+                    C[i, a, b] = m if a == b else 0.0
+            B[i, 0, 1], B[i, 0, 2], B[i, 1, 2] = -m * c[2], m * c[1], -m * c[0]
+            B[i, 1, 0], B[i, 2, 0], B[i, 2, 1] = m * c[2], -m * c[1], m * c[0]
+            # pᴬ = v ×* (I v): h = I v = [A ω + B v; Bᵀ ω + m v]; v ×* h = [ω × hn + v × hf; ω × hf]
+            for k in range(3):
+                t1[k] = A[i, k, 0] * w[i, 0] + A[i, k, 1] * w[i, 1] + A[i, k, 2] * w[i, 2] \
+                    + B[i, k, 0] * vl[i, 0] + B[i, k, 1] * vl[i, 1] + B[i, k, 2] * vl[i, 2]
+                t2[k] = B[i, 0, k] * w[i, 0] + B[i, 1, k] * w[i, 1] + B[i, 2, k] * w[i, 2] + m * vl[i, k]
+            _cross(w[i], t1, pn[i])
+            _cross(vl[i], t2, t3)
+            _cross(w[i], t2, pf[i])
+            for k in range(3):
+                pn[i, k] += t3[k]
+        for i in range(nv - 1, -1, -1):                       # pass 2: articulated inertias
+            z = axis[i]
+            if rev[i]:                                        # U = Iᴬ S
+                for k in range(3):
+                    uw[i, k] = A[i, k, 0] * z[0] + A[i, k, 1] * z[1] + A[i, k, 2] * z[2]
+                    uv[i, k] = B[i, 0, k] * z[0] + B[i, 1, k] * z[1] + B[i, 2, k] * z[2]
+                D[i] = uw[i, 0] * z[0] + uw[i, 1] * z[1] + uw[i, 2] * z[2]
+                u[i] = T[s, i] - (pn[i, 0] * z[0] + pn[i, 1] * z[1] + pn[i, 2] * z[2])
+            else:
+                for k in range(3):
+                    uw[i, k] = B[i, k, 0] * z[0] + B[i, k, 1] * z[1] + B[i, k, 2] * z[2]
+                    uv[i, k] = C[i, k, 0] * z[0] + C[i, k, 1] * z[1] + C[i, k, 2] * z[2]
+                D[i] = uv[i, 0] * z[0] + uv[i, 1] * z[1] + uv[i, 2] * z[2]
+                u[i] = T[s, i] - (pf[i, 0] * z[0] + pf[i, 1] * z[1] + pf[i, 2] * z[2])
+            if not D[i] > 1e-300:
+                return -2 - i
+            j = parent[i]
+            if j < 0:
+                continue
+            inv = 1.0 / D[i]
+            for a in range(3):                                # Iᵃ = Iᴬ − U Uᵀ / D
+                for b in range(3):
+                    A[i, a, b] -= uw[i, a] * uw[i, b] * inv
+                    B[i, a, b] -= uw[i, a] * uv[i, b] * inv
+                    C[i, a, b] -= uv[i, a] * uv[i, b] * inv
+            g = u[i] * inv                                    # pᵃ = pᴬ + Iᵃ c + U u / D
+            for k in range(3):
+                t1[k] = pn[i, k] + uw[i, k] * g
+                t2[k] = pf[i, k] + uv[i, k] * g
+                for l in range(3):
+                    t1[k] += A[i, k, l] * cw[i, l] + B[i, k, l] * cv[i, l]
+                    t2[k] += B[i, l, k] * cw[i, l] + C[i, k, l] * cv[i, l]
+            Ri = R[i]                                         # into the parent frame: force transform
+            _rot3(Ri, t2, t3)                                 # R pf
+            _rot3(Ri, t1, t2)                                 # R pn
+            _cross(p[i], t3, t1)
+            for k in range(3):
+                pf[j, k] += t3[k]
+                pn[j, k] += t2[k] + t1[k]
+            # Iᴬ_λ += Xᵀ Iᵃ X: rotate the blocks (A', B', C'), then shift by P = [p]×:
+            # A += A' + P B'ᵀ − B' P − P C' P;  B += B' + P C';  C += C'
+            Ar[:, :] = 0.0
+            Br[:, :] = 0.0
+            Cr[:, :] = 0.0
+            _sandwich(Ri, A[i], M3, Ar)
+            _sandwich(Ri, B[i], M3, Br)
+            _sandwich(Ri, C[i], M3, Cr)
+            px, py, pz = p[i, 0], p[i, 1], p[i, 2]
+            Pm[0, 0], Pm[0, 1], Pm[0, 2] = 0.0, -pz, py
+            Pm[1, 0], Pm[1, 1], Pm[1, 2] = pz, 0.0, -px
+            Pm[2, 0], Pm[2, 1], Pm[2, 2] = -py, px, 0.0
+            for a in range(3):
+                for b in range(3):
+                    PC, PBt, BP = 0.0, 0.0, 0.0
+                    for k in range(3):
+                        PC += Pm[a, k] * Cr[k, b]
+                        PBt += Pm[a, k] * Br[b, k]
+                        BP += Br[a, k] * Pm[k, b]
+                    M3[a, b] = PC
+                    A[j, a, b] += Ar[a, b] + PBt - BP
+                    B[j, a, b] += Br[a, b] + PC
+                    C[j, a, b] += Cr[a, b]
+            for a in range(3):                                # − P C' P = − (P C') P
+                for b in range(3):
+                    A[j, a, b] -= M3[a, 0] * Pm[0, b] + M3[a, 1] * Pm[1, b] + M3[a, 2] * Pm[2, b]
+        for i in range(nv):                                   # pass 3: accelerations
+            j = parent[i]
+            if j < 0:                                         # a_0 = [0; −g]
+                for k in range(3):
+                    t1[k] = 0.0
+                _rot3t(R[i], mg, t2)
+            else:                                             # X a_λ = [Rᵀ ȧω; Rᵀ (ȧv + ȧω × p)]
+                _rot3t(R[i], aw[j], t1)
+                _cross(aw[j], p[i], t3)
+                for k in range(3):
+                    t3[k] += av[j, k]
+                _rot3t(R[i], t3, t2)
+            for k in range(3):
+                t1[k] += cw[i, k]
+                t2[k] += cv[i, k]
+            qdd = (u[i] - (uw[i, 0] * t1[0] + uw[i, 1] * t1[1] + uw[i, 2] * t1[2]
+                           + uv[i, 0] * t2[0] + uv[i, 1] * t2[1] + uv[i, 2] * t2[2])) / D[i]
+            out[s, i] = qdd
+            z = axis[i]
+            for k in range(3):
+                aw[i, k] = t1[k] + (qdd * z[k] if rev[i] else 0.0)
+                av[i, k] = t2[k] + (0.0 if rev[i] else qdd * z[k])
+    return -1
+
+
+@njit(cache=True)
+def crba_kernel(parent, rev, axis, R0, p0, mass, com, inertia, mg, Q, M):
+    """M(q) (N, nv, nv) by the composite-rigid-body algorithm, as lagrange._crba: composites (m, h = m c,
+    I_O about the frame origin) carried to the parent, then columns by force transmission. Returns -1 or
+    the flat index of the first non-finite q."""
+    N, nv = Q.shape
+    R = np.empty((nv, 3, 3))
+    p = np.empty((nv, 3))
+    mc = np.empty(nv)
+    h = np.empty((nv, 3))
+    Io = np.empty((nv, 3, 3))
+    tmp = np.empty((3, 3))
+    hr, f, n, t = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    for s in range(N):
+        for i in range(nv):
+            q = Q[s, i]
+            if not np.isfinite(q):
+                return s * nv + i
+            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
+            for k in range(3):
+                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
+                                                                  + R0[i, k, 2] * axis[i, 2])
+            c = com[i]
+            mc[i] = mass[i]
+            cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+            for a in range(3):
+                h[i, a] = mass[i] * c[a]
+                for b in range(3):
+                    Io[i, a, b] = inertia[i, a, b] + mass[i] * ((cc if a == b else 0.0) - c[a] * c[b])
+        for i in range(nv - 1, -1, -1):          # pass 1: composite bodies
+            j = parent[i]
+            if j < 0:
+                continue
+            _rot3(R[i], h[i], hr)
+            _sandwich(R[i], Io[i], tmp, Io[j])
+            pp = p[i]
+            ph = pp[0] * hr[0] + pp[1] * hr[1] + pp[2] * hr[2]
+            p2 = pp[0] * pp[0] + pp[1] * pp[1] + pp[2] * pp[2]
+            for a in range(3):                   # shift: m(|p|²1 − p pᵀ) + 2(p·h)1 − p hᵀ − h pᵀ
+                for b in range(3):
+                    Io[j, a, b] += mc[i] * ((p2 if a == b else 0.0) - pp[a] * pp[b]) \
+                        + (2.0 * ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]
+            for a in range(3):
+                h[j, a] += hr[a] + mc[i] * pp[a]
+            mc[j] += mc[i]
+        M[s, :, :] = 0.0                          # bodies on different branches do not couple
+        for i in range(nv):                      # pass 2: column i
+            z = axis[i]
+            if rev[i]:
+                _cross(z, h[i], f)
+                _rot3(Io[i], z, n)
+                M[s, i, i] = n[0] * z[0] + n[1] * z[1] + n[2] * z[2]
+            else:
+                for a in range(3):
+                    f[a] = mc[i] * z[a]
+                _cross(h[i], z, n)
+                M[s, i, i] = f[0] * z[0] + f[1] * z[1] + f[2] * z[2]
+            k = i
+            while parent[k] >= 0:
+                _rot3(R[k], f, t)
+                _rot3(R[k], n, hr)
+                _cross(p[k], t, n)
+                for a in range(3):
+                    f[a] = t[a]
+                    n[a] += hr[a]
+                k = parent[k]
+                zk = axis[k]
+                x = (n[0] * zk[0] + n[1] * zk[1] + n[2] * zk[2]) if rev[k] else (f[0] * zk[0] + f[1] * zk[1] + f[2] * zk[2])
+                M[s, i, k] = x
+                M[s, k, i] = x
+    return -1

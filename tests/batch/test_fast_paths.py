@@ -1,0 +1,53 @@
+"""Every compiled fast path against the readable reference it replaces (DESIGN.md §5), at 1e-12."""
+import warnings
+
+import numpy as np
+import pytest
+from conftest import assert_close, inertial_xml, urdf, zoo_paths
+
+import manipdyn as md
+from manipdyn.dynamics.aba import aba_reference
+from manipdyn.validation import random_states
+
+
+def _load(path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return md.load_urdf(path)
+
+
+@pytest.mark.parametrize("path", zoo_paths(), ids=lambda p: p.stem)
+def test_kernels_equal_references(path):
+    model = _load(path)
+    Q, V, A = random_states(model, 200, np.random.default_rng(21))
+    assert_close(md.rnea(model, Q, V, A), md.rnea_terms(model, Q, V, A)["tau"], 1e-12, "rnea kernel")
+    assert_close(md.mass_matrix(model, Q), md.mass_matrix(model, Q, method="crba_reference"), 1e-12, "crba")
+    tau = md.rnea(model, Q, V, A)
+    cond = np.linalg.cond(md.mass_matrix(model, Q)).max()
+    assert_close(md.aba(model, Q, V, tau), aba_reference(model, Q, V, tau), 1e-13 * cond, "aba kernel")
+
+
+def test_fast_path_checks_inputs():
+    model = _load(zoo_paths()[0])
+    z = np.zeros(model.nv)
+    bad = z.copy()
+    bad[2] = np.nan
+    for f in (lambda x: md.rnea(model, z, x, z), lambda x: md.aba(model, z, x, z)):
+        with pytest.raises(md.InputError, match=rf"v\[2\] \(joint '{model.joint_names[2]}'\) is nan"):
+            f(bad)
+    with pytest.raises(md.InputError, match=r"q\[1, 0\]"):
+        md.mass_matrix(model, np.vstack([z, np.r_[np.inf, z[1:]]]))
+    # non-contiguous, integer and list inputs take the checked path and give the same numbers
+    Q, V, A = random_states(model, 4, np.random.default_rng(2))
+    ref = md.rnea(model, Q, V, A)
+    assert_close(md.rnea(model, np.asfortranarray(Q), V.tolist(), A), ref, 1e-15, "converted inputs")
+    assert_close(md.rnea(model, Q[0], V[0], A[0]), ref[0], 1e-15, "single state")
+
+
+def test_fast_aba_refuses_massless_subtree():
+    model = md.load_urdf_string(urdf({"base": "", "a": inertial_xml(1.0, (0, 0, 0.1), (0.1, 0.1, 0.1, 0, 0, 0)),
+                                      "tip": ""},
+                                     [("ja", "revolute", "base", "a", (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+                                      ("jtip", "revolute", "a", "tip", (0, 0, 0.2), (0, 0, 0), (0, 1, 0))]))
+    with pytest.raises(md.SingularError, match="jtip"):
+        md.aba(model, np.zeros(2), np.zeros(2), np.zeros(2))
