@@ -15,8 +15,8 @@ from ..model import REVOLUTE
 from ..spatial import skew
 from .lagrange import mass_matrix
 from .rnea import rnea
-from .fast import aba_kernel, kernel_arrays
-from .state import as_batch, external_wrenches, fast_batch, raise_kernel_error, unbatch
+from .fast import aba_kernel, aba_one, kernel_arrays
+from .state import as_batch, external_wrenches, fast_shape, raise_kernel_error, unbatch
 
 
 def _motion_subspace(model):
@@ -62,16 +62,17 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     subtree without mass or inertia: M is singular there). Without f_ext this runs the compiled kernel
     (dynamics/fast.py), held by the tests to ``aba_reference``, the readable algorithm.
     """
-    if f_ext:
-        return aba_reference(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
-    names = ("q", "v", "tau")
-    (Q, V, T), single = fast_batch(model, names, q, v, tau)
-    qdd = np.empty(Q.shape)
-    code = aba_kernel(*kernel_arrays(model), Q, V, T, qdd)
+    nd = 0 if f_ext else fast_shape(model, q, v, tau)
+    if nd == 0:
+        if f_ext:
+            return aba_reference(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+        (q, v, tau), single = as_batch(model, q=q, v=v, tau=tau)  # checked and converted: (N, nv)
+        return unbatch(aba(model, q, v, tau), single)
+    qdd = np.empty(q.shape)
+    code = (aba_one if nd == 1 else aba_kernel)(*kernel_arrays(model), q, v, tau, qdd)
     if code != -1:
-        raise_kernel_error(model, code, names, (Q, V, T))
-    _check_D_scale(model, qdd)
-    return qdd[0] if single else qdd
+        raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau))
+    return qdd
 
 
 def aba_reference(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
@@ -119,12 +120,6 @@ def aba_reference(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         qdd[:, i] = (u[i] - np.einsum("na,na->n", U[i], ap)) / D[i]
         a[i] = ap + qdd[:, i, None] * S[i]
     return unbatch(qdd, single)
-
-
-def _check_D_scale(model, qdd):
-    """The kernel only refuses D = 0 exactly; a massless subtree can leave D at round-off: refuse that too."""
-    if not np.all(np.isfinite(qdd)) or np.max(np.abs(qdd), initial=0.0) > 1e200:
-        raise SingularError(f"mass matrix of {model.name!r} is singular or nearly so (q̈ not finite)")
 
 
 def _check_D(model, i, D):

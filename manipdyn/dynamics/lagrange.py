@@ -13,8 +13,8 @@ from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
 from .kinematics import axes_world, placements, point_jacobian, supports
-from .fast import crba_kernel, kernel_arrays
-from .state import as_batch, raise_kernel_error, unbatch
+from .fast import crba_kernel, crba_one, kernel_arrays
+from .state import as_batch, fast_shape, raise_kernel_error, unbatch
 
 
 def _com_jacobians(model, R, p):
@@ -33,12 +33,16 @@ def mass_matrix(model, q, method="crba"):
     the readable version it is tested against). method="lagrange": the closed form
     M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links (costly, as the chapter warns).
     """
-    (Q,), single = as_batch(model, q=q)
-    if method == "crba":                                # compiled; held by the tests to crba_reference
-        M = np.empty((Q.shape[0], model.nv, model.nv))
-        code = crba_kernel(*kernel_arrays(model), Q, M)
+    nd = fast_shape(model, q) if method == "crba" else 0
+    if nd:                                              # compiled; held by the tests to crba_reference
+        M = np.empty(q.shape + (model.nv,))
+        code = (crba_one if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
         if code != -1:
-            raise_kernel_error(model, code, ("q",), (Q,))
+            raise_kernel_error(model, code, ("q",), (q,))
+        return M
+    (Q,), single = as_batch(model, q=q)
+    if method == "crba":
+        return unbatch(mass_matrix(model, Q), single)
     elif method == "crba_reference":
         M = _crba(model, Q)
     elif method == "lagrange":

@@ -11,8 +11,8 @@ import numpy as np
 
 from ..model import REVOLUTE
 from ..spatial import cross, rot, rot_t
-from .fast import kernel_arrays, rnea_kernel
-from .state import as_batch, external_wrenches, fast_batch, raise_kernel_error, unbatch
+from .fast import kernel_arrays, rnea_kernel, rnea_one
+from .state import as_batch, external_wrenches, fast_shape, raise_kernel_error, unbatch
 
 
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -30,14 +30,17 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     Without f_ext this runs the compiled kernel (dynamics/fast.py), held by the tests to ``rnea_terms``,
     the readable recursion below; with f_ext it runs the readable recursion.
     """
-    if f_ext:
-        return rnea_terms(model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)["tau"]
-    (Q, V, A), single = fast_batch(model, _QVA, q, v, a)
-    tau = np.empty(Q.shape)
-    code = rnea_kernel(*kernel_arrays(model), Q, V, A, tau)
+    nd = 0 if f_ext else fast_shape(model, q, v, a)
+    if nd == 0:
+        if f_ext:
+            return rnea_terms(model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)["tau"]
+        (q, v, a), single = as_batch(model, q=q, v=v, a=a)      # checked and converted: (N, nv)
+        return unbatch(rnea(model, q, v, a), single)
+    tau = np.empty(q.shape)
+    code = (rnea_one if nd == 1 else rnea_kernel)(*kernel_arrays(model), q, v, a, tau)
     if code != -1:
-        raise_kernel_error(model, code, _QVA, (Q, V, A))
-    return tau[0] if single else tau
+        raise_kernel_error(model, code, _QVA, (q, v, a))
+    return tau
 
 
 _QVA = ("q", "v", "a")

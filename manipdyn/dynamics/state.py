@@ -75,19 +75,22 @@ def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     return F, Mo
 
 
-def fast_batch(model, names, *arrays):
-    """Like as_batch, without copies or numpy passes when every array is already float64, C-contiguous,
-    (nv,) or (N, nv) of one shape — finiteness is then checked inside the compiled kernel (see
-    raise_kernel_error). Anything else takes as_batch's full checks (and conversions)."""
+_F64 = np.dtype(np.float64)
+
+
+def fast_shape(model, *arrays):
+    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N, nv) — the compiled kernels
+    then take them as they are (any memory layout) and check finiteness themselves; 0 otherwise (take
+    as_batch's checks and conversions)."""
     x0 = arrays[0]
-    shape = getattr(x0, "shape", None)
-    for x in arrays:
-        if (type(x) is not np.ndarray or x.dtype != np.float64 or x.shape != shape
-                or not x.flags.c_contiguous or not (1 <= x.ndim <= 2) or x.shape[-1] != model.nv):
-            return as_batch(model, **dict(zip(names, arrays)))
-    if x0.ndim == 1:
-        return [x[None] for x in arrays], True
-    return list(arrays), False
+    if type(x0) is not np.ndarray or x0.dtype is not _F64:
+        return 0
+    shape = x0.shape
+    for x in arrays[1:]:
+        if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != shape:
+            return 0
+    nd = len(shape)
+    return nd if 1 <= nd <= 2 and shape[-1] == len(model.joint_names) else 0
 
 
 def raise_kernel_error(model, code, names, batches):
@@ -99,6 +102,7 @@ def raise_kernel_error(model, code, names, batches):
                             f"without mass or inertia about its axis")
     s, i = divmod(code, model.nv)
     for name, x in zip(names, batches):
+        x = np.atleast_2d(x)
         if not np.isfinite(x[s, i]):
             idx = [i] if x.shape[0] == 1 else [s, i]
             raise InputError(f"{name}{idx} (joint {model.joint_names[i]!r}) is {x[s, i]}: inputs must be finite")
