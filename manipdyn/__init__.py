@@ -13,6 +13,7 @@ from .errors import (ConstraintError, DivergenceError, InertiaWarning, InputErro
                      SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
 from .model import PRISMATIC, REVOLUTE, Frame, Model
+from .reduce import reduce
 
 __version__ = "0.1.0"
 
@@ -23,7 +24,7 @@ def dh_to_urdf(*args, **kwargs):
     return _dh_to_urdf(*args, **kwargs)
 
 
-__all__ = ["rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+__all__ = ["reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "InertiaWarning"]

@@ -39,7 +39,7 @@ def _validate(args) -> int:
         for path in paths:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                model = load_urdf(path)
+                model = load_urdf(path, **reduction(args))
             for w in caught:
                 bar.write(f"warning: {w.message}", file=sys.stderr)
             ref = Path(args.reference) if args.reference else path
@@ -55,12 +55,35 @@ def _validate(args) -> int:
     return 1 if failed else 0
 
 
+def add_reduction_options(p):
+    """--lock / --root / --tips / --prune: model only what the scene needs (manipdyn.reduce)."""
+    p.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
+                   help="hold a joint fixed at a value (repeatable)")
+    p.add_argument("--root", help="keep only chains from this link ...")
+    p.add_argument("--tips", nargs="+", metavar="LINK", help="... to these links (bodies beyond merge as payload)")
+    p.add_argument("--prune", action="store_true", help="drop massless moving leaves")
+
+
+def reduction(args) -> dict:
+    """The reduction keyword arguments of load_urdf from the CLI options."""
+    locked = {}
+    for item in args.lock:
+        name, sep, value = item.partition("=")
+        try:
+            locked[name] = float(value)
+        except ValueError:
+            raise ManipdynError(f"--lock {item!r}: expected JOINT=VALUE with a number") from None
+        if not sep:
+            raise ManipdynError(f"--lock {item!r}: expected JOINT=VALUE")
+    return dict(locked=locked or None, root=args.root, tips=args.tips, prune=args.prune)
+
+
 def _inspect(args) -> int:
     from .io.urdf import load_urdf
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = load_urdf(args.urdf)
+        model = load_urdf(args.urdf, **reduction(args))
     print(model.summary())
     for w in caught:
         print(f"warning: {w.message}")
@@ -79,9 +102,11 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_reduction_options(v)
     v.set_defaults(func=_validate)
     i = sub.add_parser("inspect", help="show what the loader built from a URDF")
     i.add_argument("urdf")
+    add_reduction_options(i)
     i.set_defaults(func=_inspect)
     return p
 

@@ -82,6 +82,7 @@ class Model:
     notes: tuple = ()      # what the loader did that a user should know (warnings included)
     constraints: tuple = field(default=())  # (Constraint, ...) loop closures; empty for a tree
     actuated: tuple = field(default=())     # joint names with a URDF <transmission>, q order
+    locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q)
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -148,6 +149,8 @@ class Model:
             lines.append(f"closure {c.name!r} ({c.type}, {c.n_rows} equations): {c.parent_link} <-> {c.child_link}")
         if self.actuated:
             lines.append(f"actuated joints (<transmission>): {', '.join(self.actuated)}")
+        if self.locked:
+            lines.append("locked joints: " + ", ".join(f"{j} = {v:g}" for j, v in self.locked.items()))
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 

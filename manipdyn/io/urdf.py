@@ -26,18 +26,24 @@ SUPPORTED = set(MOVING) | {"fixed"}
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
-def load_urdf(path, *, gravity=(0.0, 0.0, -9.81), strict: bool = False) -> Model:
+def load_urdf(path, *, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None, root=None, tips=None,
+              prune=False) -> Model:
     """Read a URDF file into a Model (fixed base; revolute, continuous, prismatic and fixed joints).
 
     Parameters: path to the .urdf file; gravity (3,) in the base frame; strict=True refuses inertias that
-    violate the triangle inequality instead of warning.
+    violate the triangle inequality instead of warning; locked / root / tips / prune as in
+    ``manipdyn.reduce`` (model only what the scene needs).
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:
-        return load_urdf_string(fh.read(), source=path, gravity=gravity, strict=strict)
+        model = load_urdf_string(fh.read(), source=path, gravity=gravity, strict=strict)
+    if locked or root or tips or prune:
+        from ..reduce import reduce
+        model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
+    return model
 
 
 def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), strict=False) -> Model:

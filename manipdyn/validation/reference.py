@@ -31,6 +31,9 @@ class Reference:
         P = pin()
         self.model = model
         self.pm = P.buildModelFromUrdf(str(urdf_path))
+        if model.locked:                      # a reduced model: compare with Pinocchio's reduced model
+            self.pm = P.buildReducedModel(self.pm, [self.pm.getJointId(j) for j in model.locked],
+                                          self._locked_q(model.locked))
         self.pd = self.pm.createData()
         names = tuple(self.pm.names[1:])
         if names != model.joint_names:
@@ -39,6 +42,15 @@ class Reference:
         self.pm.gravity.linear = np.asarray(model.gravity, float)
         self.idx_q = np.array([self.pm.joints[i + 1].idx_q for i in range(model.nv)])
         self.nq_j = np.array([self.pm.joints[i + 1].nq for i in range(model.nv)])
+
+    def _locked_q(self, locked):
+        """Pinocchio's full q with the locked joints at their values (the others at neutral)."""
+        P, pm = pin(), self.pm
+        q = P.neutral(pm)
+        for j, val in locked.items():
+            jm = pm.joints[pm.getJointId(j)]
+            q[jm.idx_q:jm.idx_q + jm.nq] = (np.cos(val), np.sin(val)) if jm.nq == 2 else val
+        return q
 
     def to_pin_q(self, q):
         """Our q (nv,) -> Pinocchio's q (nq,): continuous joints as (cos, sin)."""

@@ -1,0 +1,125 @@
+"""Model only what a scene needs: lock joints, keep the chains from a root to tips, prune massless leaves.
+
+A locked joint becomes a fixed joint at its given value (as Pinocchio's buildReducedModel does): its body
+merges into its parent body (mass, CoM and inertia combined; frames kept, re-expressed), and the joints
+below it keep moving with the merged body as their parent. ``root``/``tips`` lock every joint that is not on
+a chain from the root link to one of the tip links — bodies beyond the tips merge into them as payload,
+side branches merge into the chain they hang from (or into the fixed base, where they no longer matter).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .errors import InputError, ModelError
+from .model import REVOLUTE, Constraint, Frame
+from .spatial import axis_angle, combine_inertias
+
+
+def reduce(model, *, locked=None, root=None, tips=None, prune=False):
+    """A new Model with ``locked`` = {joint: value} fixed, only the root→tips chains moving (if given),
+    and, with prune=True, massless moving leaves dropped. Raises InputError naming unknown joints/links,
+    ModelError naming a closure whose two sides become one rigid body."""
+    values = dict(locked or {})
+    for j in values:
+        model.joint_index(j)
+    values.update({j: 0.0 for j in _off_chain(model, root, tips) if j not in values})
+    if prune:
+        values.update({j: 0.0 for j in _massless_leaves(model, values)})
+    keep = [i for i, j in enumerate(model.joint_names) if j not in values]
+    return _rebuild(model, keep, values)
+
+
+def _off_chain(model, root, tips):
+    """Joints to lock so that only chains from ``root`` to ``tips`` move."""
+    if root is None and tips is None:
+        return []
+    body_of = lambda link: model.frame(link).body  # noqa: E731
+    anc = [set() for _ in range(model.nv)]
+    for i in range(model.nv):
+        anc[i] = ({i} | anc[model.parent[i]]) if model.parent[i] >= 0 else {i}
+    tip_bodies = [body_of(t) for t in (tips or [])] or [i for i in range(model.nv)
+                                                        if i not in model.parent]   # default: every leaf
+    on_chain = set().union(*(anc[b] for b in tip_bodies if b >= 0)) if tip_bodies else set()
+    if root is not None:
+        rb = body_of(root)
+        above = anc[rb] if rb >= 0 else set()      # joints between the base and the root link: locked
+        on_chain -= above
+        missing = [t for t, b in zip(tips or [], tip_bodies) if rb >= 0 and rb not in anc[b] and b != rb]
+        if missing:
+            raise InputError(f"tip link(s) {', '.join(missing)} do not hang below root link {root!r}")
+    return [model.joint_names[i] for i in range(model.nv) if i not in on_chain]
+
+
+def _massless_leaves(model, values):
+    """Moving joints whose whole subtree carries no mass and no inertia (repeatedly, leaves first)."""
+    drop = set(values)
+    for i in reversed(range(model.nv)):
+        children = [k for k in range(model.nv) if model.parent[k] == i and model.joint_names[k] not in drop]
+        if not children and model.mass[i] == 0.0 and not np.any(model.inertia[i]):
+            drop.add(model.joint_names[i])
+    return [j for j in drop if j not in values]
+
+
+def _rebuild(model, keep, values):
+    """Renumber the kept joints; carry every locked body into the kept body (or base) it hangs from."""
+    new_of = {}                                    # old body -> (new body, R, p): old frame in new frame
+    parts, parent, R0, p0 = {-1: []}, [], [], []
+    merged = {k: list(v) for k, v in model.merged.items()}
+    base = (-1, np.eye(3), np.zeros(3))
+    for i in range(model.nv):
+        nb, Rt, pt = new_of.get(model.parent[i], base)
+        if i in keep:
+            k = len(parent)
+            parent.append(nb)
+            R0.append(Rt @ model.R0[i])
+            p0.append(pt + Rt @ model.p0[i])
+            new_of[i], parts[k] = (k, np.eye(3), np.zeros(3)), []
+        else:
+            Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])
+            new_of[i] = (nb, Rt @ Ri, pt + Rt @ pi)
+            host = model.root_link if nb < 0 else model.body_names[keep[nb]]
+            merged.setdefault(host, []).extend([model.body_names[i]] + merged.pop(model.body_names[i], []))
+    for i in range(model.nv):
+        nb, Rt, pt = new_of[i]
+        parts[nb].append((model.mass[i], pt + Rt @ model.com[i], Rt @ model.inertia[i] @ Rt.T))
+    inert = [combine_inertias(parts[k]) for k in range(len(keep))]
+    frames = {n: _move_frame(f, new_of, base) for n, f in model.frames.items()}
+    names = [model.joint_names[i] for i in keep]
+    sel = np.array(keep, int)
+    return dataclasses.replace(
+        model, joint_names=tuple(names), body_names=tuple(model.body_names[i] for i in keep),
+        parent=np.array(parent, int).reshape(-1), kind=model.kind[sel], continuous=model.continuous[sel],
+        axis=model.axis[sel], R0=np.array(R0).reshape(-1, 3, 3), p0=np.array(p0).reshape(-1, 3),
+        mass=np.array([m for m, _, _ in inert]).reshape(-1), com=np.array([c for _, c, _ in inert]).reshape(-1, 3),
+        inertia=np.array([I for _, _, I in inert]).reshape(-1, 3, 3), lower=model.lower[sel],
+        upper=model.upper[sel], effort=model.effort[sel], velocity=model.velocity[sel], frames=frames,
+        merged={k: tuple(v) for k, v in merged.items()},
+        mimic=tuple(m for m in model.mimic if m[0] in names and m[1] in names),
+        constraints=tuple(_move_constraint(c, new_of, base) for c in model.constraints),
+        actuated=tuple(j for j in model.actuated if j in names),
+        locked={**model.locked, **{j: float(v) for j, v in values.items()}})
+
+
+def _fixed_placement(model, i, value):
+    """Placement of body i in its parent at joint value ``value`` (the joint turned into a fixed one)."""
+    if not np.isfinite(value):
+        raise InputError(f"locked value of joint {model.joint_names[i]!r} is {value}: must be finite")
+    if model.kind[i] == REVOLUTE:
+        return model.R0[i] @ axis_angle(model.axis[i], np.array([float(value)]))[0], model.p0[i].copy()
+    return model.R0[i].copy(), model.p0[i] + value * (model.R0[i] @ model.axis[i])
+
+
+def _move_frame(f, new_of, base):
+    nb, Rt, pt = new_of.get(f.body, base)
+    return Frame(f.name, nb, Rt @ f.R, pt + Rt @ f.p)
+
+
+def _move_constraint(c, new_of, base):
+    (a, Ra, pa), (b, Rb, pb) = new_of.get(c.parent, base), new_of.get(c.child, base)
+    if a == b:
+        raise ModelError(f"closure {c.name!r} cannot be kept: locking makes {c.parent_link!r} and "
+                         f"{c.child_link!r} one rigid body (unlock a joint of the loop or drop the closure)")
+    return Constraint(c.name, c.type, a, c.parent_link, Ra @ c.Rp, pa + Ra @ c.pp, Ra @ c.axis_p,
+                      b, c.child_link, Rb @ c.Rc, pb + Rb @ c.pc, Rb @ c.axis_c)
