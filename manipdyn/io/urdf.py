@@ -67,13 +67,15 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
 
 def _parse_xml(data: bytes, source: str):
     """Well-formed XML with a <robot> root; DTDs and entities are refused (no expansion, no network)."""
+    if b"<!ENTITY" in data:                   # before parsing: nothing is expanded or fetched
+        raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
                              remove_comments=True)
     try:
         root = etree.parse(io.BytesIO(data), parser).getroot()
     except etree.XMLSyntaxError as exc:
         raise URDFError(f"{source}: malformed XML: {exc}") from None
-    if root.getroottree().docinfo.internalDTD is not None or b"<!ENTITY" in data:
+    if root.getroottree().docinfo.internalDTD is not None:
         raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
     if root.tag != "robot":
         raise URDFError(f"{source}: root element is <{root.tag}>, expected <robot>")
@@ -169,6 +171,10 @@ def _build(robot, source, gravity, strict) -> Model:
                 visit(j.child, len(joints) - 1, np.eye(3), np.zeros(3))
 
     visit(root, -1, np.eye(3), np.zeros(3))
+    unreached = sorted(set(links) - set(frames))
+    if unreached:                          # every link has one parent, yet some hang off no root: a cycle
+        raise URDFError(f"{source}: links {', '.join(unreached)} are not connected to the root link "
+                        f"{root!r}: their joints form a cycle")
     nv = len(joints)
     axes = [_unit_axis(j, source, notes) for j, *_ in joints]
     inertias = [combine_inertias(parts[i]) for i in range(nv)]
