@@ -1,4 +1,4 @@
-"""The ``manipdyn`` command: validate, inspect (more subcommands join as they land).
+"""The ``manipdyn`` command: validate, inspect, bench (more subcommands join as they land).
 
 Exit codes: 0 success, 1 a validated term failed, 2 bad input (file, URDF, arguments).
 """
@@ -90,6 +90,13 @@ def _inspect(args) -> int:
     return 0
 
 
+def _bench(args) -> int:
+    from .bench import run
+    run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
+    print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="manipdyn", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -108,6 +115,10 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("urdf")
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
+    b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
+    b.add_argument("--out", required=True, help="folder for report.md, report.json and PNG plots")
+    b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (about a minute)")
+    b.set_defaults(func=_bench)
     return p
 
 

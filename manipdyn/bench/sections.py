@@ -1,0 +1,168 @@
+"""The bench report's sections: each returns rows of plain dicts (time and error side by side)."""
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from ..constraints import constrained_forward_dynamics
+from ..dynamics.aba import aba
+from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
+from ..dynamics.rnea import rnea
+from ..io.urdf import load_urdf
+from ..validation.compare import error, random_states
+from ..validation.reference import Reference, pin
+from .timing import per_call, random_chain
+
+
+def _load(path, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_urdf(path, **kw)
+
+
+def latency(paths, quick=False):
+    """a. Single-state latency of the public, input-checked calls vs Pinocchio's Python calls, with errors."""
+    P, rows = pin(), []
+    for path in paths:
+        model = _load(path)
+        ref = Reference(model, path)
+        pm, pd = ref.pm, ref.pd
+        Q, V, A = random_states(model, 50 if quick else 200, np.random.default_rng(0))
+        q, v, a = Q[0], V[0], A[0]
+        pq = ref.to_pin_q(q)
+        cases = [
+            ("rnea", lambda: rnea(model, q, v, a), lambda: P.rnea(pm, pd, pq, v, a),
+             lambda s: (rnea(model, Q[s], V[s], A[s]), P.rnea(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+            ("mass_matrix (crba)", lambda: mass_matrix(model, q), lambda: P.crba(pm, pd, pq),
+             lambda s: (mass_matrix(model, Q[s]), P.crba(pm, pd, ref.to_pin_q(Q[s])))),
+            ("mass_matrix (lagrange)", lambda: mass_matrix(model, q, method="lagrange"), lambda: P.crba(pm, pd, pq),
+             lambda s: (mass_matrix(model, Q[s], method="lagrange"), P.crba(pm, pd, ref.to_pin_q(Q[s])))),
+            ("coriolis_matrix", lambda: coriolis_matrix(model, q, v),
+             lambda: P.computeCoriolisMatrix(pm, pd, pq, v),
+             lambda s: (coriolis_matrix(model, Q[s], V[s]), P.computeCoriolisMatrix(pm, pd, ref.to_pin_q(Q[s]), V[s]))),
+            ("gravity_torques", lambda: gravity_torques(model, q), lambda: P.computeGeneralizedGravity(pm, pd, pq),
+             lambda s: (gravity_torques(model, Q[s]), P.computeGeneralizedGravity(pm, pd, ref.to_pin_q(Q[s])))),
+            ("aba", lambda: aba(model, q, v, a), lambda: P.aba(pm, pd, pq, v, a),
+             lambda s: (aba(model, Q[s], V[s], A[s]), P.aba(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+        ]
+        for name, ours, theirs, pair in cases:
+            ours(), theirs()
+            t_ours, t_pin = per_call(ours, repeat=3 if quick else 7), per_call(theirs, repeat=3 if quick else 7)
+            err = max(error(*[np.array(x) for x in pair(s)]) for s in range(len(Q)))
+            rows.append(dict(robot=model.name, call=name, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                             ratio=t_ours / t_pin, err=err))
+    return rows
+
+
+def closed_latency(spm_path, quick=False):
+    """a (closed chains). SPM constrained forward dynamics vs pin.constraintDynamics, per call, with error."""
+    from ..validation.closed import ClosedReference, manifold_states
+    model = _load(spm_path)
+    cref = ClosedReference(Reference(model, spm_path))
+    rng = np.random.default_rng(1)
+    Qm, Vm = manifold_states(model, 20 if quick else 100, rng)
+    tau = np.zeros(model.nv)
+    tau[[model.joint_index(j) for j in model.actuated]] = 0.1
+    q, v = Qm[0], Vm[0]
+    t_ours = per_call(lambda: constrained_forward_dynamics(model, q, v, tau), repeat=3)
+    t_pin = per_call(lambda: cref.qdd(q, v, tau), repeat=3)
+    err = max(error(constrained_forward_dynamics(model, Qm[s], Vm[s], tau)[0], cref.qdd(Qm[s], Vm[s], tau))
+              for s in range(len(Qm)))
+    return [dict(robot=model.name, call="constrained_forward_dynamics", ours_us=t_ours * 1e6,
+                 pin_us=t_pin * 1e6, ratio=t_ours / t_pin, err=err)]
+
+
+def throughput(paths, sizes, quick=False):
+    """b. Time per state of batched calls: ours vs a Pinocchio loop and pin.*InParallel (1 and all cores)."""
+    P, rows = pin(), []
+    import os
+    cores = os.cpu_count() or 1
+    for path in paths:
+        model = _load(path)
+        ref = Reference(model, path)
+        pm, pd = ref.pm, ref.pd
+        pool = P.ModelPool(pm, cores)
+        for N in sizes:
+            Q, V, A = random_states(model, N, np.random.default_rng(2))
+            PQ = np.asfortranarray(np.array([ref.to_pin_q(x) for x in Q]).T)
+            PV, PA = np.asfortranarray(V.T), np.asfortranarray(A.T)
+            out = np.asfortranarray(np.zeros((model.nv, N)))
+            reps = 1 if (quick or N >= 10000) else 3
+            loop_n = min(N, 2000)           # the Python loop is timed on at most 2000 states
+            for call, ours, loop, par in (
+                ("rnea", lambda: rnea(model, Q, V, A),
+                 lambda: [P.rnea(pm, pd, PQ[:, s], PV[:, s], PA[:, s]) for s in range(loop_n)],
+                 lambda th: P.rneaInParallel(th, pool, PQ, PV, PA, out)),
+                ("aba", lambda: aba(model, Q, V, A),
+                 lambda: [P.aba(pm, pd, PQ[:, s], PV[:, s], PA[:, s]) for s in range(loop_n)],
+                 lambda th: P.abaInParallel(th, pool, PQ, PV, PA, out)),
+                ("mass_matrix", lambda: mass_matrix(model, Q),
+                 lambda: [P.crba(pm, pd, PQ[:, s]) for s in range(loop_n)], None)):
+                ours()
+                row = dict(robot=model.name, call=call, N=N,
+                           ours_us=per_call(ours, repeat=reps, min_time=0.02) / N * 1e6,
+                           pin_loop_us=per_call(loop, repeat=reps, min_time=0.02) / loop_n * 1e6)
+                if par is not None:
+                    row["pin_par1_us"] = per_call(lambda: par(1), repeat=reps, min_time=0.02) / N * 1e6
+                    row["pin_par_all_us"] = per_call(lambda: par(cores), repeat=reps, min_time=0.02) / N * 1e6
+                    row["ratio_par1"] = row["ours_us"] / row["pin_par1_us"]
+                row["ratio_loop"] = row["ours_us"] / row["pin_loop_us"]
+                rows.append(row)
+    return rows
+
+
+def scaling(ns, quick=False):
+    """c. Random serial chains of n joints: time per call against n, ours vs Pinocchio, single-state (vs
+    its Python call) and batched (vs pin.*InParallel, 1 thread)."""
+    P, rows = pin(), []
+    N = 1000 if quick else 10000
+    for n in ns:
+        model, pm = random_chain(n, seed=n)
+        pd, pool = pm.createData(), P.ModelPool(pm, 1)
+        Q, V, A = random_states(model, N, np.random.default_rng(n))
+        q, v, a = Q[0], V[0], A[0]
+        QT, VT, AT = (np.asfortranarray(x.T) for x in (Q, V, A))
+        out = np.asfortranarray(np.zeros((model.nv, N)))
+        for call, ours, theirs in (
+            ("rnea", lambda: rnea(model, q, v, a), lambda: P.rnea(pm, pd, q, v, a)),
+            ("aba", lambda: aba(model, q, v, a), lambda: P.aba(pm, pd, q, v, a)),
+            ("mass_matrix (crba)", lambda: mass_matrix(model, q), lambda: P.crba(pm, pd, q)),
+            ("mass_matrix (lagrange)", lambda: mass_matrix(model, q, method="lagrange"), lambda: P.crba(pm, pd, q)),
+            ("rnea batch/state", lambda: rnea(model, Q, V, A), lambda: P.rneaInParallel(1, pool, QT, VT, AT, out)),
+            ("aba batch/state", lambda: aba(model, Q, V, A), lambda: P.abaInParallel(1, pool, QT, VT, AT, out)),
+        ):
+            ours()
+            t_o, t_p = per_call(ours, repeat=3), per_call(theirs, repeat=3)
+            if call.endswith("batch/state"):
+                t_o, t_p = t_o / N, t_p / N
+            rows.append(dict(n=n, call=call, ours_us=t_o * 1e6, pin_us=t_p * 1e6, ratio=t_o / t_p))
+    return rows
+
+
+def slopes(rows):
+    """Fitted log-log slope of time against n for each call (ours and Pinocchio)."""
+    out = {}
+    for call in sorted({r["call"] for r in rows}):
+        pts = [(r["n"], r["ours_us"], r["pin_us"]) for r in rows if r["call"] == call]
+        n, t_o, t_p = (np.log(np.array(x, float)) for x in zip(*pts))
+        out[call] = dict(ours=float(np.polyfit(n, t_o, 1)[0]), pin=float(np.polyfit(n, t_p, 1)[0]))
+    return out
+
+
+def reduced(path, reduce_kw, quick=False):
+    """Load time and per-call speed of a reduced model against the full one (what a scene needs)."""
+    rows = []
+    for label, kw in (("full", {}), ("reduced", reduce_kw)):
+        t0 = time.perf_counter()
+        for _ in range(3):
+            model = _load(path, **kw)
+        t_load = (time.perf_counter() - t0) / 3
+        Q, V, A = random_states(model, 1000, np.random.default_rng(3))
+        rnea(model, Q[0], V[0], A[0]), aba(model, Q[0], V[0], A[0])
+        rows.append(dict(model=label, nv=model.nv, load_ms=t_load * 1e3,
+                         rnea_us=per_call(lambda: rnea(model, Q[0], V[0], A[0]), repeat=3) * 1e6,
+                         aba_us=per_call(lambda: aba(model, Q[0], V[0], A[0]), repeat=3) * 1e6,
+                         rnea_batch_us=per_call(lambda: rnea(model, Q, V, A), repeat=3) / 1000 * 1e6))
+    return rows
