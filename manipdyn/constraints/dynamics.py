@@ -48,7 +48,27 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     Parameters: q, v, tau (nv,) or (N, nv) — tau is the full generalized force of the spanning tree
     (zero on passive joints); baumgarte=(alpha, beta) stabilises drift; f_ext as in ``rnea``.
     Returns q̈ (nv,)/(N, nv), λ (m,)/(N, m) in the rows of ``row_labels(model)``.
+    Without f_ext this runs the compiled kernel (constraints/fast.py), held by the tests to
+    ``constrained_forward_dynamics_reference``, the readable solve below.
     """
+    if f_ext:
+        return constrained_forward_dynamics_reference(model, q, v, tau, baumgarte=baumgarte, f_ext=f_ext,
+                                                      f_ext_frame=f_ext_frame, info=info)
+    from .fast import constrained_fd_fast
+    (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+    code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
+    if code == -2:
+        raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")
+    out = (unbatch(qdd, single), unbatch(lam, single))
+    if not info:
+        return out
+    reports = [rank_report(model, J) for J in closure_terms(model, Q)[1]]
+    return out + ((reports[0] if single else reports),)
+
+
+def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, f_ext=None,
+                                           f_ext_frame="local", info=False):
+    """The readable KKT solve of Eq. 27 (same contract as constrained_forward_dynamics)."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
     Phi, Jc, bias = closure_terms(model, Q, V)
     c = -bias

@@ -51,3 +51,22 @@ def test_fast_aba_refuses_massless_subtree():
                                       ("jtip", "revolute", "a", "tip", (0, 0, 0.2), (0, 0, 0), (0, 1, 0))]))
     with pytest.raises(md.SingularError, match="jtip"):
         md.aba(model, np.zeros(2), np.zeros(2), np.zeros(2))
+
+
+@pytest.mark.parametrize("name", ["fourbar.urdf", "spm.urdf"])
+def test_closed_chain_kernel_equals_reference(name):
+    from conftest import ROOT
+    from manipdyn.constraints.dynamics import (constrained_forward_dynamics,
+                                               constrained_forward_dynamics_reference)
+    from manipdyn.validation.closed import manifold_states
+    model = md.load_urdf(ROOT / "urdf" / name)
+    rng = np.random.default_rng(8)
+    Q, V = manifold_states(model, 30, rng)
+    T = rng.normal(size=Q.shape)
+    for bg in (None, (3.0, 4.0)):
+        fast = constrained_forward_dynamics(model, Q, V, T, baumgarte=bg)
+        ref = constrained_forward_dynamics_reference(model, Q, V, T, baumgarte=bg)
+        assert_close(fast[0], ref[0], 1e-12, "q̈")
+        assert_close(fast[1], ref[1], 1e-12, "λ")
+    one = constrained_forward_dynamics(model, Q[0], V[0], T[0], info=True)
+    assert one[0].shape == (model.nv,) and one[2].rank == (2 if name == "fourbar.urdf" else 4)
