@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import closure_terms, constrained_forward_dynamics, project, rank_report
+from ..dynamics.lagrange import mass_matrix
 from ..errors import ConstraintError
 from .reference import pin
 
@@ -92,8 +93,9 @@ def closed_chain_terms(model, ref, Q, rng, progress=None):
         _update(worst["phi"], _point_rows(model, Phi[0]), cref.point_gaps(Q[s]))
         tau = np.zeros(model.nv)
         tau[act] = rng.normal(0.0, 1.0, len(act))
-        _update(worst["qdd_closed"], constrained_forward_dynamics(model, Qm[s], Vm[s], tau)[0],
-                cref.qdd(Qm[s], Vm[s], tau))
+        qdd, _, rep = constrained_forward_dynamics(model, Qm[s], Vm[s], tau, info=True)
+        kappa = np.linalg.cond(mass_matrix(model, Qm[s])) * rep.cond ** 2   # conditioning of the solve
+        _update(worst["qdd_closed"], qdd, cref.qdd(Qm[s], Vm[s], tau), kappa)
         if progress is not None:
             progress(1)
     _, Jc, _ = closure_terms(model, Qm[:1])
@@ -110,10 +112,10 @@ def _point_rows(model, phi):
     return np.array(rows).reshape(-1, 3)
 
 
-def _update(w, x, y):
+def _update(w, x, y, scale=1.0):
     from .compare import error
     w[0] = max(w[0], float(np.max(np.abs(np.asarray(x) - y), initial=0.0)))
-    w[1] = max(w[1], error(x, y))
+    w[1] = max(w[1], error(x, y) / scale)
 
 
 def actuator_torques_by_inversion(model, cref, q, v, a_act, actuated, gen_force=None):
