@@ -1,4 +1,4 @@
-"""The ``manipdyn`` command: validate, inspect, bench (more subcommands join as they land).
+"""The ``manipdyn`` command: validate, inspect, example, bench (more subcommands join as they land).
 
 Exit codes: 0 success, 1 a validated term failed, 2 bad input (file, URDF, arguments).
 """
@@ -97,6 +97,25 @@ def _bench(args) -> int:
     return 0
 
 
+def _example(args) -> int:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.name == "aau":
+        from .examples import aau_arm as ex
+        from .io.urdf import load_urdf
+        model = load_urdf(BUNDLED / "aau_arm.urdf")
+        traj, tau = ex.chapter_example(model, samples=args.samples)
+        ex.write_csv(out / "aau_arm.csv", model, traj, tau)
+        ex.plot(out, model, traj, tau)
+        print(f"AAU arm, t in [0, 2π] s, {len(traj.t)} samples: pose error ≤ {traj.pos_err.max():.1e} m / "
+              f"{traj.dir_err.max():.1e} rad, σ_min(J_task) ≥ {traj.sigma_min.min():.3f}, "
+              f"|τ| ≤ {abs(tau).max():.2f} N·m with a {ex.PAYLOAD_KG:g} kg payload")
+        print(f"wrote {out / 'aau_arm.csv'}, fig3_joint_rates.png, fig4_joint_torques.png")
+        return 0
+    from .examples import spm_fig7
+    return spm_fig7.main(out, samples=args.samples)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="manipdyn", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -115,6 +134,11 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("urdf")
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
+    e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
+    e.add_argument("name", choices=["aau", "spm"], help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7)")
+    e.add_argument("--out", default=".", help="output folder")
+    e.add_argument("--samples", type=int, default=401)
+    e.set_defaults(func=_example)
     b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
     b.add_argument("--out", required=True, help="folder for report.md, report.json and PNG plots")
     b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (about a minute)")
