@@ -32,6 +32,7 @@ def run(out_dir, quick=False, progress=print) -> dict:
         ("closed_latency", lambda: sections.closed_latency(ROOT / "urdf" / "spm.urdf", quick)),
         ("throughput", lambda: sections.throughput(arms, (1, 100, 10_000) if quick else (1, 100, 10_000, 100_000), quick)),
         ("scaling", lambda: sections.scaling((2, 4, 8, 16, 32) if quick else (2, 4, 8, 16, 32, 64), quick)),
+        ("hard_cases", lambda: hard_cases(quick)),
         ("reduced", lambda: sections.reduced(robots_dir() / "baxter_description/urdf/baxter.urdf",
                                              dict(root="torso", tips=["left_gripper"]), quick)),
     ]
@@ -42,6 +43,19 @@ def run(out_dir, quick=False, progress=print) -> dict:
     data["slopes"] = sections.slopes(data["scaling"])
     write(data, out)
     return data
+
+
+def hard_cases(quick):
+    """Ill-conditioned chains against the 50-digit reference: q̈ error of each forward-dynamics route."""
+    from .hard import ill_conditioned
+    rows = []
+    for label, kw in (("uniform masses", dict(spread=(1.0, 1.0))),
+                      ("1e3 kg root … 1e-6 kg tip", dict(n=8, lengths=(0.001, 0.5))),
+                      ("1e-6 kg root … 1e3 kg tip", dict(n=8, light_root=True, lengths=(0.001, 0.5)))):
+        for r in ill_conditioned(states=2 if quick else 6, **kw):
+            rows.append({"case": label, "cond(M)": f"{r['cond_M']:.1e}", "ABA": f"{r['aba']:.1e}",
+                         "Cholesky (M⁻¹)": f"{r['cholesky']:.1e}", "Pinocchio aba": f"{r['pinocchio']:.1e}"})
+    return rows
 
 
 def _table(rows, cols, fmt):
@@ -74,9 +88,14 @@ def markdown(d) -> str:
          "\n## Reduced models (baxter, one arm: root torso, tip left_gripper)\n\n",
          _table(d["reduced"], ["model", "nv", "load_ms", "rnea_us", "aba_us", "rnea_batch_us"],
                 dict(load_ms="{:.1f}", rnea_us=us, aba_us=us, rnea_batch_us="{:.3f}"))]
+    titles = dict(work_precision="d. Work–precision of forward simulation", spm_drift="e. SPM: cost and drift",
+                  hard_cases="Hard cases: q̈ error against a 50-digit reference (mpmath)")
     for extra in ("work_precision", "spm_drift", "hard_cases"):
         if extra in d:
-            s.append(f"\n## {extra.replace('_', ' ')}\n\n" + _table(d[extra], list(d[extra][0]), {}))
+            s.append(f"\n## {titles[extra]}\n\n" + _table(d[extra], list(d[extra][0]), {}))
+    if "hard_cases" in d:
+        s.append("\nTrust the recursive ABA on ill-conditioned chains: it never forms M, and its error stays"
+                 " far below the Cholesky (M⁻¹) route's, which grows like eps · cond(M).\n")
     return "".join(s)
 
 
