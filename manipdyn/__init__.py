@@ -6,6 +6,8 @@ state (nv,) or a batch (N, nv) and returns the matching shape. Pinocchio is neve
 from __future__ import annotations
 
 from .dynamics.aba import aba, forward_dynamics
+from .dynamics.energy import kinetic_energy, potential_energy
+from .dynamics.integrate import SimResult, simulate
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
@@ -24,7 +26,7 @@ def dh_to_urdf(*args, **kwargs):
     return _dh_to_urdf(*args, **kwargs)
 
 
-__all__ = ["reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+__all__ = ["simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "InertiaWarning"]

@@ -1,0 +1,99 @@
+"""Integrators and energies: physical laws and measured convergence orders, against independent references."""
+import numpy as np
+import pytest
+from conftest import AAU, assert_close, inertial_xml, urdf, zoo_paths
+
+import manipdyn as md
+from manipdyn.dynamics.energy import kinetic_energy, potential_energy
+from manipdyn.dynamics.integrate import simulate
+from manipdyn.validation import random_states
+
+MODEL = md.load_urdf(AAU)
+Q0, V0 = np.array([0.3, -0.5, 0.8, 0.2, -0.4]), np.array([0.5, -0.3, 0.2, 1.0, -0.5])
+
+
+@pytest.mark.parametrize("path", [AAU] + [p for p in zoo_paths() if p.name == "baxter.urdf"], ids=lambda p: p.stem)
+def test_kinetic_energy_over_links_equals_half_vMv(path):
+    model = md.load_urdf(path)
+    Q, V, _ = random_states(model, 50, np.random.default_rng(1))
+    half_vMv = 0.5 * np.einsum("ni,nij,nj->n", V, md.mass_matrix(model, Q), V)
+    assert_close(kinetic_energy(model, Q, V), half_vMv, 1e-13, "T")
+
+
+def test_gravity_torques_are_the_gradient_of_the_potential():
+    Q, _, _ = random_states(MODEL, 10, np.random.default_rng(2))
+    h = 1e-6
+    for q in Q:
+        grad = np.array([(potential_energy(MODEL, q + h * e) - potential_energy(MODEL, q - h * e)) / (2 * h)
+                         for e in np.eye(MODEL.nv)])
+        assert_close(md.gravity_torques(MODEL, q), grad, 1e-7, "∂V/∂q")
+
+
+def _final_error(method, h, ref):
+    r = simulate(MODEL, Q0, V0, (0.0, 1.0), dt=h, method=method)
+    return np.abs(np.r_[r.q[-1], r.v[-1]] - ref).max()
+
+
+def test_measured_convergence_orders():
+    # AAU arm under gravity, 1 s; the adaptive reference at rtol 1e-12. Steps in the asymptotic regime:
+    # RK4 5, 2.5, 1.25 ms; semi-implicit Euler 0.5, 0.25, 0.125 ms.
+    r = simulate(MODEL, Q0, V0, (0.0, 1.0), method="adaptive", rtol=1e-12, atol=1e-13)
+    ref = np.r_[r.q[-1], r.v[-1]]
+    for method, hs, order in (("rk4", (5e-3, 2.5e-3, 1.25e-3), 4.0), ("euler", (5e-4, 2.5e-4, 1.25e-4), 1.0)):
+        e = [_final_error(method, h, ref) for h in hs]
+        slope = np.polyfit(np.log(hs), np.log(e), 1)[0]
+        print(f"\n{method}: errors {['%.2e' % x for x in e]}, measured order {slope:.2f}")
+        assert abs(slope - order) <= 0.3
+
+
+def test_energy_drift_torque_free():
+    # drift = max_t |E(t) − E(0)| / max_t T(t): independent of the potential's datum
+    def drift(r):
+        E = kinetic_energy(MODEL, r.q, r.v) + potential_energy(MODEL, r.q)
+        return np.abs(E - E[0]).max() / kinetic_energy(MODEL, r.q, r.v).max()
+
+    rows = [("adaptive rtol 1e-12", drift(simulate(MODEL, Q0, V0, (0, 10), method="adaptive", rtol=1e-12,
+                                                   atol=1e-13)))]
+    for method, h in (("rk4", 4e-3), ("rk4", 2e-3), ("euler", 1e-3), ("euler", 5e-4)):
+        rows.append((f"{method} dt {h:g}", drift(simulate(MODEL, Q0, V0, (0, 10), dt=h, method=method))))
+    print("\nenergy drift over 10 s, torque-free AAU arm under gravity")
+    for name, d in rows:
+        print(f"  {name:<22} {d:.2e}")
+    assert rows[0][1] < 1e-9
+    assert rows[2][1] < rows[1][1] and rows[4][1] < rows[3][1]       # smaller steps drift less
+
+
+def test_batch_equals_single_runs():
+    Q, V, _ = random_states(MODEL, 4, np.random.default_rng(3))
+    batch = simulate(MODEL, Q, V, (0, 0.2), dt=1e-3, method="rk4")
+    assert batch.q.shape == (4, 201, MODEL.nv) and batch.t.shape == (201,)
+    for k in range(4):
+        one = simulate(MODEL, Q[k], V[k], (0, 0.2), dt=1e-3, method="rk4")
+        assert_close(batch.q[k], one.q, 1e-14, "q rows")
+        assert_close(batch.v[k], one.v, 1e-14, "v rows")
+    with pytest.raises(md.InputError, match="one initial state at a time"):
+        simulate(MODEL, Q, V, (0, 0.1), method="adaptive")
+
+
+def test_torque_forms_and_gravity_compensation():
+    hold = simulate(MODEL, Q0, np.zeros(5), (0, 1), dt=2e-3, method="rk4",
+                    tau=lambda t, q, v: md.rnea(MODEL, q, v, np.zeros_like(q)))
+    assert_close(hold.q[-1], Q0, 1e-10, "gravity-compensated arm stays put")
+    const = simulate(MODEL, Q0, V0, (0, 0.1), dt=1e-3, tau=np.ones(5))
+    assert const.q.shape == (101, 5) and const.t[-1] == 0.1
+    odd = simulate(MODEL, Q0, V0, (0, 0.1005), dt=1e-3)          # last step shortened to land on t1
+    assert odd.t[-1] == 0.1005 and odd.n_steps == 101
+
+
+def test_divergence_names_the_time():
+    with pytest.raises(md.DivergenceError, match=r"diverged at t = "):
+        simulate(MODEL, Q0, V0, (0, 1), dt=1e-2, tau=lambda t, q, v: np.full_like(q, np.nan if t > 0.05 else 0.0))
+
+
+def test_singular_mass_matrix_raises_naming_the_joint():
+    model = md.load_urdf_string(urdf({"base": "", "a": inertial_xml(1.0, (0, 0, 0.1), (0.1, 0.1, 0.1, 0, 0, 0)),
+                                      "tip": ""},
+                                     [("ja", "revolute", "base", "a", (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+                                      ("jtip", "revolute", "a", "tip", (0, 0, 0.2), (0, 0, 0), (0, 1, 0))]))
+    with pytest.raises(md.SingularError, match="jtip"):
+        simulate(model, np.zeros(2), np.zeros(2), (0, 0.1))
