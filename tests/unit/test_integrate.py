@@ -60,7 +60,10 @@ def test_energy_drift_torque_free():
     for name, d in rows:
         print(f"  {name:<22} {d:.2e}")
     assert rows[0][1] < 1e-9
-    assert rows[2][1] < rows[1][1] and rows[4][1] < rows[3][1]       # smaller steps drift less
+    assert rows[2][1] < 0.2 * rows[1][1]          # RK4: halving the step cuts the drift (~2⁴)
+    # semi-implicit Euler is symplectic: its energy error stays bounded (no secular growth) on this
+    # chaotic swing, but is not monotone in the step over 10 s
+    assert max(rows[3][1], rows[4][1]) < 0.1
 
 
 def test_batch_equals_single_runs():
