@@ -13,7 +13,7 @@ import numpy as np
 from ..dynamics.lagrange import mass_matrix
 from ..dynamics.state import as_batch
 from ..errors import ConstraintError, SingularError
-from .closures import closure_terms, independent_rows, row_labels
+from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
 from .dynamics import actuation
 
 
@@ -29,7 +29,7 @@ class Assembly:
     damped: bool           # damped least-squares steps were needed
 
 
-def _solve_block(model, q, free, rtol=1e-9):
+def _solve_block(model, q, free, rtol=RANK_RTOL):
     """Φ, the independent rows of Φ_q restricted to the free coordinates, and that block's cond."""
     Phi, Jc, _ = closure_terms(model, q[None])
     G = Jc[0][:, free]
@@ -87,19 +87,19 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
 def project(model, q, v, *, tol=1e-12, max_iter=20):
     """(q, v) returned to Φ = 0 (minimum-norm Newton steps) and Φ_q q̇ = 0 (kinetic-energy-minimal:
     q̇ ← q̇ − M⁻¹Φ_qᵀ(Φ_q M⁻¹ Φ_qᵀ)⁻¹ Φ_q q̇). One state (nv,) or a batch (N, nv), row by row."""
+    from .fast import closure_rows
     (Q, V), single = as_batch(model, q=q, v=v)
     Q, V = Q.copy(), V.copy()
     for s in range(Q.shape[0]):
         for _ in range(max_iter):
-            Phi, Jc, _ = closure_terms(model, Q[s:s + 1])
+            Phi, Jc, _ = closure_rows(model, Q[s])
             if np.max(np.abs(Phi), initial=0.0) <= tol:
                 break
-            Q[s] -= np.linalg.lstsq(Jc[0], Phi[0], rcond=1e-10)[0]   # all rows: off the manifold the
-            #                                                            "redundant" ones still carry Φ
+            Q[s] -= np.linalg.lstsq(Jc, Phi, rcond=1e-10)[0]   # all rows: off the manifold the
+            #                                                    "redundant" ones still carry Φ
         else:
             raise ConstraintError(f"projection of state {s} did not converge (|Φ| = {np.max(np.abs(Phi)):.3g})")
-        _, Jc, _ = closure_terms(model, Q[s:s + 1])
-        G = Jc[0, independent_rows(Jc[0])]
+        G = Jc[independent_rows(Jc)]
         if G.shape[0]:
             Minv_Gt = np.linalg.solve(mass_matrix(model, Q[s]), G.T)
             V[s] -= Minv_Gt @ np.linalg.solve(G @ Minv_Gt, G @ V[s])

@@ -86,7 +86,12 @@ def closure_terms(model, Q, V=None):
     return Phi, Jac, (np.concatenate(bias, axis=1) if V is not None else None)
 
 
-def independent_rows(J, rtol=1e-9):
+RANK_RTOL = 1e-6   # rows whose new direction is below 1e-6 of the largest row are redundant: off the
+#                    manifold (mid-step states) the ideally redundant rows keep components ~|Φ|, which a
+#                    tighter tolerance would take as rank and make the KKT solve singular
+
+
+def independent_rows(J, rtol=RANK_RTOL):
     """Greedy rank-revealing row selection: indices of rows of J (m, nv) that add rank, in order.
 
     A row is kept when its component orthogonal to the rows kept so far exceeds rtol · max row norm;

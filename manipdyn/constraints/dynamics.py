@@ -17,7 +17,7 @@ from ..dynamics.lagrange import mass_matrix
 from ..dynamics.rnea import rnea
 from ..dynamics.state import as_batch, unbatch
 from ..errors import ConstraintError, InputError, SingularError
-from .closures import closure_terms, independent_rows, row_labels
+from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
 
 
 @dataclass(frozen=True)
@@ -33,9 +33,9 @@ class RankReport:
         return f"closure Jacobian rank {self.rank} of {self.rows} rows (cond {self.cond:.3g}){red}"
 
 
-def rank_report(model, J, rtol=1e-9) -> RankReport:
+def rank_report(model, J, rtol=None) -> RankReport:
     """Rank of one state's Φ_q (m, nv), naming the redundant rows."""
-    keep, labels = independent_rows(J, rtol), row_labels(model)
+    keep, labels = independent_rows(J, RANK_RTOL if rtol is None else rtol), row_labels(model)
     sv = np.linalg.svd(J[keep], compute_uv=False) if keep else np.ones(1)
     return RankReport(len(keep), J.shape[0], tuple(l for k, l in enumerate(labels) if k not in keep),
                       float(sv[0] / sv[-1]))

@@ -11,7 +11,8 @@ from numba import njit
 
 from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays, rnea_kernel
 from ..dynamics.kinematics import supports
-from .closures import _pairs
+from ..errors import SingularError
+from .closures import RANK_RTOL, _pairs
 
 TYPES = {"spherical": 0, "revolute": 1, "fixed": 2}
 
@@ -123,7 +124,7 @@ def closure_kernel(I, F, CI, CF, S, q, v, Phi, Jc, bias):
 
 
 @njit(cache=True)
-def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, QDD, LAM, RANK):
+def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
     Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
     N, nv = Q.shape
@@ -148,7 +149,7 @@ def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, QDD, LAM, RA
             for l in range(r):
                 x -= (x @ basis[l]) * basis[l]
             nx = np.sqrt(x @ x)
-            if nx > 1e-9 * max(scale, 1e-300):
+            if nx > rtol * max(scale, 1e-300):
                 basis[r] = x / nx
                 keep[r] = k
                 r += 1
@@ -181,5 +182,20 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     m = sum(c.n_rows for c in model.constraints)
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
-    code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, QDD, LAM, RANK)
+    try:
+        code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    except np.linalg.LinAlgError:
+        raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "
+                            f"(a singular configuration, or closures that cannot hold together)") from None
     return code, QDD, LAM, RANK
+
+
+def closure_rows(model, q, v=None):
+    """Φ (m,), Φ_q (m, nv) and Φ̇_q q̇ (m,) of one state (v = 0 if not given) through the kernel."""
+    I, F = kernel_arrays(model)
+    CI, CF, S = closure_arrays(model)
+    m = sum(c.n_rows for c in model.constraints)
+    Phi, Jc, bias = np.empty(m), np.empty((m, model.nv)), np.empty(m)
+    closure_kernel(I, F, CI, CF, S, np.ascontiguousarray(q, float),
+                   np.zeros(model.nv) if v is None else np.ascontiguousarray(v, float), Phi, Jc, bias)
+    return Phi, Jc, bias
