@@ -166,3 +166,74 @@ def reduced(path, reduce_kw, quick=False):
                          aba_us=per_call(lambda: aba(model, Q[0], V[0], A[0]), repeat=3) * 1e6,
                          rnea_batch_us=per_call(lambda: rnea(model, Q, V, A), repeat=3) / 1000 * 1e6))
     return rows
+
+
+def work_precision(aau_path, quick=False):
+    """d. AAU arm, 5 s from a fixed state, without and with gravity: each integrator × step size →
+    (wall time, final-state error against the adaptive reference at rtol 1e-13), with our aba and with
+    Pinocchio's aba inside the same integrator loop."""
+    from ..dynamics.integrate import _step, simulate
+    P = pin()
+    horizon = 1.0 if quick else 5.0
+    rows = []
+    for gravity in ((0.0, 0.0, 0.0), (0.0, 0.0, -9.81)):
+        model = _load(aau_path, gravity=gravity)
+        ref = Reference(model, aau_path)
+        q0, v0 = np.array([0.3, -0.5, 0.8, 0.2, -0.4]), np.array([0.5, -0.3, 0.2, 1.0, -0.5])
+        exact = simulate(model, q0, v0, (0, horizon), method="adaptive", rtol=1e-13, atol=1e-14)
+        x_ref = np.r_[exact.q[-1], exact.v[-1]]
+        accels = {"manipdyn aba": lambda q, v, tau: aba(model, q, v, tau),
+                  "Pinocchio aba": lambda q, v, tau: P.aba(ref.pm, ref.pd, q, v, tau)}
+        zero = lambda t, q, v: np.zeros(5)  # noqa: E731
+        for method, steps in (("rk4", (0.01, 0.005, 0.0025, 0.00125, 0.000625, 0.0003125)),
+                              ("euler", (0.002, 0.001, 0.0005, 0.00025))):
+            for dt in (steps[::2] if quick else steps):
+                n = int(round(horizon / dt))
+                for who, accel in accels.items():
+                    t0 = time.perf_counter()
+                    q, v = q0.copy(), v0.copy()
+                    for k in range(n):
+                        q, v = _step(method, accel, zero, k * dt, q, v, dt)
+                    wall = time.perf_counter() - t0
+                    rows.append(dict(gravity="on" if gravity[2] else "off", method=method, dt=dt, who=who,
+                                     seconds=wall, error=float(np.abs(np.r_[q, v] - x_ref).max())))
+    return rows
+
+
+def cost_at_error(rows, target=1e-8):
+    """Time to reach a final-state error of ``target``, interpolated on log axes, per (gravity, method, who)."""
+    out = []
+    keys = sorted({(r["gravity"], r["method"], r["who"]) for r in rows})
+    for g, m, who in keys:
+        pts = sorted((r["error"], r["seconds"]) for r in rows if (r["gravity"], r["method"], r["who"]) == (g, m, who))
+        e, t = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+        if len(pts) >= 2 and e.min() <= np.log(target) <= e.max():
+            out.append(dict(gravity=g, method=m, who=who, seconds_at_1e_8=float(np.exp(np.interp(np.log(target), e, t)))))
+    return out
+
+
+def spm_drift(spm_path, quick=False):
+    """e. SPM held by a PD law around the Fig. 7 start: cost per step and max |Φ| over the run."""
+    from ..constraints import closure_terms, complete_state
+    from ..dynamics.integrate import simulate
+    from ..examples import spm_params as SP
+    from ..examples.spm_urdf import tree_guess
+    model = _load(spm_path)
+    Q0 = np.array([[np.cos(np.pi / 6), 0, np.sin(np.pi / 6)], [0, 1, 0], [-np.sin(np.pi / 6), 0, np.cos(np.pi / 6)]])
+    q0, v0, _, _ = complete_state(model, tree_guess(model, Q0, np.radians(SP.THETA0_FIRST_BRANCH_DEG)),
+                                  np.array([2.0, -1.5, 1.0]), np.zeros(3))
+    act = [model.joint_index(j) for j in model.actuated]
+
+    def pd_law(t, q, v):
+        tau = np.zeros_like(q)
+        tau[..., act] = 2.0 * (q0[act] - q[..., act]) - 0.05 * v[..., act]
+        return tau
+
+    horizon, rows = (1.0 if quick else 10.0), []
+    for stab in ("none", "baumgarte", "projection"):
+        r = simulate(model, q0, v0, (0, horizon), dt=5e-4, method="rk4", tau=pd_law, stabilization=stab,
+                     baumgarte=(20.0, 20.0))
+        phi = np.abs(closure_terms(model, r.q)[0]).max(axis=1)
+        rows.append(dict(stabilization=stab, horizon_s=horizon, us_per_step=r.wall_time / r.n_steps * 1e6,
+                         max_phi=float(phi.max()), final_phi=float(phi[-1])))
+    return rows
