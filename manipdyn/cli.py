@@ -112,8 +112,8 @@ def _example(args) -> int:
               f"|τ| ≤ {abs(tau).max():.2f} N·m with a {ex.PAYLOAD_KG:g} kg payload")
         print(f"wrote {out / 'aau_arm.csv'}, fig3_joint_rates.png, fig4_joint_torques.png")
         return 0
-    from .examples import spm_fig7
-    return spm_fig7.main(out, samples=args.samples)
+    from .validation import fig7
+    return fig7.main(out, samples=min(args.samples, 101))
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -71,12 +71,12 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
         if cond > max_cond and damping is None:
             raise SingularError(f"assembly of {model.name!r}: closure Jacobian is singular (cond {cond:.3g}) "
                                 f"at iteration {it}; pass damping= for a damped least-squares step")
-        r = Phi[keep]
-        if damping is not None and cond > max_cond:
-            step = -G.T @ np.linalg.solve(G @ G.T + damping**2 * np.eye(len(keep)), r)
+        Gall = closure_terms(model, q[None])[1][0][:, free]     # every row: off the closures the ideally
+        if damping is not None and cond > max_cond:             # redundant rows still carry Φ
+            step = -Gall.T @ np.linalg.solve(Gall @ Gall.T + damping**2 * np.eye(len(Phi)), Phi)
             damped = True
         else:
-            step = -np.linalg.lstsq(G, r, rcond=None)[0]
+            step = -np.linalg.lstsq(Gall, Phi, rcond=1e-10)[0]
         q[free] += step * min(1.0, max_step / max(np.max(np.abs(step)), 1e-300))
     labels = row_labels(model)
     k = int(np.argmax(np.abs(Phi)))
