@@ -91,13 +91,17 @@ RANK_RTOL = 1e-6   # rows whose new direction is below 1e-6 of the largest row a
 #                    tighter tolerance would take as rank and make the KKT solve singular
 
 
-def independent_rows(J, rtol=RANK_RTOL):
+def independent_rows(J, rtol=RANK_RTOL, phi=None):
     """Greedy rank-revealing row selection: indices of rows of J (m, nv) that add rank, in order.
 
     A row is kept when its component orthogonal to the rows kept so far exceeds rtol · max row norm;
-    the rows left out are the redundant ones (dependent on earlier rows).
+    the rows left out are the redundant ones (dependent on earlier rows). Off the closures (|Φ| > 0, e.g.
+    inside an integrator step) the ideally redundant rows gain spurious components of the order of |Φ|:
+    given Φ, the tolerance is raised to 100 max|Φ| / (max row norm) so they are not taken as rank.
     """
     scale = max(float(np.max(np.linalg.norm(J, axis=1), initial=0.0)), 1e-300)
+    if phi is not None and len(phi):
+        rtol = max(rtol, 100.0 * float(np.max(np.abs(phi))) / scale)
     basis, keep = [], []
     for k, row in enumerate(J):
         r = row.copy()

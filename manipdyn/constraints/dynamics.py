@@ -79,7 +79,7 @@ def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, 
     M = mass_matrix(model, Q)
     qdd, lam, reports = np.empty_like(Q), np.zeros_like(Phi), []
     for s in range(Q.shape[0]):
-        keep = independent_rows(Jc[s])
+        keep = independent_rows(Jc[s], phi=Phi[s])
         qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
         if info:
             reports.append(rank_report(model, Jc[s]))

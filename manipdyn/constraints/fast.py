@@ -139,9 +139,11 @@ def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, L
         crba_kernel(I, F, Q[s:s + 1], M)
         rnea_kernel(I, F, Q[s:s + 1], V[s:s + 1], np.zeros((1, nv)), h)     # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
-        scale = 0.0                                           # Gram–Schmidt: keep rows that add rank
+        scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):
             scale = max(scale, np.sqrt(Jc[k] @ Jc[k]))
+            phimax = max(phimax, abs(Phi[k]))
+        tol = max(rtol, 100.0 * phimax / max(scale, 1e-300))  # as closures.independent_rows
         basis, keep = np.empty((m, nv)), np.empty(m, np.int64)
         r = 0
         for k in range(m):
@@ -149,7 +151,7 @@ def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, L
             for l in range(r):
                 x -= (x @ basis[l]) * basis[l]
             nx = np.sqrt(x @ x)
-            if nx > rtol * max(scale, 1e-300):
+            if nx > tol * max(scale, 1e-300):
                 basis[r] = x / nx
                 keep[r] = k
                 r += 1

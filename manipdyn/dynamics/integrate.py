@@ -78,6 +78,9 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
     if stabilization not in ("none", "baumgarte", "projection"):
         raise InputError(f"stabilization must be 'none', 'baumgarte' or 'projection', not {stabilization!r}")
     accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, model.nv)
+    if single and callable(tau):               # a single state: the callable sees (nv,) arrays
+        user = torque
+        torque = lambda t, q, v: np.asarray(user(t, q[0], v[0]), float).reshape(1, -1)  # noqa: E731
     start = time.perf_counter()
     if method == "adaptive":
         if not single:
@@ -121,7 +124,7 @@ def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol):
     def rhs(t, x):
         q, v = x[:nv], x[nv:]
         try:
-            a = accel(q, v, np.asarray(torque(t, q, v), float))
+            a = accel(q, v, np.asarray(torque(t, q[None], v[None]), float).reshape(-1))
         except InputError as exc:
             raise DivergenceError(f"simulation of {model.name!r} diverged at t = {t:.6g} s: {exc}") from None
         if not np.all(np.isfinite(a)):

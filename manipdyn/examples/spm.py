@@ -5,12 +5,11 @@ Q = Rz(φ) Ry(θ) Rz(σ − φ), ω = Ψ φ̇ (Eq. 43). Every body turns about O
 Ω_b = A_b(q) q̇ and an inertia I_b about O (world axes): proximal i: Ω = θ̇_i u_i, I_l1 about u_i; distal i:
 ρ_i = (u_i j_iᵀ + v_i j_ψiᵀ) ω (Eq. 55b), E_i I_l2 E_iᵀ; platform: ω, Q I_O Qᵀ. Then
     M = Σ A_bᵀ I_b A_b                                  (Eqs. 54–55)
-    Ṁ q̇ − T_q = Σ A_bᵀ (I_b Ȧ_b q̇ + Ω_b × I_b Ω_b)   (Euler's equation about O, projected: the same
-                                                         velocity terms as Eq. 60's −Ṁ q̇ + T_q, negated)
-    V_q = Σ m_b A_bᵀ (c_b × g),  g = [0, 0, 9.81]      (V = Σ m_b gᵀ c_b, Eq. 52 sign)
-Writing θ̇_i = j_iᵀ ω inside ρ_i (as Eq. 55b does) changes M and the multipliers off the constraint but not the
-motion nor the actuator torques (the difference is Φ_qᵀ times something); the tests check both against
-independent routes. Misprints corrected here (DESIGN.md §6): Ψ(3,3) = cos θ; Eq. 47's e_x, e_y, e_z; Eq. 52's
+    h₀ = Σ A_bᵀ (I_b Ȧ_b q̇ + Ω_b × I_b Ω_b) + Σ m_b A_bᵀ (c_b × g),  g = [0, 0, 9.81]
+(Euler's equation about O for each body, projected; V = Σ m_b gᵀ c_b, Eq. 52's sign). Writing θ̇_i = j_iᵀω
+inside ρ_i (as Eq. 55b does) uses the constraint, so h₀ equals Eq. 60's Ṁq̇ − T_q + V_q only up to
+C_qᵀ(·) — generalized forces the multipliers absorb: the motion and the actuator torques are the same, λ is
+not (the tests check h₀ on the null space of C_q, and the torques against two independent routes). Misprints corrected here (DESIGN.md §6): Ψ(3,3) = cos θ; Eq. 47's e_x, e_y, e_z; Eq. 52's
 T_p needs the platform inertia about O, I_O = I_p + m_p(|p*|² 1 − p* p*ᵀ); Eq. 55b E → E_i; Eq. 57
 Ċ_q q̇ = Ḃθ̇ − Ȧω − AΨ̇φ̇; Eq. 60's right side [τ; Ψᵀm] − (Ṁq̇ − T_q) − V_q, with the external moment m
 (environment on the platform, base axes) doing work m·ω = (Ψᵀm)·φ̇; Eq. 61 τ_a = τ − J⁻ᵀ m, J⁻ᵀ = B A⁻ᵀ.
@@ -236,10 +235,11 @@ class Fig7:
     leg_triple: np.ndarray      # (T, 3): (u_i × v_i)·w_i, the chapter's divisor
 
 
-def fig7(t, theta_ddot=(0.0, 0.0, 0.0), branch=0, moment=P.MOMENT):
-    """Table 2's scenario: φ0 = [0, π/6, 0], θ̇0 = [−8, −7, −9] rad/s, constant θ̈, external moment m."""
-    phi = np.array(P.PHI0, float)
-    th0 = inverse_kinematics(platform_rotation(phi))[:, branch]
+def fig7(t, theta_ddot=(0.0, 0.0, 0.0), branch=0, moment=P.MOMENT, phi_guess=None):
+    """Table 2's scenario: φ0 = [0, π/6, 0], θ̇0 = [−8, −7, −9] rad/s, constant θ̈, external moment m.
+    The platform is followed by forward kinematics from sample to sample, starting at φ0 (or phi_guess)."""
+    th0 = inverse_kinematics(platform_rotation(np.array(P.PHI0, float)))[:, branch]
+    phi = np.array(P.PHI0 if phi_guess is None else phi_guess, float)
     thdd = np.asarray(theta_ddot, float)
     rows = []
     for tk in np.asarray(t, float):
