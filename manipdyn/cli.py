@@ -1,4 +1,4 @@
-"""The ``manipdyn`` command: validate, inspect, example, bench (more subcommands join as they land).
+"""The ``manipdyn`` command: validate, inspect, play, example, bench.
 
 Exit codes: 0 success, 1 a validated term failed, 2 bad input (file, URDF, arguments).
 """
@@ -90,6 +90,34 @@ def _inspect(args) -> int:
     return 0
 
 
+def _play(args) -> int:
+    import time
+
+    from . import viz
+    from .io.urdf import load_urdf
+    model = load_urdf(args.urdf, **reduction(args))
+    if args.traj:
+        t, Q = viz.read_trajectory(args.traj, model)
+        Q = viz.complete(model, Q) if model.constraints else Q
+    else:
+        t, Q = viz.demo(model, args.urdf)
+    if args.html:
+        sc = viz.export_html(model, args.urdf, t, Q, args.html, show_frames=args.frames)
+        print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:g} fps over {t[-1] - t[0]:.3g} s "
+              f"(open it in a browser; {args.html}#t=1.5 opens at 1.5 s)")
+        return 0
+    live = viz.LiveViewer()
+    live.show(viz.scene_for(model, args.urdf, t, Q, show_frames=args.frames))
+    print(f"playing on {live.url} (loopback only); Ctrl-C to stop")
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        live.close()
+
+
 def _bench(args) -> int:
     from .bench import run
     run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
@@ -134,6 +162,13 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("urdf")
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
+    pl = sub.add_parser("play", help="3-D playback in the browser (meshcat): live, or one HTML file")
+    pl.add_argument("urdf")
+    pl.add_argument("--traj", help="CSV (t, q_<joint>...) or NPZ (t, q, joint_names); default: a built-in demo")
+    pl.add_argument("--html", help="write one self-contained HTML file instead of serving live")
+    pl.add_argument("--frames", action="store_true", help="draw each body's frame")
+    add_reduction_options(pl)
+    pl.set_defaults(func=_play)
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
     e.add_argument("name", choices=["aau", "spm"], help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7)")
     e.add_argument("--out", default=".", help="output folder")
