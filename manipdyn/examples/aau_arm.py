@@ -124,8 +124,12 @@ def payload_wrench(n, mass=PAYLOAD_KG):
     return {"tool": (np.tile([0.0, 0.0, -mass * G], (n, 1)), np.zeros((n, 3)))}
 
 
-def torques(model, traj, mass=PAYLOAD_KG):
-    """Joint torques along the trajectory with the payload's weight (Newton–Euler, Eqs. 32a–i)."""
+def torques(model, traj, mass=PAYLOAD_KG, inertia=None):
+    """Joint torques along the trajectory with the payload (Newton–Euler, Eqs. 32a–i): its weight as an
+    external force at ``tool`` — or, given ``inertia`` (3, 3 about the tool, tool axes), the payload as a
+    rigid body merged into link 5, so that its inertial forces act too."""
+    if inertia is not None:
+        return rnea(with_payload(model, mass, inertia), traj.q, traj.v, traj.a)
     return rnea(model, traj.q, traj.v, traj.a, f_ext=payload_wrench(len(traj.t), mass), f_ext_frame="world")
 
 
@@ -217,3 +221,18 @@ def singular_path(model, q_start, duration=2.0, samples=201):
     sdd = 0.5 * (np.pi / duration) ** 2 * np.cos(np.pi * t / duration)
     x = p0 + np.outer(s, goal - p0)
     return follow(model, t, x, np.outer(sd, goal - p0), np.outer(sdd, goal - p0), q_start)
+
+
+def with_payload(model, mass=PAYLOAD_KG, inertia=None, frame="tool"):
+    """The model with a rigid payload (mass at the frame's origin, inertia (3, 3) about it in the frame's
+    axes, default a point mass) merged into the body carrying ``frame``: its weight *and* inertia then act."""
+    import dataclasses
+
+    from ..spatial import combine_inertias
+    fr = model.frame(frame)
+    b = fr.body
+    I_b = np.zeros((3, 3)) if inertia is None else fr.R @ np.asarray(inertia, float) @ fr.R.T
+    m, c, I = combine_inertias([(model.mass[b], model.com[b], model.inertia[b]), (float(mass), fr.p, I_b)])
+    mass_, com_, inertia_ = model.mass.copy(), model.com.copy(), model.inertia.copy()
+    mass_[b], com_[b], inertia_[b] = m, c, I
+    return dataclasses.replace(model, mass=mass_, com=com_, inertia=inertia_)

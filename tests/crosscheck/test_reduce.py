@@ -79,3 +79,15 @@ def test_cli_accepts_reduction_options(capsys):
     assert main(["inspect", str(ZOO["baxter.urdf"]), "--root", "torso", "--tips", "right_gripper"]) == 0
     assert "locked joints" in capsys.readouterr().out
     assert main(["inspect", str(ZOO["panda.urdf"]), "--lock", "oops"]) == 2
+
+
+def test_dynamics_path_never_loads_geometry(tmp_path):
+    # visual and collision meshes that do not exist: loading for dynamics must not care (or read them)
+    text = ('<robot name="r"><link name="b"/><link name="a"><inertial><mass value="1"/><inertia ixx="1" '
+            'iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial><visual><geometry><mesh '
+            'filename="package://nowhere/missing.dae"/></geometry></visual><collision><geometry><mesh '
+            'filename="missing.stl"/></geometry></collision></link><joint name="j" type="continuous">'
+            '<parent link="b"/><child link="a"/><axis xyz="0 0 1"/></joint></robot>')
+    (tmp_path / "r.urdf").write_text(text)
+    model = md.load_urdf(tmp_path / "r.urdf")
+    assert model.nv == 1 and np.isfinite(md.rnea(model, [0.1], [0.2], [0.3])).all()

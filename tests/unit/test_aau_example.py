@@ -83,3 +83,21 @@ def test_cli_writes_figures_and_csv(tmp_path):
     assert main(["example", "aau", "--out", str(tmp_path), "--samples", "41"]) == 0
     for f in ("aau_arm.csv", "fig3_joint_rates.png", "fig4_joint_torques.png"):
         assert (tmp_path / f).stat().st_size > 1000, f
+
+
+def test_payload_inertia_option_against_pinocchio(example):
+    # the payload as a rigid body: Pinocchio appends the same inertia to joint 5 at the tool placement
+    traj, _ = example
+    I_p = np.diag([0.02, 0.03, 0.025])
+    tau = ex.torques(MODEL, traj, inertia=I_p)
+    ref = Reference(MODEL, AAU)
+    fid = ref.pm.getFrameId("tool")
+    placement = ref.pm.frames[fid].placement
+    ref.pm.appendBodyToJoint(ref.pm.frames[fid].parentJoint, pin.Inertia(ex.PAYLOAD_KG, np.zeros(3), I_p), placement)
+    ref.pd = ref.pm.createData()
+    for k in range(0, len(traj.t), 10):
+        assert_close(tau[k], pin.rnea(ref.pm, ref.pd, ref.to_pin_q(traj.q[k]), traj.v[k], traj.a[k]), 1e-12, "τ")
+    # at rest the weight alone remains: same as the external-force model
+    still = ex.Trajectory(traj.t[:3], traj.q[:3], 0 * traj.v[:3], 0 * traj.a[:3], *(x[:3] for x in
+                          (traj.pos_err, traj.dir_err, traj.sigma_min, traj.damped)))
+    assert_close(ex.torques(MODEL, still, inertia=I_p), ex.torques(MODEL, still), 1e-12, "static payload")

@@ -126,3 +126,20 @@ def test_mesh_paths_cannot_escape(tmp_path):
     with pytest.raises(md.URDFError, match="leaves the URDF's folder"):
         resolve_mesh("../secret.stl", urdf)
     assert resolve_mesh("../secret.stl", urdf, allow_outside=True).name == "secret.stl"
+
+
+def test_ur5_meshes_through_package_paths(tmp_path):
+    # a real vendor URDF: DAE meshes resolved through package://example-robot-data/..., drawn in Chromium
+    from manipdyn.validation import robots_dir
+    from manipdyn.viz.geometry import load_visuals
+    path = robots_dir() / "ur_description/urdf/ur5_robot.urdf"
+    assert len(load_visuals(path)) >= 6
+    model = md.load_urdf(path)
+    t, Q = viz.demo(model, path)
+    page = tmp_path / "ur5.html"
+    viz.export_html(model, path, t, Q, page)
+    hidden = tmp_path / "ur5_hidden.html"
+    hidden.write_text(page.read_text().replace("</body>", HIDE))
+    a = shoot(f"file://{page}#t=1.0", ART / "ur5_t1.0.png")
+    empty = shoot(f"file://{hidden}#t=1.0", ART / "ur5_hidden.png")
+    assert (np.abs(a - empty).sum(axis=2) > 30).sum() > 300
