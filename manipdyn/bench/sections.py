@@ -185,7 +185,7 @@ def work_precision(aau_path, quick=False):
         accels = {"manipdyn aba": lambda q, v, tau: aba(model, q, v, tau),
                   "Pinocchio aba": lambda q, v, tau: P.aba(ref.pm, ref.pd, q, v, tau)}
         zero = lambda t, q, v: np.zeros(5)  # noqa: E731
-        for method, steps in (("rk4", (0.01, 0.005, 0.0025, 0.00125, 0.000625, 0.0003125)),
+        for method, steps in (("rk4", (0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125, 0.000625, 0.0003125, 0.00015625)),
                               ("euler", (0.002, 0.001, 0.0005, 0.00025))):
             for dt in (steps[::2] if quick else steps):
                 n = int(round(horizon / dt))
