@@ -85,7 +85,7 @@ class Model:
     locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q)
 
     def __post_init__(self):
-        for name, value in vars(self).items():
+        for value in vars(self).values():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
 

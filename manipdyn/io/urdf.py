@@ -180,7 +180,7 @@ def _build(robot, source, gravity, strict) -> Model:
     inertias = [combine_inertias(parts[i]) for i in range(nv)]
     _check_psd(combine_inertias(parts[-1])[2], f"fixed base {root!r} (with merged links "
                f"{', '.join(merged[root]) or 'none'})", source)
-    for (j, *_), (m, c, I) in zip(joints, inertias):
+    for (j, *_), (_, _, I) in zip(joints, inertias):
         extra = f" (with merged links {', '.join(merged[j.child])})" if merged[j.child] else ""
         _check_psd(I, f"body {j.child!r}{extra}", source)
     lim = np.array([_limits(j) for j, *_ in joints], float).reshape(nv, 4)

@@ -8,7 +8,7 @@ from manipdyn.constraints import assemble, complete_state, constrained_forward_d
 from manipdyn.examples import spm as S
 from manipdyn.examples import spm_params as P
 from manipdyn.examples.spm_urdf import tree_guess
-from manipdyn.validation import error, random_states
+from manipdyn.validation import random_states
 
 ARM = md.load_urdf(AAU)
 SPM = md.load_urdf(ROOT / "urdf" / "spm.urdf")
@@ -82,6 +82,6 @@ def test_float_edge_cases():
     for s in (1e-150, 1e150):
         assert_close(md.rnea(free, Q, 0 * V, s * A) / s, md.rnea(free, Q, 0 * V, A), 1e-14, f"q̈ × {s:g}")
         assert_close(md.rnea(free, Q, s * V, 0 * A) / s**2 if s < 1 else md.rnea(free, Q, np.sqrt(s) * V, 0 * A) / s,
-                     md.rnea(free, Q, V, 0 * A), 1e-14, f"q̇ scaled")
+                     md.rnea(free, Q, V, 0 * A), 1e-14, "q̇ scaled")
     with pytest.raises(md.InputError, match="inf"):
         md.rnea(ARM, Q, np.full_like(V, np.inf), A)               # non-finite input is refused, named

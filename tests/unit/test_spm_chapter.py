@@ -1,6 +1,5 @@
 """The chapter's SPM formulation (examples/spm.py) against independent references and physical laws."""
 import numpy as np
-import pytest
 from conftest import assert_close
 
 from manipdyn.examples import spm as S

@@ -56,7 +56,7 @@ def test_exported_html_renders_the_motion(name, times, tmp_path):
     # the animation's transforms are the model's forward kinematics at the frame times
     for k in (0, len(sc.times) // 2, len(sc.times) - 1):
         q = np.array([np.interp(sc.times[k], t - t[0], Q[:, i]) for i in range(model.nv)])
-        for b_, body in enumerate(model.body_names):
+        for body in model.body_names:
             R, p = md.frame_placement(model, q, body)
             assert_close(sc.frames[f"/manipdyn/{body}"][k][:3, :3], R, 1e-12, "R")
             assert_close(sc.frames[f"/manipdyn/{body}"][k][:3, 3], p, 1e-12, "p")
