@@ -16,6 +16,8 @@ from .errors import (ConstraintError, DivergenceError, InertiaWarning, InputErro
 from .io.urdf import load_urdf, load_urdf_string
 from .model import PRISMATIC, REVOLUTE, Frame, Model
 from .reduce import reduce
+from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
+                          constrained_inverse_dynamics, project)
 
 __version__ = "0.1.0"
 
@@ -26,7 +28,8 @@ def dh_to_urdf(*args, **kwargs):
     return _dh_to_urdf(*args, **kwargs)
 
 
-__all__ = ["simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+__all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "project", "assemble",
+           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "InertiaWarning"]

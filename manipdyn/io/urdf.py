@@ -158,7 +158,7 @@ def _build(robot, source, gravity, strict) -> Model:
 
     def visit(link, body, R, p):          # (R, p): pose of `link` in the frame of `body`
         frames[link] = Frame(link, body, R, p)
-        parts[body].append(_link_inertia(links[link], R, p, source, strict))
+        parts[body].append(_link_inertia(links[link], R, p, source))
         notes.extend(_triangle(parts[body][-1][2], link, source, strict))
         for j in children[link]:          # sorted by joint name
             Ro, po = (np.eye(3), np.zeros(3)) if j.origin is None else (j.origin[:3, :3], j.origin[:3, 3])
@@ -225,7 +225,7 @@ def _limits(j):
     return lo, hi, get(L and L.effort, np.inf), get(L and L.velocity, np.inf)
 
 
-def _link_inertia(link, R, p, source, strict):
+def _link_inertia(link, R, p, source):
     """(m, c, I_c) of a URDF link in the frame where the link sits at (R, p); checks mass and moments."""
     inertial = link.inertial
     if inertial is None or inertial.mass is None:
