@@ -2,7 +2,9 @@
 import subprocess
 import sys
 
-from conftest import AAU
+from conftest import AAU, ROOT
+
+SPM = ROOT / "urdf" / "spm.urdf"
 
 CODE = f"""
 import sys
@@ -15,6 +17,16 @@ tau = manipdyn.rnea(m, np.zeros(m.nv), np.ones(m.nv), np.ones(m.nv), f_ext={{"to
 terms = manipdyn.rnea_terms(m, np.zeros((3, m.nv)), np.ones((3, m.nv)), np.ones((3, m.nv)))
 assert np.all(np.isfinite(tau)) and terms["tau"].shape == (3, m.nv)
 assert main(["inspect", {str(AAU)!r}]) == 0
+q, v = np.full(m.nv, 0.3), np.full(m.nv, -0.2)
+assert np.all(np.isfinite(manipdyn.aba(m, q, v, tau))) and manipdyn.mass_matrix(m, q, method="lagrange").shape == (5, 5)
+assert np.all(np.isfinite(manipdyn.coriolis_matrix(m, q, v))) and np.all(np.isfinite(manipdyn.frame_jacobian_dot(m, q, v, "tool")))
+assert manipdyn.simulate(m, q, v, (0, 0.01), dt=1e-3).q.shape == (11, 5)
+spm = manipdyn.load_urdf({str(SPM)!r})
+from manipdyn.examples import spm as chapter
+from manipdyn.examples.spm_urdf import tree_guess
+f = chapter.fig7(np.array([0.0, 0.1]))
+qs, vs, a_s, _ = manipdyn.complete_state(spm, tree_guess(spm, chapter.platform_rotation(f.q[0, 3:]), f.q[0, :3]), f.qd[0, :3], f.qdd[0, :3])
+assert np.all(np.isfinite(manipdyn.constrained_forward_dynamics(spm, qs, vs, np.zeros(7))[0]))
 print("ok")
 """
 
@@ -25,6 +37,7 @@ def test_core_runs_without_pinocchio():
     assert out.stdout.strip().endswith("ok")
 
 
-def test_import_does_not_load_pinocchio():
-    code = "import sys, manipdyn; print('pinocchio' in sys.modules)"
-    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "False"
+def test_import_does_not_load_pinocchio_or_meshcat():
+    code = "import sys, manipdyn; print('pinocchio' in sys.modules, 'meshcat' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip()
+    assert out == "False False"
