@@ -110,13 +110,14 @@ def actuation(model, actuated=None):
     return [model.joint_index(n) for n in names]
 
 
-def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local"):
+def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local",
+                                 info=False):
     """(τ_a, λ): actuator forces for a prescribed motion of a closed chain, τ_tree = Sᵀ τ_a − Φ_qᵀ λ.
 
     Solves [Sᵀ, −Φ_qᵀ] [τ_a; λ] = rnea(q, q̇, q̈) in the least-squares, minimum-norm sense (rank-revealing)
     and raises ConstraintError when (q, q̇, q̈) violates a closure (|Φ|, |Φ_q q̇| or |Φ_q q̈ + Φ̇_q q̇| above
     tol) or when the actuators cannot produce the motion (under-actuated: residual above tol).
-    ``actuation_status(model, q)`` says whether the chain is fully, under- or over-actuated.
+    ``info=True`` adds whether the chain is "fully", "under" or "over" actuated at (the first) q.
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
     idx = actuation(model, actuated)
@@ -135,7 +136,8 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
             raise ConstraintError(f"the actuators {[model.joint_names[i] for i in idx]} cannot produce this "
                                   f"motion (under-actuated; residual {np.max(np.abs(resid)):.3g})")
         ta[s], lam[s, keep] = x[:len(idx)], x[len(idx):]
-    return unbatch(ta, single), unbatch(lam, single)
+    out = (unbatch(ta, single), unbatch(lam, single))
+    return out + (actuation_status(model, Q[0], actuated),) if info else out
 
 
 def _check_consistent(model, Phi, Jc, bias, V, A, tol):

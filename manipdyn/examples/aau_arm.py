@@ -206,16 +206,18 @@ def plot(out_dir, model, traj, tau):
     plt.close(fig)
 
 
-def singular_path(model, q_start, duration=2.0, samples=201):
+def singular_path(model, q_start, duration=2.0, samples=201, goal=None):
     """A path designed to run into a singularity of the 5-D task: from q_start the tool point moves
     straight towards the base axis. Around that axis lies the edge of the reachable set (the 0.1 m wrist
     offset keeps the tool point off it), where σ_min(J_task) → 0: the solver reports σ_min, switches to
     damped least squares and keeps the rates bounded; the pose error it reports grows where the path
-    leaves the reachable set (never NaN, never silent)."""
+    leaves the reachable set (never NaN, never silent). ``goal`` (3,) replaces that target, e.g. a point
+    beyond reach straight out from the shoulder: the elbow straightens (the elbow singularity)."""
     t = np.linspace(0.0, duration, samples)
     _, p0 = frame_placement(model, q_start, "tool")
     shoulder = frame_placement(model, np.zeros(model.nv), model.body_names[1])[1]
-    goal = np.array([shoulder[0], shoulder[1], p0[2]])       # above/below the base axis: joint 1 singular
+    if goal is None:                                          # above/below the base axis: joint 1 singular
+        goal = np.array([shoulder[0], shoulder[1], p0[2]])
     s = 0.5 * (1 - np.cos(np.pi * t / duration))             # rest to rest
     sd = 0.5 * np.pi / duration * np.sin(np.pi * t / duration)
     sdd = 0.5 * (np.pi / duration) ** 2 * np.cos(np.pi * t / duration)
