@@ -54,3 +54,26 @@ def test_lagrange_and_forward_batch_equals_rows():
         rows = np.stack([f(q, v, a) for q, v, a in zip(Q, V, A)])
         assert batch.shape == rows.shape, name
         assert_close(batch, rows, 1e-14, name)
+
+
+def test_energy_and_closed_chain_batch_equals_rows():
+    import manipdyn as md
+    from conftest import ROOT
+    from manipdyn.validation.closed import manifold_states
+    arm = load_urdf(AAU)
+    Q, V, A = random_states(arm, 8, np.random.default_rng(12))
+    for f in (lambda q, v: md.kinetic_energy(arm, q, v), lambda q, v: md.potential_energy(arm, q)):
+        assert_close(f(Q, V), np.array([f(q, v) for q, v in zip(Q, V)]), 1e-14, "energy")
+    spm = load_urdf(ROOT / "urdf" / "spm.urdf")
+    rng = np.random.default_rng(13)
+    Qm, Vm = manifold_states(spm, 6, rng)
+    T = rng.normal(size=Qm.shape)
+    qdd, lam = md.constrained_forward_dynamics(spm, Qm, Vm, T, baumgarte=(5.0, 5.0))
+    for s in range(6):
+        one = md.constrained_forward_dynamics(spm, Qm[s], Vm[s], T[s], baumgarte=(5.0, 5.0))
+        assert_close(qdd[s], one[0], 1e-14, "q̈ rows")
+        assert_close(lam[s], one[1], 1e-14, "λ rows")
+    Ad = qdd                                                       # a motion consistent with the closures
+    ta, _ = md.constrained_inverse_dynamics(spm, Qm, Vm, Ad)
+    assert_close(ta, np.stack([md.constrained_inverse_dynamics(spm, q, v, a)[0] for q, v, a in zip(Qm, Vm, Ad)]),
+                 1e-14, "τ_a rows")
