@@ -57,6 +57,13 @@ def _joint_rotation(R0, axis, rev, q, out):
         out[i, 2] = a0 * r02 + a1 * r12 + a2 * r22
 
 
+@njit(cache=True, inline="always")
+def _joint_translation(R0, p0, axis, rev, q, out):
+    """out = p^{i-1}_i: p0 (revolute) or p0 + d R0 axis (prismatic, evaluated at the current d, Eqs. 8–12)."""
+    for k in range(3):
+        out[k] = p0[k] if rev else p0[k] + q * (R0[k, 0] * axis[0] + R0[k, 1] * axis[1] + R0[k, 2] * axis[2])
+
+
 @njit(cache=True)
 def rnea_kernel(I, F, Q, V, A, tau):
     """τ for every state of (Q, V, A) (N, nv) into tau (N, nv): the chapter's Eqs. 3–18. Returns -1, or the
@@ -77,9 +84,7 @@ def rnea_kernel(I, F, Q, V, A, tau):
                 return s * nv + i
             _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
             Ri = R[i]
-            for k in range(3):
-                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
-                                                                  + R0[i, k, 2] * axis[i, 2])
+            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
             j = parent[i]
             if j < 0:
                 w0x = w0y = w0z = 0.0
@@ -218,9 +223,7 @@ def aba_kernel(I, F, Q, V, T, out):
             if not (np.isfinite(q) and np.isfinite(qd) and np.isfinite(T[s, i])):
                 return s * nv + i
             _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
-            for k in range(3):
-                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
-                                                                  + R0[i, k, 2] * axis[i, 2])
+            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
             j = parent[i]
             if j < 0:
                 w[i, :] = 0.0
@@ -374,9 +377,7 @@ def crba_kernel(I, F, Q, M):
             if not np.isfinite(q):
                 return s * nv + i
             _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
-            for k in range(3):
-                p[i, k] = p0[i, k] if rev[i] else p0[i, k] + q * (R0[i, k, 0] * axis[i, 0] + R0[i, k, 1] * axis[i, 1]
-                                                                  + R0[i, k, 2] * axis[i, 2])
+            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
             c = com[i]
             mc[i] = mass[i]
             cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
