@@ -59,6 +59,8 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
     if code == -2:
         raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")
+    if code >= 0:                       # as_batch checked finiteness already: this cannot happen silently
+        raise InputError(f"non-finite input at state {code // model.nv}, joint {model.joint_names[code % model.nv]!r}")
     out = (unbatch(qdd, single), unbatch(lam, single))
     if not info:
         return out
