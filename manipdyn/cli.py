@@ -11,12 +11,13 @@ import warnings
 from pathlib import Path
 
 from .errors import ManipdynError
+from .paths import bundled_dir
 
-BUNDLED = Path(__file__).resolve().parent.parent / "urdf"
+BUNDLED = bundled_dir()
 
 
 def bundled_models() -> list[Path]:
-    """The chapter's models shipped in the repository's urdf/ folder."""
+    """The chapter's models: the repository's urdf/ folder (or their installed copies)."""
     return sorted(p for p in BUNDLED.glob("*.urdf"))
 
 

@@ -5,11 +5,12 @@ import json
 import time
 from pathlib import Path
 
+from ..paths import bundled_dir
 from ..validation.zoo import robots_dir
 from . import sections
 from .timing import machine
 
-ROOT = Path(__file__).resolve().parent.parent.parent
+ROOT = bundled_dir().parent
 
 
 def write(data, out_dir):

@@ -18,11 +18,12 @@ from ..examples import spm_params as P
 from ..examples.spm_routes import generic_torques
 from ..examples.spm_urdf import tree_guess
 from ..io.urdf import load_urdf
+from ..paths import bundled_dir
 from .closed import PROXIMAL, ClosedReference, actuator_torques_by_inversion
 from .compare import error
 from .reference import Reference
 
-SPM_URDF = Path(__file__).resolve().parent.parent.parent / "urdf" / "spm.urdf"
+SPM_URDF = bundled_dir() / "spm.urdf"
 SPAN = (0.0, 0.25)            # singularity-free: leg 2's (u₂ × v₂)·w₂ reaches 0 at t ≈ 0.281 s (zero θ̈)
 ACCEL_CASE = (5.0, -5.0, 3.0)  # the non-zero constant actuator accelerations we chose, rad/s²
 
