@@ -121,25 +121,24 @@ def plots(d, out):
         line, = ax.loglog(n, [r["ours_us"] for r in rows], "o-", label=f"{call} (ours)")
         if "lagrange" not in call:
             ax.loglog(n, [r["pin_us"] for r in rows], "x--", color=line.get_color(), label=f"{call} (Pinocchio)")
-    ax.set_xlabel("joints n")
-    ax.set_ylabel("time per call [µs]")
-    ax.set_title("Scaling on random serial chains")
-    ax.legend(fontsize=7)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / "scaling.png", dpi=120)
-    plt.close(fig)
+    _finish(plt, fig, ax, out / "scaling.png", "Scaling on random serial chains", "joints n", "time per call [µs]")
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for key in sorted({(r["gravity"], r["method"], r["who"]) for r in d["work_precision"]}):
         rows = sorted((r for r in d["work_precision"] if (r["gravity"], r["method"], r["who"]) == key),
                       key=lambda r: r["error"])
         ax.loglog([r["error"] for r in rows], [r["seconds"] for r in rows],
                   "o-" if key[2].startswith("manipdyn") else "x--", label=f"{key[1]}, gravity {key[0]}, {key[2]}")
-    ax.set_xlabel("final-state error vs adaptive reference (rtol 1e-13)")
-    ax.set_ylabel("wall time [s]")
-    ax.set_title("Work–precision, AAU arm")
+    _finish(plt, fig, ax, out / "work_precision.png", "Work–precision, AAU arm",
+            "final-state error vs adaptive reference (rtol 1e-13)", "wall time [s]")
+
+
+def _finish(plt, fig, ax, path, title, xlabel, ylabel):
+    """Labels, legend, grid, and the PNG."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.legend(fontsize=7)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out / "work_precision.png", dpi=120)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
