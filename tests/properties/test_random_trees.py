@@ -92,8 +92,11 @@ def test_mangled_urdf_raises_only_manipdyn_errors(start, length, insert):
 @given(st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=4), st.integers(0, 3))
 def test_bad_arrays_raise_only_input_errors(values, ndim):
     model = md.load_urdf_string(GOOD)
-    x = np.array(values).reshape((-1,) + (1,) * (ndim > 1) * 0) if values else np.array(values)
-    ok = x.ndim in (1, 2) and x.shape[-1] == 1 and np.all(np.isfinite(x))
+    flat = np.array(values, dtype=float)           # 0-D, 1-D (k,), 2-D (k, 1) or 3-D (1, k, 1) arrays
+    x = [flat[0] if flat.size else flat, flat, flat.reshape(-1, 1), flat.reshape(1, -1, 1)][ndim]
+    x = np.asarray(x)
+    # valid: one state (1,) or a batch (N, 1), N = 0 included (an empty batch gives an empty result)
+    ok = x.ndim in (1, 2) and x.shape[-1:] == (1,) and bool(np.all(np.isfinite(x)))
     try:
         md.rnea(model, x, x, x)
         md.aba(model, x, x, x)
