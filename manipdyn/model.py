@@ -11,6 +11,7 @@ Conventions owned here:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -99,15 +100,24 @@ class Model:
         """The frame of a link (merged links included); InputError names the unknown frame."""
         try:
             return self.frames[name]
-        except KeyError:
+        except (KeyError, TypeError):
+            known = sorted(self.frames)
             raise InputError(f"model {self.name!r} has no link or frame named {name!r}; "
-                             f"known: {', '.join(sorted(self.frames))}") from None
+                             f"known: {', '.join(known[:50])}{' ...' if len(known) > 50 else ''}") from None
+
+    @cached_property
+    def _joint_position(self) -> dict:
+        """joint name -> index in q (built once: lookups stay O(1) on large models)."""
+        return {name: i for i, name in enumerate(self.joint_names)}
 
     def joint_index(self, name: str) -> int:
-        if name not in self.joint_names:
+        """Index of a moving joint in q; InputError names the unknown joint."""
+        try:
+            return self._joint_position[name]
+        except (KeyError, TypeError):
             raise InputError(f"model {self.name!r} has no moving joint named {name!r}; "
-                             f"q order: {', '.join(self.joint_names)}")
-        return self.joint_names.index(name)
+                             f"q order: {', '.join(self.joint_names[:50])}"
+                             f"{' ...' if self.nv > 50 else ''}") from None
 
     def joint_transforms(self, Q: np.ndarray):
         """Placement of body i in its parent body for a batch Q (N, nv): (R (nv, N, 3, 3), p (nv, N, 3)).

@@ -32,33 +32,47 @@ def reduce(model, *, locked=None, root=None, tips=None, prune=False):
 
 
 def _off_chain(model, root, tips):
-    """Joints to lock so that only chains from ``root`` to ``tips`` move."""
+    """Joints to lock so that only chains from ``root`` to ``tips`` move (walks up parent links: no
+    per-body ancestor sets, so linear in the size of the chains)."""
     if root is None and tips is None:
         return []
     body_of = lambda link: model.frame(link).body  # noqa: E731
-    anc = [set() for _ in range(model.nv)]
-    for i in range(model.nv):
-        anc[i] = ({i} | anc[model.parent[i]]) if model.parent[i] >= 0 else {i}
+    has_child = set(model.parent.tolist())
     tip_bodies = [body_of(t) for t in (tips or [])] or [i for i in range(model.nv)
-                                                        if i not in model.parent]   # default: every leaf
-    on_chain = set().union(*(anc[b] for b in tip_bodies if b >= 0)) if tip_bodies else set()
+                                                        if i not in has_child]   # default: every leaf
+    on_chain = set()
+    for b in tip_bodies:
+        while b >= 0 and b not in on_chain:
+            on_chain.add(b)
+            b = int(model.parent[b])
     if root is not None:
         rb = body_of(root)
-        above = anc[rb] if rb >= 0 else set()      # joints between the base and the root link: locked
+        above = set(_ancestors(model, rb))         # joints between the base and the root link: locked
         on_chain -= above
-        missing = [t for t, b in zip(tips or [], tip_bodies) if rb >= 0 and rb not in anc[b] and b != rb]
+        missing = [t for t, b in zip(tips or [], tip_bodies) if rb >= 0 and rb not in _ancestors(model, b)]
         if missing:
             raise InputError(f"tip link(s) {', '.join(missing)} do not hang below root link {root!r}")
     return [model.joint_names[i] for i in range(model.nv) if i not in on_chain]
 
 
+def _ancestors(model, b):
+    """Body b and its ancestors up to the base, b first: [b, parent[b], ...] (empty for the base)."""
+    out = []
+    while b >= 0:
+        out.append(b)
+        b = int(model.parent[b])
+    return out
+
+
 def _massless_leaves(model, values):
     """Moving joints whose whole subtree carries no mass and no inertia (repeatedly, leaves first)."""
     drop = set(values)
+    live_children = [0] * model.nv                 # children not dropped (children come after parents)
     for i in reversed(range(model.nv)):
-        children = [k for k in range(model.nv) if model.parent[k] == i and model.joint_names[k] not in drop]
-        if not children and model.mass[i] == 0.0 and not np.any(model.inertia[i]):
+        if not live_children[i] and model.mass[i] == 0.0 and not np.any(model.inertia[i]):
             drop.add(model.joint_names[i])
+        if model.joint_names[i] not in drop and model.parent[i] >= 0:
+            live_children[model.parent[i]] += 1
     return [j for j in drop if j not in values]
 
 
@@ -67,10 +81,10 @@ def _rebuild(model, keep, values):
     new_of = {}                                    # old body -> (new body, R, p): old frame in new frame
     parts, parent, R0, p0 = {-1: []}, [], [], []
     merged = {k: list(v) for k, v in model.merged.items()}
-    base = (-1, np.eye(3), np.zeros(3))
+    base, kept = (-1, np.eye(3), np.zeros(3)), set(keep)
     for i in range(model.nv):
         nb, Rt, pt = new_of.get(model.parent[i], base)
-        if i in keep:
+        if i in kept:
             k = len(parent)
             parent.append(nb)
             R0.append(Rt @ model.R0[i])

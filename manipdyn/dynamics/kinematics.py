@@ -35,6 +35,15 @@ def supports(model) -> np.ndarray:
     return S
 
 
+def support_path(model, body) -> list:
+    """The joints that move ``body``: body, parent[body], ... up to the base (iterative, O(depth))."""
+    out = []
+    while body >= 0:
+        out.append(int(body))
+        body = model.parent[body]
+    return out
+
+
 def axes_world(model, R):
     """z_j in world coordinates: (nv, N, 3)."""
     return np.einsum("jnab,jb->jna", R, model.axis)
@@ -46,7 +55,7 @@ def point_jacobian(model, R, p, z, body, point):
     J = np.zeros((N, 6, model.nv))
     if body < 0:
         return J
-    for j in np.flatnonzero(supports(model)[body]):
+    for j in sorted(support_path(model, body)):
         if model.kind[j] == REVOLUTE:
             J[:, :3, j], J[:, 3:, j] = cross(z[j], point - p[j]), z[j]
         else:
@@ -114,7 +123,7 @@ def point_jacobian_dot(model, p, z, w, vel, body, point):
     if body < 0:
         return dJ
     vp = vel[body] + cross(w[body], point - p[body])            # velocity of the point
-    for j in np.flatnonzero(supports(model)[body]):
+    for j in sorted(support_path(model, body)):
         dz = cross(w[j], z[j])                                  # ż_j = ω_j × z_j
         if model.kind[j] == REVOLUTE:
             dJ[:, :3, j] = cross(dz, point - p[j]) + cross(z[j], vp - vel[j])

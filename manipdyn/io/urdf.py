@@ -1,23 +1,40 @@
 """URDF -> Model. The only module that reads robot XML.
 
-The file is parsed once with a hardened parser (no DTD, no entities, no network), its elements are read by
-yourdfpy, and the tree is walked the way Pinocchio's URDF reader walks it: depth-first from the root link,
-the child joints of a link in the order of their names (urdfdom keeps joints in a map sorted by name),
-fixed joints merged into the moving body they hang from. The walk is implemented here; Pinocchio is
-never imported.
+The file is parsed once with a hardened parser (no DTD, no entities, no network, a size limit), every
+number manipdyn reads is checked on the raw XML against one grammar and physical bounds, its elements are
+then read by yourdfpy, and the tree is walked the way Pinocchio's URDF reader walks it: depth-first from the
+root link, the child joints of a link in the order of their names (urdfdom keeps joints in a map sorted by
+name), fixed joints merged into the moving body they hang from. The walk is implemented here, iteratively
+(no recursion limit) and in time linear in the number of links; Pinocchio is never imported.
+
+What the loader refuses (URDFError naming the file, the link or joint, the attribute and its value):
+- numbers outside the URDF grammar ``_NUMBER`` (plain decimal: optional sign, digits with an optional
+  fraction, an optional exponent). Python's float() also reads ``1_0``, non-ASCII digits, ``nan``, ``inf``
+  and surrounding Unicode spaces; urdfdom (Pinocchio's reader) does not, and neither do we. Numbers that
+  overflow (``1e400``) are refused too. Vectors must have exactly their count of numbers.
+- masses, inertias and lengths beyond ``MAX_MASS``, ``MAX_INERTIA``, ``MAX_LENGTH`` (see there: the bounds
+  keep every computation of the model finite) and negative masses or effort/velocity limits;
+- joint axes that are zero (an axis that is not unit is normalised, with a note);
+- revolute/prismatic joints without ``<limit effort= velocity=>`` (urdfdom refuses them too; a missing
+  lower/upper is 0, as the URDF specification and urdfdom say), limits with lower > upper;
+- mimic joints naming a joint that does not exist, or themselves;
+- files larger than ``max_bytes`` (default ``MAX_BYTES``).
 """
 from __future__ import annotations
 
 import dataclasses
 import io
+import math
 import os
+import re
 import warnings
+from collections import Counter
 
 import numpy as np
 import yourdfpy
 from lxml import etree
 
-from ..errors import InertiaWarning, ModelError, URDFError
+from ..errors import InertiaWarning, InputError, ModelError, URDFError
 from ..model import PRISMATIC, REVOLUTE, Constraint, Frame, Model
 from ..spatial import combine_inertias, rpy_matrix
 
@@ -25,38 +42,61 @@ MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
 SUPPORTED = set(MOVING) | {"fixed"}
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
+# The URDF number grammar: optional sign, digits with an optional fraction (or a fraction alone), an
+# optional exponent; ASCII digits only. Items of a vector are separated by XML white space.
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_SPACE = re.compile(r"[ \t\n\r]+")
+_LIST = re.compile(r"[ \t\n\r]*(?:{0}(?:[ \t\n\r]+{0})*)?[ \t\n\r]*".format(_NUMBER.pattern))
+
+# Bounds that keep a model's computations finite. The heaviest machines built weigh ~1e9 kg and span
+# ~1e3 m; the bounds leave three orders of magnitude beyond that. With 1e5 bodies, the largest force
+# (m g) ~1e17 N, moment (m g L n) ~1e28 N m, mass-matrix entry (I + m L²) n ~1e29: products and squares
+# of these (energies, norms, condition numbers) stay far below the float range (1e308).
+MAX_MASS = 1e12        # kg, per link
+MAX_INERTIA = 1e12     # kg m², per entry of a link's inertia
+MAX_LENGTH = 1e6       # m, per coordinate of an origin (joint, inertial, constraint) and prismatic limits
+MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data's largest is 0.21 MB
+
 
 def load_urdf(path, *, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None, root=None, tips=None,
-              prune=False) -> Model:
+              prune=False, max_bytes: int = MAX_BYTES) -> Model:
     """Read a URDF file into a Model (fixed base; revolute, continuous, prismatic and fixed joints).
 
     Parameters: path to the .urdf file; gravity (3,) in the base frame; strict=True refuses inertias that
     violate the triangle inequality instead of warning; locked / root / tips / prune as in
-    ``manipdyn.reduce`` (model only what the scene needs).
+    ``manipdyn.reduce`` (model only what the scene needs); max_bytes: larger files are refused unread.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:
-        model = load_urdf_string(fh.read(), source=path, gravity=gravity, strict=strict)
+        data = fh.read(max_bytes + 1)        # never more than the limit, whatever the file claims
+    model = load_urdf_string(data, source=path, gravity=gravity, strict=strict, max_bytes=max_bytes)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
     return model
 
 
-def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), strict=False) -> Model:
+def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), strict=False,
+                     max_bytes: int = MAX_BYTES) -> Model:
     """Same as load_urdf for URDF text (str or bytes); ``source`` names it in messages."""
     data = text.encode() if isinstance(text, str) else bytes(text)
+    if len(data) > max_bytes:
+        raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
+                        f"(pass max_bytes=... to load_urdf to raise it)")
+    g = np.asarray(gravity, float)
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise InputError(f"gravity must be 3 finite numbers, got {gravity!r}")
     root = _parse_xml(data, source)
-    _check_required(root, source)
+    _check_xml(root, source)
     try:
         robot = yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=False, load_meshes=False,
                                    build_collision_scene_graph=False, load_collision_meshes=False).robot
     except Exception as exc:  # yourdfpy raises bare KeyError/ValueError on malformed elements
         raise URDFError(f"{source}: cannot read URDF elements: {exc!r}") from exc
-    model = _build(robot, source, np.asarray(gravity, float), strict)
+    model = _build(robot, source, g, strict)
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
     for note in model.notes:
@@ -75,6 +115,8 @@ def _parse_xml(data: bytes, source: str):
         root = etree.parse(io.BytesIO(data), parser).getroot()
     except etree.XMLSyntaxError as exc:
         raise URDFError(f"{source}: malformed XML: {exc}") from None
+    if root is None:
+        raise URDFError(f"{source}: malformed XML: no root element")
     if root.getroottree().docinfo.internalDTD is not None:
         raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
     if root.tag != "robot":
@@ -82,47 +124,162 @@ def _parse_xml(data: bytes, source: str):
     return root
 
 
-def _check_required(root, source):
-    """What urdfdom requires and yourdfpy silently defaults: names, joint links, full inertia, numbers."""
-    for kind in ("link", "joint"):
-        names = [e.get("name") for e in root.findall(kind)]
-        if None in names:
-            raise URDFError(f"{source}: a <{kind}> has no name attribute")
-        dup = sorted({n for n in names if names.count(n) > 1})
-        if dup:
-            raise URDFError(f"{source}: duplicate {kind} name(s): {', '.join(dup)}")
-    for j in root.findall("joint"):
-        for tag in ("parent", "child"):
-            e = j.find(tag)
-            if e is None or not e.get("link"):
-                raise URDFError(f"{source}: joint {j.get('name')!r} has no <{tag} link=...>")
-        if j.get("type") is None:
-            raise URDFError(f"{source}: joint {j.get('name')!r} has no type attribute")
-    for link in root.findall("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        mass, inertia = inertial.find("mass"), inertial.find("inertia")
-        if mass is None or mass.get("value") is None:
-            raise URDFError(f"{source}: link {link.get('name')!r}: <inertial> without <mass value=...>")
-        if inertia is None or any(inertia.get(k) is None for k in _INERTIA_KEYS):
-            raise URDFError(f"{source}: link {link.get('name')!r}: <inertia> needs all of "
-                            f"{', '.join(_INERTIA_KEYS)}")
+# ---- checks on the raw XML, before yourdfpy (whose float() is not the URDF grammar) reads it -------------
+
+def _show(text, limit=60):
+    """An attribute value for a message: repr, cut to ``limit`` characters."""
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+def _numbers(e, key, count, where, source):
+    """The ``count`` numbers of attribute ``key`` of element ``e`` (None if absent): URDF grammar, finite.
+
+    Returns a list of floats. Raises URDFError naming ``where`` (the link/joint), the element, the
+    attribute and its value.
+    """
+    text = e.get(key)
+    if text is None:
+        return None
+    at = lambda: f"{source}: {where}: <{e.tag} {key}={_show(text)}>"  # noqa: E731
+    if not _LIST.fullmatch(text):             # the slow path only to name the offending item
+        bad = next(t for t in _SPACE.split(text) if t and not _NUMBER.fullmatch(t))
+        raise URDFError(f"{at()}: {_show(bad, 30)} is not a URDF number (plain decimal: sign, digits, "
+                        f"fraction, exponent; no nan, inf, hex, '_' or non-ASCII digits)")
+    x = [float(t) for t in text.split()]      # only ASCII white space is left: split() is the grammar's
+    if len(x) != count:
+        raise URDFError(f"{at()}: {len(x)} number(s), expected {count}")
+    if not all(map(math.isfinite, x)):
+        raise URDFError(f"{at()}: overflows the float range")
+    return x
+
+
+def _bounded(x, bound, what, e, key, where, source):
+    """x (list of floats, or None) with every |x_k| <= bound; URDFError naming the attribute otherwise."""
+    for v in x or ():
+        if abs(v) > bound:
+            raise URDFError(f"{source}: {where}: <{e.tag} {key}={_show(e.get(key))}>: {what} {v:g} "
+                            f"beyond the bound {bound:g}")
+    return x
+
+
+def _check_origin(e, where, source, bound=MAX_LENGTH):
+    """<origin xyz rpy>: three numbers each, xyz within ±bound metres."""
+    _bounded(_numbers(e, "xyz", 3, where, source), bound, "coordinate", e, "xyz", where, source)
+    _numbers(e, "rpy", 3, where, source)
+
+
+def _check_xml(root, source):
+    """What urdfdom requires and yourdfpy silently defaults or misreads: names, links, numbers, bounds."""
     if not root.get("name"):
         raise URDFError(f"{source}: <robot> has no name attribute")
-    numeric = {"origin": ("xyz", "rpy"), "axis": ("xyz",), "mass": ("value",), "inertia": _INERTIA_KEYS,
-               "limit": ("lower", "upper", "effort", "velocity")}
-    for owner in root.findall("link") + root.findall("joint"):
-        for e in owner.iter(*numeric):
-            for key in numeric[e.tag]:
-                value = e.get(key)
-                try:
-                    ok = value is None or bool(np.all(np.isfinite([float(x) for x in value.split()])))
-                except ValueError:
-                    ok = False
-                if not ok:
-                    raise URDFError(f"{source}: {owner.tag} {owner.get('name')!r}: <{e.tag} {key}="
-                                    f"{value!r}> is not a list of finite numbers")
+    joints, links = root.findall("joint"), root.findall("link")
+    _check_names(joints, links, source)
+    names = {j.get("name") for j in joints}
+    for j in joints:
+        _check_joint(j, names, source)
+    for link in links:
+        _check_link(link, source)
+
+
+def _check_names(joints, links, source):
+    """Every link and joint has a name, and no two of a kind share one (counted once: linear time)."""
+    for kind, elements in (("link", links), ("joint", joints)):
+        count = Counter(e.get("name") for e in elements)
+        if None in count:
+            raise URDFError(f"{source}: a <{kind}> has no name attribute")
+        dup = sorted(n for n, k in count.items() if k > 1)
+        if dup:
+            raise URDFError(f"{source}: duplicate {kind} name(s): {', '.join(dup[:20])}")
+
+
+def _check_joint(j, joint_names, source):
+    """One <joint>: links, type, origin, axis, limit and mimic, as urdfdom requires them."""
+    name, kind = j.get("name"), j.get("type")
+    where = f"joint {name!r}"
+    for tag in ("parent", "child"):
+        e = j.find(tag)
+        if e is None or not e.get("link"):
+            raise URDFError(f"{source}: {where} has no <{tag} link=...>")
+    if kind is None:
+        raise URDFError(f"{source}: {where} has no type attribute")
+    if kind not in SUPPORTED:
+        why = "floating/planar joints (free bases) are not supported" \
+            if kind in ("floating", "planar") else "unknown joint type"
+        raise URDFError(f"{source}: {where}: type {kind!r}: {why}")
+    for e in j.findall("origin"):
+        _check_origin(e, where, source)
+    for e in j.findall("axis"):
+        _check_axis(e, where, source, moving=kind != "fixed")
+    limits = j.findall("limit")
+    if not limits and kind in ("revolute", "prismatic"):
+        raise URDFError(f"{source}: {where}: a {kind} joint needs <limit effort=... velocity=...> "
+                        f"(URDF specification; Pinocchio's reader refuses it too)")
+    for e in limits:
+        _check_limit(e, where, kind, source)
+    for e in j.findall("mimic"):
+        _check_mimic(e, name, joint_names, source)
+
+
+def _check_axis(e, where, source, moving):
+    """<axis xyz>: three numbers, not all zero on a moving joint (urdfdom reads a bare <axis> as zero)."""
+    if e.get("xyz") is None:
+        raise URDFError(f"{source}: {where}: <axis> has no xyz attribute")
+    a = _numbers(e, "xyz", 3, where, source)
+    if moving and not any(a):
+        raise URDFError(f"{source}: {where}: <axis xyz={_show(e.get('xyz'))}> has no direction")
+
+
+def _check_limit(e, where, kind, source):
+    """<limit>: effort and velocity given and >= 0; lower <= upper; prismatic limits within MAX_LENGTH."""
+    values = {k: _numbers(e, k, 1, where, source) for k in ("lower", "upper", "effort", "velocity")}
+    for k in ("effort", "velocity"):
+        if values[k] is None:
+            raise URDFError(f"{source}: {where}: <limit> has no {k} attribute (URDF specification)")
+        if values[k][0] < 0:
+            raise URDFError(f"{source}: {where}: <limit {k}={_show(e.get(k))}>: must be >= 0")
+    lo, hi = (values[k][0] if values[k] else 0.0 for k in ("lower", "upper"))   # URDF default: 0
+    if lo > hi:
+        raise URDFError(f"{source}: {where}: <limit lower={_show(e.get('lower', '0'))} "
+                        f"upper={_show(e.get('upper', '0'))}>: lower > upper")
+    if kind == "prismatic":
+        for k in ("lower", "upper"):
+            _bounded(values[k], MAX_LENGTH, "limit", e, k, where, source)
+
+
+def _check_mimic(e, name, joint_names, source):
+    """<mimic joint multiplier offset>: the mimicked joint exists and is another joint; finite numbers."""
+    where, target = f"joint {name!r}", e.get("joint")
+    if target is None or target not in joint_names:
+        raise URDFError(f"{source}: {where}: <mimic joint={target!r}> names no joint of the file")
+    if target == name:
+        raise URDFError(f"{source}: {where}: <mimic joint={target!r}> mimics itself")
+    for k in ("multiplier", "offset"):
+        _numbers(e, k, 1, where, source)
+
+
+def _check_link(link, source):
+    """One <link>: full inertial (mass, six moments, origin) within bounds; visual/collision origins."""
+    where = f"link {link.get('name')!r}"
+    for inertial in link.findall("inertial"):
+        masses, inertias = inertial.findall("mass"), inertial.findall("inertia")
+        if not masses or any(m.get("value") is None for m in masses):
+            raise URDFError(f"{source}: {where}: <inertial> without <mass value=...>")
+        if not inertias or any(e.get(k) is None for e in inertias for k in _INERTIA_KEYS):
+            raise URDFError(f"{source}: {where}: <inertia> needs all of {', '.join(_INERTIA_KEYS)}")
+        for e in masses:
+            m = _numbers(e, "value", 1, where, source)[0]
+            if m < 0:
+                raise URDFError(f"{source}: {where}: negative mass {m:g} (<mass value={_show(e.get('value'))}>)")
+            _bounded([m], MAX_MASS, "mass (kg)", e, "value", where, source)
+        for e in inertias:
+            for k in _INERTIA_KEYS:
+                _bounded(_numbers(e, k, 1, where, source), MAX_INERTIA, "inertia (kg m²)", e, k, where, source)
+        for e in inertial.findall("origin"):
+            _check_origin(e, where, source)
+    for tag in ("visual", "collision"):        # read by yourdfpy and urdfdom: the grammar, no bounds
+        for part in link.findall(tag):
+            for e in part.findall("origin"):
+                _check_origin(e, f"{where} <{tag}>", source, bound=np.inf)
 
 
 def _tree(robot, source):
@@ -130,10 +287,6 @@ def _tree(robot, source):
     links = {l.name: l for l in robot.links}
     children, parent_of = {name: [] for name in links}, {}
     for j in sorted(robot.joints, key=lambda j: j.name):
-        if j.type not in SUPPORTED:
-            why = "floating/planar joints (free bases) are not supported" \
-                if j.type in ("floating", "planar") else "unknown joint type"
-            raise URDFError(f"{source}: joint {j.name!r}: type {j.type!r}: {why}")
         for role, link in (("parent", j.parent), ("child", j.child)):
             if link not in links:
                 raise URDFError(f"{source}: joint {j.name!r}: {role} link {link!r} is not defined")
@@ -147,42 +300,69 @@ def _tree(robot, source):
     if len(roots) != 1:
         if not roots:
             raise URDFError(f"{source}: no root link: the joints form a cycle")
-        raise URDFError(f"{source}: several root links: {', '.join(roots)} (a URDF is one tree)")
+        raise URDFError(f"{source}: several root links: {', '.join(roots[:20])} (a URDF is one tree)")
     return links, children, roots[0]
+
+
+def _walk(children, root):
+    """Depth-first pre-order from the root, children in joint-name order, without recursion.
+
+    Yields (joint, link): the joint (None for the root) and the link it carries; a link comes after
+    its parent and before its siblings' subtrees, as a recursive walk would give them.
+    """
+    stack = [(None, root)]
+    while stack:
+        j, link = stack.pop()
+        yield j, link
+        stack.extend((c, c.child) for c in reversed(children[link]))
 
 
 def _build(robot, source, gravity, strict) -> Model:
     """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links."""
     links, children, root = _tree(robot, source)
     joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
-
-    def visit(link, body, R, p):          # (R, p): pose of `link` in the frame of `body`
+    for j, link in _walk(children, root):
+        if j is None:                      # the root: the fixed base, body -1
+            body, R, p = -1, np.eye(3), np.zeros(3)
+        else:                              # (R, p): pose of `link` in the frame of `body`
+            fp = frames[j.parent]
+            Ro, po = (np.eye(3), np.zeros(3)) if j.origin is None else (j.origin[:3, :3], j.origin[:3, 3])
+            body, R, p = fp.body, fp.R @ Ro, fp.p + fp.R @ po
+            if j.type == "fixed":
+                merged[root if body < 0 else joints[body][0].child].append(link)
+            else:
+                joints.append((j, body, R, p))
+                body, R, p = len(joints) - 1, np.eye(3), np.zeros(3)
+                parts[body], merged[link] = [], []
         frames[link] = Frame(link, body, R, p)
         parts[body].append(_link_inertia(links[link], R, p, source))
-        notes.extend(_triangle(parts[body][-1][2], link, source, strict))
-        for j in children[link]:          # sorted by joint name
-            Ro, po = (np.eye(3), np.zeros(3)) if j.origin is None else (j.origin[:3, :3], j.origin[:3, 3])
-            if j.type == "fixed":
-                merged[root if body < 0 else joints[body][0].child].append(j.child)
-                visit(j.child, body, R @ Ro, p + R @ po)
-            else:
-                joints.append((j, body, R @ Ro, p + R @ po))
-                parts[len(joints) - 1], merged[j.child] = [], []
-                visit(j.child, len(joints) - 1, np.eye(3), np.zeros(3))
-
-    visit(root, -1, np.eye(3), np.zeros(3))
     unreached = sorted(set(links) - set(frames))
     if unreached:                          # every link has one parent, yet some hang off no root: a cycle
-        raise URDFError(f"{source}: links {', '.join(unreached)} are not connected to the root link "
+        raise URDFError(f"{source}: links {', '.join(unreached[:20])} are not connected to the root link "
                         f"{root!r}: their joints form a cycle")
+    link_I = [parts[f.body][k][2] for f, k in _part_index(frames, parts)]
+    notes.extend(_triangle(link_I, list(frames), source, strict))
+    return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes)
+
+
+def _part_index(frames, parts):
+    """(frame, k) for every link: its inertia is parts[frame.body][k] (links were added in frame order)."""
+    seen = dict.fromkeys(parts, 0)
+    for f in frames.values():
+        yield f, seen[f.body]
+        seen[f.body] += 1
+
+
+def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes) -> Model:
+    """The Model's arrays from the walk's joints (joint, parent body, R0, p0) and merged body parts."""
     nv = len(joints)
     axes = [_unit_axis(j, source, notes) for j, *_ in joints]
     inertias = [combine_inertias(parts[i]) for i in range(nv)]
-    _check_psd(combine_inertias(parts[-1])[2], f"fixed base {root!r} (with merged links "
-               f"{', '.join(merged[root]) or 'none'})", source)
-    for (j, *_), (_, _, I) in zip(joints, inertias):
+    what = [f"fixed base {root!r} (with merged links {', '.join(merged[root]) or 'none'})"]
+    for j, *_ in joints:
         extra = f" (with merged links {', '.join(merged[j.child])})" if merged[j.child] else ""
-        _check_psd(I, f"body {j.child!r}{extra}", source)
+        what.append(f"body {j.child!r}{extra}")
+    _check_psd([combine_inertias(parts[-1])[2]] + [I for _, _, I in inertias], what, source)
     lim = np.array([_limits(j) for j, *_ in joints], float).reshape(nv, 4)
     mimic = tuple((j.name, j.mimic.joint, float(j.mimic.multiplier), float(j.mimic.offset or 0.0))
                   for j, *_ in joints if j.mimic is not None)
@@ -207,21 +387,25 @@ def _build(robot, source, gravity, strict) -> Model:
 
 
 def _unit_axis(j, source, notes):
+    """The joint's unit axis (3,); scaled by its largest component first, so 1e200 or 1e-200 cannot
+    overflow or underflow the norm. A zero axis is refused (checked on the XML already)."""
     a = np.asarray(j.axis if j.axis is not None else (1.0, 0.0, 0.0), float)
-    n = np.linalg.norm(a)
-    if a.shape != (3,) or not n > 1e-12:
+    scale = np.max(np.abs(a)) if a.shape == (3,) else 0.0
+    if not (np.isfinite(scale) and scale > 0):
         raise URDFError(f"{source}: joint {j.name!r}: axis {a.tolist()} has no direction")
-    if abs(n - 1.0) > 1e-9:
+    u = a / scale
+    u = u / np.linalg.norm(u)
+    if abs(np.linalg.norm(a / scale) * scale - 1.0) > 1e-9:
         notes.append(f"joint {j.name!r}: axis {a.tolist()} normalised")
-    return a / n
+    return u
 
 
 def _limits(j):
-    """(lower, upper, effort, velocity); missing values and continuous joints are unbounded."""
+    """(lower, upper, effort, velocity): continuous joints are unbounded, a missing lower/upper is 0 (the
+    URDF default, as urdfdom reads it), a continuous joint without <limit> has unbounded effort/velocity."""
     L = j.limit
     get = lambda v, d: d if (L is None or v is None) else float(v)  # noqa: E731
-    lo, hi = (-np.inf, np.inf) if j.type == "continuous" else \
-        (get(L and L.lower, -np.inf), get(L and L.upper, np.inf))
+    lo, hi = (-np.inf, np.inf) if j.type == "continuous" else (get(L and L.lower, 0.0), get(L and L.upper, 0.0))
     return lo, hi, get(L and L.effort, np.inf), get(L and L.velocity, np.inf)
 
 
@@ -238,37 +422,40 @@ def _link_inertia(link, R, p, source):
     return m, p + R @ To[:3, 3], R @ I @ R.T
 
 
-def _check_psd(I, what, source):
-    """Inertia must be positive semi-definite beyond round-off: smallest eigenvalue >= -1e-12 trace."""
-    lam = np.linalg.eigvalsh(I)
-    if lam[0] < -1e-12 * max(np.trace(I), 0.0) - 1e-18:   # 1e-18 kg m²: round-off on massless bodies
-        raise ModelError(f"{source}: {what}: inertia is not positive semi-definite "
-                         f"(eigenvalues {lam.tolist()})")
+def _check_psd(Is, what, source):
+    """Inertias Is (n, 3, 3) must be positive semi-definite beyond round-off: smallest eigenvalue >=
+    -1e-12 trace - 1e-18 kg m² (round-off on massless bodies). ModelError names the first, what[i]."""
+    Is = np.asarray(Is, float).reshape(-1, 3, 3)
+    lam = np.linalg.eigvalsh(Is)
+    tr = np.maximum(np.trace(Is, axis1=1, axis2=2), 0.0)
+    for i in np.flatnonzero(lam[:, 0] < -1e-12 * tr - 1e-18)[:1]:
+        raise ModelError(f"{source}: {what[i]}: inertia is not positive semi-definite "
+                         f"(eigenvalues {lam[i].tolist()})")
 
 
-def _triangle(I, link, source, strict):
-    """Principal moments of a physical body satisfy I1 + I2 >= I3: a note (or ModelError if strict)."""
-    lam = np.sort(np.linalg.eigvalsh(I))
-    tol = 1e-9 * max(np.sum(np.abs(lam)), 1e-300)
-    if lam[0] < -tol or lam[0] + lam[1] >= lam[2] - tol:   # non-PSD is reported per body, later
-        return []
-    msg = (f"link {link!r}: principal moments {lam.tolist()} violate the triangle inequality "
-           f"I1 + I2 >= I3 ({lam[0] + lam[1]:.6g} < {lam[2]:.6g})")
-    if strict:
-        raise ModelError(f"{source}: {msg}")
-    return [msg]
+def _triangle(Is, links, source, strict):
+    """Principal moments of a physical body satisfy I1 + I2 >= I3: notes (or ModelError if strict).
+
+    Is (n, 3, 3) per link, links (n,) their names. Non-PSD inertias are reported per body, later."""
+    lam = np.linalg.eigvalsh(np.asarray(Is, float).reshape(-1, 3, 3))       # ascending
+    tol = 1e-9 * np.maximum(np.sum(np.abs(lam), axis=1), 1e-300)
+    notes = []
+    for i in np.flatnonzero((lam[:, 0] >= -tol) & (lam[:, 0] + lam[:, 1] < lam[:, 2] - tol)):
+        msg = (f"link {links[i]!r}: principal moments {lam[i].tolist()} violate the triangle inequality "
+               f"I1 + I2 >= I3 ({lam[i, 0] + lam[i, 1]:.6g} < {lam[i, 2]:.6g})")
+        if strict:
+            raise ModelError(f"{source}: {msg}")
+        notes.append(msg)
+    return notes
 
 
-def _vec(e, key, default, source, where):
-    """A 3-vector attribute of an XML element (default if the element or attribute is absent)."""
-    text = default if e is None or e.get(key) is None else e.get(key)
-    try:
-        x = np.array([float(t) for t in text.split()])
-    except ValueError:
-        x = np.array([np.nan])
-    if x.shape != (3,) or not np.all(np.isfinite(x)):
-        raise URDFError(f"{source}: {where}: {key}={text!r} is not three finite numbers")
-    return x
+def _vec(e, key, default, source, where, bound=np.inf):
+    """A 3-vector attribute of an XML element (default if the element or attribute is absent), in the
+    URDF grammar, each coordinate within ±bound."""
+    x = None if e is None else _numbers(e, key, 3, where, source)
+    if x is None:
+        return np.array(default, float)
+    return np.array(_bounded(x, bound, "coordinate", e, key, where, source), float)
 
 
 def _constraints(root, model, source):
@@ -289,11 +476,12 @@ def _constraints(root, model, source):
             if link not in model.frames:
                 raise URDFError(f"{source}: {where}: {side} link {link!r} is not defined")
             fr, org = model.frames[link], e.find(f"{side}_origin")
-            R = rpy_matrix(_vec(org, "rpy", "0 0 0", source, where))
-            p = _vec(org, "xyz", "0 0 0", source, where)
-            axis = _vec(e.find(f"{side}_axis"), "xyz", "0 0 1", source, where)
-            if np.linalg.norm(axis) < 1e-12:
+            R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
+            p = _vec(org, "xyz", (0, 0, 0), source, where, bound=MAX_LENGTH)
+            axis = _vec(e.find(f"{side}_axis"), "xyz", (0, 0, 1), source, where)
+            if not np.any(axis):
                 raise URDFError(f"{source}: {where}: {side}_axis has no direction")
+            axis = axis / np.max(np.abs(axis))           # scaled first: no overflow in the norm
             sides += [fr.body, link, fr.R @ R, fr.p + fr.R @ p, fr.R @ axis / np.linalg.norm(axis)]
         if sides[0] == sides[5]:
             raise URDFError(f"{source}: {where}: parent and child are the same rigid body")
