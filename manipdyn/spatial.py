@@ -52,8 +52,15 @@ def rpy_matrix(rpy) -> np.ndarray:
 
 
 def parallel_axis(mass: float, d: np.ndarray) -> np.ndarray:
-    """Inertia of a point mass at offset d about the origin: m (|d|² 1 − d dᵀ), (3, 3)."""
-    return mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+    """Inertia of a point mass at offset d about the origin: m (|d|² 1 − d dᵀ), (3, 3).
+
+    The diagonal is formed as sums of the other two squares (m (y² + z²), ...), never |d|² − x²: a
+    large offset along one axis must not wipe out the small moment about that axis by cancellation.
+    """
+    x, y, z = (float(t) for t in d)
+    return mass * np.array([[y * y + z * z, -x * y, -x * z],
+                            [-x * y, x * x + z * z, -y * z],
+                            [-x * z, -y * z, x * x + y * y]])
 
 
 def combine_inertias(parts):

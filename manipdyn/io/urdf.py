@@ -86,17 +86,15 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
     if len(data) > max_bytes:
         raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
                         f"(pass max_bytes=... to load_urdf to raise it)")
-    g = np.asarray(gravity, float)
+    try:
+        g = np.asarray(gravity, float)
+    except (TypeError, ValueError):
+        g = np.full(1, np.nan)
     if g.shape != (3,) or not np.all(np.isfinite(g)):
         raise InputError(f"gravity must be 3 finite numbers, got {gravity!r}")
     root = _parse_xml(data, source)
     _check_xml(root, source)
-    try:
-        robot = yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=False, load_meshes=False,
-                                   build_collision_scene_graph=False, load_collision_meshes=False).robot
-    except Exception as exc:  # yourdfpy raises bare KeyError/ValueError on malformed elements
-        raise URDFError(f"{source}: cannot read URDF elements: {exc!r}") from exc
-    model = _build(robot, source, g, strict)
+    model = _build(_read_elements(root, source), source, g, strict)
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
     for note in model.notes:
@@ -122,6 +120,25 @@ def _parse_xml(data: bytes, source: str):
     if root.tag != "robot":
         raise URDFError(f"{source}: root element is <{root.tag}>, expected <robot>")
     return root
+
+
+def _read_elements(root, source):
+    """yourdfpy's readers applied to each <link> and <joint> of the checked tree: a yourdfpy Robot.
+
+    <visual> and <collision> are removed first: the dynamics never use them (manipdyn.viz reads them
+    when a viewer asks), so a broken visual does not stop the model loading, as in Pinocchio.
+    """
+    for e in root.findall("link/visual") + root.findall("link/collision"):
+        e.getparent().remove(e)
+    robot = yourdfpy.Robot(name=root.get("name"))
+    for kind, read, out in (("link", yourdfpy.URDF._parse_link, robot.links),
+                            ("joint", yourdfpy.URDF._parse_joint, robot.joints)):
+        for e in root.findall(kind):
+            try:
+                out.append(read(e))
+            except Exception as exc:  # yourdfpy raises bare KeyError/ValueError on malformed elements
+                raise URDFError(f"{source}: {kind} {e.get('name')!r} cannot be read: {exc!r}") from exc
+    return robot
 
 
 # ---- checks on the raw XML, before yourdfpy (whose float() is not the URDF grammar) reads it -------------
@@ -162,14 +179,17 @@ def _bounded(x, bound, what, e, key, where, source):
     return x
 
 
-def _check_origin(e, where, source, bound=MAX_LENGTH):
-    """<origin xyz rpy>: three numbers each, xyz within ±bound metres."""
-    _bounded(_numbers(e, "xyz", 3, where, source), bound, "coordinate", e, "xyz", where, source)
+def _check_origin(e, where, source):
+    """<origin xyz rpy>: three numbers each, xyz within ±MAX_LENGTH metres."""
+    _bounded(_numbers(e, "xyz", 3, where, source), MAX_LENGTH, "coordinate", e, "xyz", where, source)
     _numbers(e, "rpy", 3, where, source)
 
 
 def _check_xml(root, source):
-    """What urdfdom requires and yourdfpy silently defaults or misreads: names, links, numbers, bounds."""
+    """What urdfdom requires and yourdfpy silently defaults or misreads: names, links, numbers, bounds.
+
+    Visual and collision elements are not checked: the dynamics never read them (see _read_elements).
+    """
     if not root.get("name"):
         raise URDFError(f"{source}: <robot> has no name attribute")
     joints, links = root.findall("joint"), root.findall("link")
@@ -218,6 +238,9 @@ def _check_joint(j, joint_names, source):
         _check_limit(e, where, kind, source)
     for e in j.findall("mimic"):
         _check_mimic(e, name, joint_names, source)
+    for e in j.findall("dynamics"):            # not used by the model, but read (Pinocchio keeps them)
+        for k in ("damping", "friction"):
+            _numbers(e, k, 1, where, source)
 
 
 def _check_axis(e, where, source, moving):
@@ -276,10 +299,6 @@ def _check_link(link, source):
                 _bounded(_numbers(e, k, 1, where, source), MAX_INERTIA, "inertia (kg m²)", e, k, where, source)
         for e in inertial.findall("origin"):
             _check_origin(e, where, source)
-    for tag in ("visual", "collision"):        # read by yourdfpy and urdfdom: the grammar, no bounds
-        for part in link.findall(tag):
-            for e in part.findall("origin"):
-                _check_origin(e, f"{where} <{tag}>", source, bound=np.inf)
 
 
 def _tree(robot, source):

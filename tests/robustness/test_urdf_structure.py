@@ -53,8 +53,6 @@ VECTORS = {   # attribute -> (builder of the text for a value, owner, element) ;
     "joint_origin_rpy": (lambda v: robot(j1_origin=f'<origin rpy="{v}"/>'), "joint 'j1'", "<origin rpy="),
     "axis": (lambda v: robot(j1_axis=f'<axis xyz="{v}"/>'), "joint 'j1'", "<axis xyz="),
     "inertial_origin": (lambda v: robot(l1=inertial(com=v)), "link 'l1'", "<origin xyz="),
-    "visual_origin": (lambda v: robot(l1=f'<visual><origin xyz="{v}"/><geometry><box size="1 1 1"/>'
-                                         f'</geometry></visual>'), "link 'l1' <visual>", "<origin xyz="),
     "constraint_origin": (lambda v: robot(extra=constraint(pxyz=v)), "constraint 'c'", "<parent_origin xyz="),
     "constraint_rpy": (lambda v: robot(extra=constraint(prpy=v)), "constraint 'c'", "<parent_origin rpy="),
     "constraint_axis": (lambda v: robot(extra=constraint(caxis=v)), "constraint 'c'", "<child_axis xyz="),
@@ -224,7 +222,36 @@ def test_continuous_joint_without_limit_is_unbounded_as_in_pinocchio():
     assert model.effort[0] == pm.effortLimit[0] == np.inf and model.velocity[0] == pm.velocityLimit[0] == np.inf
 
 
+@pytest.mark.parametrize("visual", [
+    '<visual><origin xyz="nan 1_0"/><geometry><box size="1 1 1"/></geometry></visual>',
+    '<visual><geometry><cylinder radius="x"/></geometry></visual>',
+    '<collision><geometry><mesh/></geometry></collision>',
+    '<visual><geometry><inertia/></geometry><material name="m"><color rgba="red"/></material></visual>'])
+def test_broken_visual_does_not_stop_the_dynamics_as_in_pinocchio(visual):
+    # the dynamics never read visuals (manipdyn.viz does, on demand); Pinocchio loads these too
+    text = robot(l1=inertial(mass="2") + visual)
+    model, pm = load_urdf_string(text), pin.buildModelFromXML(text)
+    assert model.nv == pm.nv == 2 and model.mass[0] == pm.inertias[1].mass == 2.0
+
+
+def test_dynamics_numbers_follow_the_grammar():
+    with pytest.raises(URDFError, match="joint 'j1': <dynamics damping='1_0'>: '1_0' is not a URDF number"):
+        load_urdf_string(robot(j1='<dynamics damping="1_0" friction="0"/>'))
+
+
 def test_fixed_joint_may_carry_a_zero_axis():
     text = robot(extra='<link name="tool"/><joint name="t" type="fixed"><parent link="l2"/><child link="tool"/>'
                        '<axis xyz="0 0 0"/></joint>')
     assert load_urdf_string(text).merged["l2"] == ("tool",)
+
+
+def test_merged_far_link_keeps_its_small_moment_as_in_pinocchio():
+    # a tool 1e5 m out along z, merged through a fixed joint: the merged moment about z gets m (x² + y²)
+    # terms of ~5e-5, which |d|² − z² (|d|² ~ 2.5e9) computes with an error of 4.5e-7 (cancellation)
+    tool = ('<link name="tool"><inertial><origin xyz="0 0.01 0"/><mass value="1"/><inertia ixx="1e-6" ixy="0" '
+            'ixz="0" iyy="1e-6" iyz="0" izz="1e-6"/></inertial></link><joint name="t" type="fixed">'
+            '<parent link="l1"/><child link="tool"/><origin xyz="0 0 1e5"/></joint>')
+    text = robot(extra=tool)
+    model, pm = load_urdf_string(text), pin.buildModelFromXML(text)
+    assert_close(model.inertia[0], pm.inertias[1].inertia, 1e-14, "merged inertia")   # measured 1.9e-16
+    assert_close(model.inertia[0][2, 2], pm.inertias[1].inertia[2, 2], 1e-15, "moment about z")  # measured 0
