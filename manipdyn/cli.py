@@ -83,6 +83,10 @@ def _validation_runs(args) -> list:
     from .io.urdf import load_urdf
     from .validation.reference import Reference
 
+    if args.reference:                    # our loader first: its message is one line, urdfdom's is not
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            load_urdf(args.reference)
     runs = []
     for path in _validate_paths(args):
         _check_input_file(path, "URDF")
@@ -202,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="show the Python traceback of an error")
     sub = p.add_subparsers(dest="command", required=True,
                            parser_class=_subparser_class(common, EPILOG))
+    p.commands = sub.choices              # name -> subcommand parser (for errors in its own name)
     v = sub.add_parser("validate", help="compare every Newton-Euler term with Pinocchio")
     v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/)")
     v.add_argument("--zoo", action="store_true", help="also validate example-robot-data's arms")
@@ -345,8 +350,11 @@ def _os_message(exc: OSError) -> str:
 
 def main(argv=None) -> int:
     """Run one subcommand; return its exit code: 0 success, 1 a term failed, 2 bad input or usage."""
+    parser = build_parser()
     try:
-        args = build_parser().parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:                         # refused by the subcommand, with its usage
+            parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:           # argparse: usage + one error line (2), or --help (0)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:
