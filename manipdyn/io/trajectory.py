@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InputError
 
 MAX_TRAJECTORY_BYTES = 64 * 2**20     # 64 MiB: ~100 000 frames of a 30-joint arm as CSV
-_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")   # ASCII digits only
 _NONFINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
@@ -61,8 +61,8 @@ def _check_times(path, t):
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         k = int(bad[0]) + 1
-        raise InputError(f"{path}: times must increase strictly; frame {k} has t = {t[k]!r} after "
-                         f"t = {t[k - 1]!r}")
+        raise InputError(f"{path}: times must increase strictly; frame {k} has t = {float(t[k])!r} after "
+                         f"t = {float(t[k - 1])!r}")
 
 
 def _read_csv(path):
