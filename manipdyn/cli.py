@@ -17,7 +17,7 @@ from .errors import InputError, ManipdynError
 from .paths import bundled_dir
 
 BUNDLED = bundled_dir()
-MAX_STATES = 100_000       # validate --states: about 4 min and 0.2 GB per 7-joint arm at the cap
+MAX_STATES = 100_000       # validate --states: at the cap ~4 min for the 5-joint AAU arm, 0.6 GiB of terms for baxter (19)
 MAX_SAMPLES = 10_001       # example --samples: about 2 min for the AAU arm at the cap
 MAX_SEED = 2**32 - 1       # validate --seed: the range every numpy generator accepts
 
