@@ -14,10 +14,11 @@ import warnings
 from pathlib import Path
 
 from .errors import InputError, ManipdynError
+from .io.trajectory import MAX_TRAJECTORY_BYTES
 from .paths import bundled_dir
 
 BUNDLED = bundled_dir()
-MAX_STATES = 100_000       # validate --states: at the cap ~4 min for the 5-joint AAU arm, 0.6 GiB of terms for baxter (19)
+MAX_STATES = 100_000       # validate --states: at the cap ~4 min (AAU arm), 0.6 GiB of terms (baxter, 19 joints)
 MAX_SAMPLES = 10_001       # example --samples: about 2 min for the AAU arm at the cap
 MAX_SEED = 2**32 - 1       # validate --seed: the range every numpy generator accepts
 
@@ -32,7 +33,7 @@ exit codes:
 limits (checked before any work starts): validate --states 1..{MAX_STATES}, --tol finite and > 0,
 --seed 0..{MAX_SEED}; example --samples 2..{MAX_SAMPLES}; --json / --html must be a writable file in
 an existing folder, --out a folder (created if missing), not a file; trajectory files (play --traj)
-are .csv or .npz of at most 64 MiB.
+are .csv or .npz of at most {MAX_TRAJECTORY_BYTES // 2**20} MiB.
 """
 
 
@@ -293,12 +294,17 @@ def _check_input_file(path, what):
 def _check_output_file(path, option):
     """A file that can be written: its folder exists, it is not a folder, it opens for writing.
 
-    The file is opened for appending (nothing written) and removed again if this check created it."""
+    A regular file is opened for appending (nothing written) and removed again if this check created it;
+    a device or pipe (/dev/stdout, a FIFO) is only checked for write permission, never opened here."""
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{option} {path}: is a directory, not a file")
     if not path.parent.is_dir():
         raise InputError(f"{option} {path}: folder {path.parent} does not exist")
+    if path.exists() and not path.is_file():
+        if not os.access(path, os.W_OK):
+            raise InputError(f"{option} {path}: cannot write it (permission denied)")
+        return
     existed = path.exists()
     try:
         with open(path, "a"):
