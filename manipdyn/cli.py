@@ -6,14 +6,35 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
+import traceback
 import warnings
 from pathlib import Path
 
-from .errors import ManipdynError
+from .errors import InputError, ManipdynError
+from .io.trajectory import MAX_TRAJECTORY_BYTES
 from .paths import bundled_dir
 
 BUNDLED = bundled_dir()
+MAX_STATES = 100_000       # validate --states: at the cap ~4 min (AAU arm), 0.6 GiB of terms (baxter, 19 joints)
+MAX_SAMPLES = 10_001       # example --samples: about 2 min for the AAU arm at the cap
+MAX_SEED = 2**32 - 1       # validate --seed: the range every numpy generator accepts
+
+EPILOG = f"""\
+exit codes:
+  0  success
+  1  a validated term failed (validate only)
+  2  bad input or usage: a bad argument, a missing or unreadable file, a URDF or trajectory manipdyn
+     refuses, an interrupted run (Ctrl-C), or an internal error; one line on stderr
+     ("manipdyn <command>: error: ..."), no traceback unless --debug
+
+limits (checked before any work starts): validate --states 1..{MAX_STATES}, --tol finite and > 0,
+--seed 0..{MAX_SEED}; example --samples 2..{MAX_SAMPLES}; --json / --html must be a writable file in
+an existing folder, --out a folder (created if missing), not a file; trajectory files (play --traj)
+are .csv or .npz of at most {MAX_TRAJECTORY_BYTES // 2**20} MiB.
+"""
 
 
 def bundled_models() -> list[Path]:
@@ -24,26 +45,17 @@ def bundled_models() -> list[Path]:
 def _validate(args) -> int:
     from tqdm import tqdm
 
-    from .io.urdf import load_urdf
-    from .validation import arm_paths, format_report, validate
+    from .validation import format_report, validate
 
-    paths = [Path(p) for p in args.urdf] or bundled_models()
-    if args.zoo:
-        paths += arm_paths()
-    if not paths:
-        raise ManipdynError(f"no URDF given and no bundled model found in {BUNDLED}")
-    print(f"manipdyn validate: {len(paths)} model(s), {args.states} random states each, seed {args.seed}, "
+    runs = _validation_runs(args)     # every model and reference loads before the first state runs
+    print(f"manipdyn validate: {len(runs)} model(s), {args.states} random states each, seed {args.seed}, "
           f"tolerance {args.tol:g} (err = max|x - y| / max(max|y|, 1))")
     reports = []
-    with tqdm(total=2 * len(paths) * args.states, unit="state", disable=args.quiet or None,
+    with tqdm(total=2 * len(runs) * args.states, unit="state", disable=args.quiet or None,
               file=sys.stderr, leave=False) as bar:
-        for path in paths:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                model = load_urdf(path, **reduction(args))
-            for w in caught:
-                bar.write(f"warning: {w.message}", file=sys.stderr)
-            ref = Path(args.reference) if args.reference else path
+        for model, ref, notes in runs:
+            for note in notes:
+                bar.write(f"warning: {note}", file=sys.stderr)
             rep = validate(model, ref, n_states=args.states, seed=args.seed, tol=args.tol,
                            progress=bar.update)
             reports.append(rep)
@@ -54,6 +66,44 @@ def _validate(args) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1))
     return 1 if failed else 0
+
+
+def _validate_paths(args) -> list[Path]:
+    """The URDF files validate runs on: those given (or the bundled ones), then the zoo's."""
+    from .validation import arm_paths
+    paths = [Path(p) for p in args.urdf] or bundled_models()
+    if args.zoo:
+        paths += arm_paths()
+    if not paths:
+        raise ManipdynError(f"no URDF given and no bundled model found in {BUNDLED}")
+    return paths
+
+
+def _validation_runs(args) -> list:
+    """(model, reference URDF, loader warnings) per model, each model and its Pinocchio reference built."""
+    from .io.urdf import load_urdf
+    from .validation.reference import Reference
+
+    if args.reference:                    # our loader first: its message is one line, urdfdom's is not
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            load_urdf(args.reference)
+    runs = []
+    for path in _validate_paths(args):
+        _check_input_file(path, "URDF")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            model = load_urdf(path, **reduction(args))
+        ref = Path(args.reference) if args.reference else path
+        try:
+            Reference(model, ref)
+        except ManipdynError:
+            raise
+        except Exception as exc:          # Pinocchio's parser raises bare ValueError/RuntimeError
+            raise InputError(f"{ref}: Pinocchio cannot build a reference model from it: "
+                             f"{_one_line(str(exc))}") from exc
+        runs.append((model, ref, [str(w.message) for w in caught]))
+    return runs
 
 
 def add_reduction_options(p):
@@ -70,12 +120,15 @@ def reduction(args) -> dict:
     locked = {}
     for item in args.lock:
         name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise InputError(f"--lock {item!r}: expected JOINT=VALUE")
         try:
-            locked[name] = float(value)
+            v = float(value)
         except ValueError:
-            raise ManipdynError(f"--lock {item!r}: expected JOINT=VALUE with a number") from None
-        if not sep:
-            raise ManipdynError(f"--lock {item!r}: expected JOINT=VALUE")
+            raise InputError(f"--lock {item!r}: expected JOINT=VALUE with a number") from None
+        if name.strip() in locked:
+            raise InputError(f"--lock {item!r}: joint {name.strip()!r} is locked twice")
+        locked[name.strip()] = v
     return dict(locked=locked or None, root=args.root, tips=args.tips, prune=args.prune)
 
 
@@ -128,7 +181,6 @@ def _bench(args) -> int:
 
 def _example(args) -> int:
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     if args.name == "aau":
         from .examples import aau_arm as ex
         from .io.urdf import load_urdf
@@ -146,14 +198,24 @@ def _example(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="manipdyn", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True)
+    p = argparse.ArgumentParser(prog="manipdyn", description=__doc__.splitlines()[0], epilog=EPILOG,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--debug", action="store_true",
+                   help="show the Python traceback of an error (also accepted after the subcommand)")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="show the Python traceback of an error")
+    sub = p.add_subparsers(dest="command", required=True,
+                           parser_class=_subparser_class(common, EPILOG))
+    p.commands = sub.choices              # name -> subcommand parser (for errors in its own name)
     v = sub.add_parser("validate", help="compare every Newton-Euler term with Pinocchio")
     v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/)")
     v.add_argument("--zoo", action="store_true", help="also validate example-robot-data's arms")
-    v.add_argument("--states", type=int, default=1000, help="random states per model (default 1000)")
-    v.add_argument("--seed", type=int, default=0)
-    v.add_argument("--tol", type=float, default=1e-12)
+    v.add_argument("--states", type=_int_in(1, MAX_STATES), default=1000,
+                   help=f"random states per model, 1..{MAX_STATES} (default 1000)")
+    v.add_argument("--seed", type=_int_in(0, MAX_SEED), default=0, help=f"0..{MAX_SEED} (default 0)")
+    v.add_argument("--tol", type=_positive_finite, default=1e-12,
+                   help="largest error measure that passes, finite and > 0 (default 1e-12)")
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -173,7 +235,8 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
     e.add_argument("name", choices=["aau", "spm"], help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7)")
     e.add_argument("--out", default=".", help="output folder")
-    e.add_argument("--samples", type=int, default=401)
+    e.add_argument("--samples", type=_int_in(2, MAX_SAMPLES), default=401,
+                   help=f"time samples, 2..{MAX_SAMPLES} (default 401; spm uses at most 101)")
     e.set_defaults(func=_example)
     b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
     b.add_argument("--out", required=True, help="folder for report.md, report.json and PNG plots")
@@ -182,13 +245,151 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+def _subparser_class(common, epilog):
+    """ArgumentParser for the subcommands: each accepts --debug and shows the exit codes in --help."""
+    class Sub(argparse.ArgumentParser):
+        def __init__(self, **kw):
+            super().__init__(parents=[common], epilog=epilog,
+                             formatter_class=argparse.RawDescriptionHelpFormatter, **kw)
+    return Sub
+
+
+def _int_in(lo, hi):
+    """An argparse type: an integer in [lo, hi]."""
+    def integer(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer in {lo}..{hi}, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in {lo}..{hi}, got {value}")
+        return value
+    return integer
+
+
+def _positive_finite(text):
+    """An argparse type: a finite number > 0."""
     try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be finite and > 0, got {text!r}")
+    return value
+
+
+def _check_input_file(path, what):
+    """An existing, readable regular file (checked before any work starts)."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such {what} file")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, not a {what} file")
+    if not path.is_file():
+        raise InputError(f"{path}: not a regular file (a {what} must be a file)")
+    if not os.access(path, os.R_OK):
+        raise InputError(f"{path}: {what} file is not readable (permission denied)")
+
+
+def _check_output_file(path, option):
+    """A file that can be written: its folder exists, it is not a folder, it opens for writing.
+
+    A regular file is opened for appending (nothing written) and removed again if this check created it;
+    a device or pipe (/dev/stdout, a FIFO) is only checked for write permission, never opened here."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{option} {path}: is a directory, not a file")
+    if not path.parent.is_dir():
+        raise InputError(f"{option} {path}: folder {path.parent} does not exist")
+    if path.exists() and not path.is_file():
+        if not os.access(path, os.W_OK):
+            raise InputError(f"{option} {path}: cannot write it (permission denied)")
+        return
+    existed = path.exists()
+    try:
+        with open(path, "a"):
+            pass
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot write it ({exc.strerror})") from None
+    if not existed:
+        path.unlink()
+
+
+def _check_output_dir(path, option):
+    """A folder to write into: created if missing; refused if it is a file or not writable."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{option} {path}: is a file, not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot create the folder ({exc.strerror})") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise InputError(f"{option} {path}: the folder is not writable")
+
+
+def _preflight(args):
+    """Check input files and output paths before a subcommand starts any long work."""
+    urdf = getattr(args, "urdf", None)
+    for path in urdf if isinstance(urdf, list) else [urdf] if urdf else []:
+        _check_input_file(path, "URDF")
+    if getattr(args, "reference", None):
+        _check_input_file(args.reference, "--reference URDF")
+    for option in ("json", "html"):
+        if getattr(args, option, None):
+            _check_output_file(getattr(args, option), f"--{option}")
+    if getattr(args, "out", None) is not None:
+        _check_output_dir(args.out, "--out")
+
+
+def _one_line(text) -> str:
+    """A message on one line (line breaks become ' | ')."""
+    return " | ".join(line.strip() for line in str(text).splitlines() if line.strip()) or "(no message)"
+
+
+def _os_message(exc: OSError) -> str:
+    """'file: reason' for an OSError."""
+    names = [f for f in (exc.filename, exc.filename2) if f is not None]
+    reason = exc.strerror or str(exc)
+    return f"{' -> '.join(map(str, names))}: {reason}" if names else reason
+
+
+def main(argv=None) -> int:
+    """Run one subcommand; return its exit code: 0 success, 1 a term failed, 2 bad input or usage."""
+    parser = build_parser()
+    try:
+        args, extra = parser.parse_known_args(argv)
+        if extra:                         # refused by the subcommand, with its usage
+            parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+    except SystemExit as exc:           # argparse: usage + one error line (2), or --help (0)
+        return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+    try:
+        _preflight(args)
         return args.func(args)
+    except KeyboardInterrupt:
+        return _fail(args, "interrupted")
     except ManipdynError as exc:
-        print(f"manipdyn {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(args, _one_line(exc))
+    except BrokenPipeError:             # stdout closed early (| head): stop writing to it
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return _fail(args, "output closed (broken pipe)")
+    except OSError as exc:
+        return _fail(args, _one_line(_os_message(exc)))
+    except Exception as exc:            # a bug: still one line and exit 2, the traceback on request
+        return _fail(args, f"internal error: {type(exc).__name__}: {_one_line(exc)} "
+                           "(run with --debug for the traceback)")
+
+
+def _fail(args, message) -> int:
+    """Print 'manipdyn <command>: error: message' (after the traceback with --debug); return 2."""
+    try:
+        sys.stdout.flush()
+    except OSError:
+        pass
+    if getattr(args, "debug", False):
+        traceback.print_exc()
+    print(f"manipdyn {args.command}: error: {message}", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":

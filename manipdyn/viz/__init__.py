@@ -9,37 +9,16 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.trajectory import read_trajectory_file
 from . import scene as _scene
 
 
 def read_trajectory(path, model):
     """(t (T,), q (T, nv)) from a CSV (header t, q_<joint>...; other columns ignored) or an NPZ (t, q,
-    joint_names). A closed chain may give only its actuated joints (completed later by assembly)."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such trajectory file")
-    if path.suffix == ".npz":
-        data = np.load(path, allow_pickle=False)
-        for key in ("t", "q", "joint_names"):
-            if key not in data:
-                raise InputError(f"{path}: NPZ needs arrays t, q and joint_names (missing {key!r})")
-        t, q, names = data["t"], np.atleast_2d(data["q"]), [str(x) for x in data["joint_names"]]
-    else:
-        with open(path) as fh:
-            head = fh.readline().strip().split(",")
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-        if head[0] != "t":
-            raise InputError(f"{path}: the first CSV column must be 't', not {head[0]!r}")
-        cols = {h[2:]: i for i, h in enumerate(head) if h.startswith("q_")}
-        names, t = list(cols), data[:, 0]
-        q = data[:, [cols[n] for n in names]] if names else np.zeros((len(t), 0))
-    if q.shape != (len(t), len(names)):
-        raise InputError(f"{path}: q has shape {q.shape}, expected ({len(t)}, {len(names)})")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
-        raise InputError(f"{path}: the trajectory has non-finite values")
-    if np.any(np.diff(t) <= 0):
-        raise InputError(f"{path}: times must increase")
-    return t, _to_model_order(model, names, q, path)
+    joint_names). A closed chain may give only its actuated joints (completed later by assembly).
+    The file is read strictly (manipdyn.io.trajectory): any flaw raises InputError naming the file."""
+    t, names, q = read_trajectory_file(path)
+    return t, _to_model_order(model, names, q, Path(path))
 
 
 def _to_model_order(model, names, q, source):
