@@ -22,6 +22,10 @@ class Fault:
     tests: tuple
     what: str
 
+    def __post_init__(self):
+        if not isinstance(self.tests, tuple) or not self.tests:
+            raise TypeError(f"fault {self.name!r}: tests must be a non-empty tuple of paths")
+
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
          "validation", "reduce")
@@ -41,11 +45,11 @@ FAULTS = (
     Fault("urdf-q-order-by-link-name", "loader", "manipdyn/io/urdf.py",
           "for j in sorted(robot.joints, key=lambda j: j.name):",
           "for j in sorted(robot.joints, key=lambda j: j.child):",
-          (_LOADER), "children of a link visited in order of their child link names, not joint names"),
+          (_LOADER,), "children of a link visited in order of their child link names, not joint names"),
     Fault("urdf-merge-drops-fixed-link-mass", "loader", "manipdyn/io/urdf.py",
           "inertias = [combine_inertias(parts[i]) for i in range(nv)]",
           "inertias = [combine_inertias(parts[i][:1]) for i in range(nv)]",
-          (_LOADER), "a body keeps only its own link's inertia: links merged by fixed joints lose their mass"),
+          (_LOADER,), "a body keeps only its own link's inertia: links merged by fixed joints lose their mass"),
     Fault("urdf-axis-not-normalised", "loader", "manipdyn/io/urdf.py",
           "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a / n\n",
           "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a\n",
@@ -82,15 +86,15 @@ FAULTS = (
     Fault("rnea-coriolis-sign", "rnea", "manipdyn/dynamics/rnea.py",
           "cross(w_in, qd * z)",
           "cross(qd * z, w_in)",
-          (_FAST), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z (readable recursion)"),
+          (_FAST,), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z (readable recursion)"),
     Fault("rnea-gravity-sign", "rnea", "manipdyn/dynamics/rnea.py",
           "base_dv = np.zeros((N, 3)), np.broadcast_to(-model.gravity, (N, 3))",
           "base_dv = np.zeros((N, 3)), np.broadcast_to(model.gravity, (N, 3))",
-          (_FAST), "v̇'_0 = +g instead of −g (readable recursion)"),
+          (_FAST,), "v̇'_0 = +g instead of −g (readable recursion)"),
     Fault("rnea-eq7-centripetal-dropped", "rnea", "manipdyn/dynamics/rnea.py",
           "dvc[i] = dv[i] + cross(dw[i], c) + cross(w[i], cross(w[i], c))",
           "dvc[i] = dv[i] + cross(dw[i], c)",
-          (_FAST), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
+          (_FAST,), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
     Fault("rnea-fext-frame-transposed", "rnea", "manipdyn/dynamics/state.py",
           "f, m = f @ fr.R.T, m @ fr.R.T",
           "f, m = f @ fr.R, m @ fr.R",
@@ -127,11 +131,11 @@ FAULTS = (
     Fault("lagrange-christoffel-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
           '- np.einsum("nijk,nk->nij", dM, V))',
           '+ np.einsum("nijk,nk->nij", dM, V))',
-          (_PROPS), "Christoffel symbol with + ∂M_jk/∂q_i instead of −"),
+          (_PROPS,), "Christoffel symbol with + ∂M_jk/∂q_i instead of −"),
     Fault("lagrange-dM-symmetrisation", "lagrange", "manipdyn/dynamics/lagrange.py",
           "dM[:, k] += sym + np.swapaxes(sym, 1, 2)",
           "dM[:, k] += 2.0 * sym",
-          (_PROPS), "∂M/∂q_k = 2 Jᵀ ∂J instead of ∂Jᵀ J + Jᵀ ∂J (not symmetrised)"),
+          (_PROPS,), "∂M/∂q_k = 2 Jᵀ ∂J instead of ∂Jᵀ J + Jᵀ ∂J (not symmetrised)"),
     Fault("lagrange-g-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
           'return unbatch(-np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
           'return unbatch(np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
@@ -239,7 +243,7 @@ FAULTS = (
     Fault("compare-lagrange-M-with-own-crba", "validation", "manipdyn/validation/compare.py",
           'theirs.update(M_crba=theirs["M"], M_lagrange=theirs["M"],',
           'theirs.update(M_crba=theirs["M"], M_lagrange=ours["M_crba"][s],',
-          ("tests/crosscheck/test_planted_fault.py"),
+          ("tests/crosscheck/test_planted_fault.py",),
           "validate compares the Lagrange-route M with our own CRBA instead of Pinocchio's"),
     # ---------------------------------------------------------------- reduce (reduce.py)
     Fault("reduce-locked-value-ignored", "reduce", "manipdyn/reduce.py",
