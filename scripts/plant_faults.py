@@ -23,6 +23,7 @@ import os
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -204,6 +205,10 @@ def _commit(root=ROOT):
         return "unknown"
 
 
+def _interrupt(signum, frame):  # noqa: ARG001
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
 def _select(args):
     if args.only and args.rotate:
         raise UsageError("--only and --rotate are exclusive")
@@ -268,10 +273,18 @@ def main(argv=None) -> int:
             write_report(outs, args.report, dict(meta, seconds=time.perf_counter() - t0,
                                                  complete=final, planned=len(chosen)))
 
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        for f, o in zip(chosen, pool.map(one, chosen)):
-            done[f.name] = o
-            report(False)
+    # SIGTERM stops like Ctrl-C: the running pytest is killed and the temporary copy removed (with --jobs 1)
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            results = map(one, chosen) if args.jobs == 1 else pool.map(one, chosen)
+            for f, o in zip(chosen, results):
+                done[f.name] = o
+                report(False)
+    except KeyboardInterrupt:
+        print(f"interrupted after {len(done)} of {len(chosen)} faults"
+              + (f"; partial report in {args.report}" if args.report and done else ""), file=sys.stderr)
+        return 130
     outcomes = [done[f.name] for f in chosen]
     report(True)
     secs = time.perf_counter() - t0
