@@ -184,8 +184,11 @@ def write_report(outcomes, path: Path, meta: dict):
              f"(commit {meta['commit']}), {meta['jobs']} job(s), {meta['seconds']:.0f} s in all"
              + ("." if meta.get("complete", True) else
                 f" so far: PARTIAL, {len(outcomes)} of {meta.get('planned')} faults run."), "",
-             f"**{caught}/{len(outcomes)} caught**", "",
-             "| fault | area | file | caught by | phase | seconds |", "|---|---|---|---|---|---:|"]
+             f"**{caught}/{len(outcomes)} caught**", ""]
+    if "--no-rest" in meta["argv"].split():
+        lines += ["Run with `--no-rest`: only each fault's relevant tests ran, so *missed* means missed by those "
+                  "tests, not by the whole suite.", ""]
+    lines += ["| fault | area | file | caught by | phase | seconds |", "|---|---|---|---|---|---:|"]
     for o in outcomes:
         by = f"`{o.caught_by}`" if o.status == "caught" else f"**{o.status.upper()}** {o.caught_by}".strip()
         lines.append(f"| {o.name} | {o.area} | {o.file} | {by} | {o.phase} | {o.seconds:.0f} |")
