@@ -1,0 +1,262 @@
+"""The planted faults: named semantic bugs a developer could make, each one exact text replacement.
+
+Every entry changes numbers (a sign, a dropped term, a wrong index, a wrong order), never the syntax. The
+old snippet must occur exactly once in its file: when the code changes under a fault, the harness stops
+with exit code 2 naming the fault (and tests/unit/test_fault_harness.py fails), so that no fault rots into
+a no-op. ``tests`` lists the test paths (files or node ids) most likely to catch the fault; the harness runs
+them first and the rest of the suite after.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One planted fault: replace ``old`` by ``new`` in ``file`` (relative to the repo root)."""
+    name: str
+    area: str
+    file: str
+    old: str
+    new: str
+    tests: tuple
+    what: str
+
+    def __post_init__(self):
+        if not isinstance(self.tests, tuple) or not self.tests:
+            raise TypeError(f"fault {self.name!r}: tests must be a non-empty tuple of paths")
+
+
+AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
+         "validation", "reduce")
+
+_LOADER = "tests/unit/test_loader.py"
+_ZOO = "tests/crosscheck/test_rnea_terms.py"
+_FAST = "tests/batch/test_fast_paths.py"
+_ANALYTIC = "tests/unit/test_analytic.py"
+_PROPS = "tests/unit/test_lagrange_properties.py"
+_FOURBAR = "tests/unit/test_fourbar.py"
+_CLOSED_FAST = "tests/batch/test_fast_paths.py::test_closed_chain_kernel_equals_reference"
+_SPM = "tests/unit/test_spm_chapter.py"
+_DH = "tests/unit/test_dh.py"
+
+FAULTS = (
+    # ---------------------------------------------------------------- loader (io/urdf.py, spatial.py)
+    Fault("urdf-q-order-by-link-name", "loader", "manipdyn/io/urdf.py",
+          "for j in sorted(robot.joints, key=lambda j: j.name):",
+          "for j in sorted(robot.joints, key=lambda j: j.child):",
+          (_LOADER,), "children of a link visited in order of their child link names, not joint names"),
+    Fault("urdf-merge-drops-fixed-link-mass", "loader", "manipdyn/io/urdf.py",
+          "inertias = [combine_inertias(parts[i]) for i in range(nv)]",
+          "inertias = [combine_inertias(parts[i][:1]) for i in range(nv)]",
+          (_LOADER,), "a body keeps only its own link's inertia: links merged by fixed joints lose their mass"),
+    Fault("urdf-axis-not-normalised", "loader", "manipdyn/io/urdf.py",
+          "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a / n\n",
+          "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a\n",
+          (_LOADER, "tests/properties/test_random_trees.py"),
+          "a joint axis of length ≠ 1 is noted as normalised but kept as written"),
+    Fault("urdf-inertial-rpy-ignored", "loader", "manipdyn/io/urdf.py",
+          "I = To[:3, :3] @ np.asarray(inertial.inertia, float) @ To[:3, :3].T",
+          "I = np.asarray(inertial.inertia, float)",
+          (_LOADER, "tests/properties/test_random_trees.py"),
+          "the <inertial><origin rpy> rotation of the inertia tensor is ignored"),
+    Fault("urdf-rpy-roll-yaw-swapped", "loader", "manipdyn/spatial.py",
+          "r, p, y = (float(x) for x in rpy)",
+          "y, p, r = (float(x) for x in rpy)",
+          (_LOADER, _DH, _FOURBAR), "rpy read as (yaw, pitch, roll): constraint origins and D-H tool frames turn wrongly"),
+    Fault("spatial-parallel-axis-sign", "loader", "manipdyn/spatial.py",
+          "return mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
+          "return mass * (np.dot(d, d) * np.eye(3) + np.outer(d, d))",
+          (_LOADER, "tests/crosscheck/test_reduce.py"),
+          "parallel-axis theorem with + d dᵀ: merged (fixed-joint) and reduced bodies get wrong inertia"),
+    # ---------------------------------------------------------------- kinematics (dynamics/kinematics.py)
+    Fault("kin-jdot-local-term-sign", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "dJ = _to_local(dJ, Rf) - np.concatenate(",
+          "dJ = _to_local(dJ, Rf) + np.concatenate(",
+          ("tests/unit/test_aau_example.py", _ZOO), "local J̇ = Rᵀ J̇_w + [ω]× Rᵀ J_w (the frame-rotation term's sign)"),
+    Fault("kin-local-jacobian-rows-swapped", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "Jl[:, :3], Jl[:, 3:] = np.swapaxes(Rf, 1, 2) @ J[:, :3], np.swapaxes(Rf, 1, 2) @ J[:, 3:]",
+          "Jl[:, :3], Jl[:, 3:] = np.swapaxes(Rf, 1, 2) @ J[:, 3:], np.swapaxes(Rf, 1, 2) @ J[:, :3]",
+          (_ZOO,), "local Jacobian rows [angular; linear] instead of [linear; angular]"),
+    Fault("kin-jdot-joint-origin-velocity", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "cross(z[j], vp - vel[j])",
+          "cross(z[j], vp)",
+          (_FOURBAR, _ZOO), "revolute J̇ column uses the point's velocity, not relative to the joint origin"),
+    # ---------------------------------------------------------------- RNEA (dynamics/rnea.py, state.py, fast.py)
+    Fault("rnea-coriolis-sign", "rnea", "manipdyn/dynamics/rnea.py",
+          "cross(w_in, qd * z)",
+          "cross(qd * z, w_in)",
+          (_FAST,), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z (readable recursion)"),
+    Fault("rnea-gravity-sign", "rnea", "manipdyn/dynamics/rnea.py",
+          "base_dv = np.zeros((N, 3)), np.broadcast_to(-model.gravity, (N, 3))",
+          "base_dv = np.zeros((N, 3)), np.broadcast_to(model.gravity, (N, 3))",
+          (_FAST,), "v̇'_0 = +g instead of −g (readable recursion)"),
+    Fault("rnea-eq7-centripetal-dropped", "rnea", "manipdyn/dynamics/rnea.py",
+          "dvc[i] = dv[i] + cross(dw[i], c) + cross(w[i], cross(w[i], c))",
+          "dvc[i] = dv[i] + cross(dw[i], c)",
+          (_FAST,), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
+    Fault("rnea-fext-frame-transposed", "rnea", "manipdyn/dynamics/state.py",
+          "f, m = f @ fr.R.T, m @ fr.R.T",
+          "f, m = f @ fr.R, m @ fr.R",
+          (_ANALYTIC, _PROPS), "f_ext in a frame's axes rotated into the body by Rᵀ instead of R"),
+    Fault("fast-rnea-coriolis-sign", "rnea", "manipdyn/dynamics/fast.py",
+          "                dwx += qdd * zx + qd * (wiy * zz - wiz * zy)\n"
+          "                dwy += qdd * zy + qd * (wiz * zx - wix * zz)\n"
+          "                dwz += qdd * zz + qd * (wix * zy - wiy * zx)\n",
+          "                dwx += qdd * zx - qd * (wiy * zz - wiz * zy)\n"
+          "                dwy += qdd * zy - qd * (wiz * zx - wix * zz)\n"
+          "                dwz += qdd * zz - qd * (wix * zy - wiy * zx)\n",
+          (_ANALYTIC, _FAST), "compiled Eq. 5: the ω × θ̇ z term with the wrong sign"),
+    Fault("fast-rnea-gravity-sign", "rnea", "manipdyn/dynamics/fast.py",
+          "a0x, a0y, a0z = mg[0], mg[1], mg[2]",
+          "a0x, a0y, a0z = -mg[0], -mg[1], -mg[2]",
+          (_ANALYTIC, _FAST), "compiled RNEA starts from v̇'_0 = +g"),
+    Fault("fast-rnea-eq7-com-term", "rnea", "manipdyn/dynamics/fast.py",
+          "            ax = dvx + dwy * cz_ - dwz * cy_ + wiy * uz - wiz * uy\n"
+          "            ay = dvy + dwz * cx_ - dwx * cz_ + wiz * ux - wix * uz\n"
+          "            az = dvz + dwx * cy_ - dwy * cx_ + wix * uy - wiy * ux\n",
+          "            ax = dvx + dwy * cz_ - dwz * cy_\n"
+          "            ay = dvy + dwz * cx_ - dwx * cz_\n"
+          "            az = dvz + dwx * cy_ - dwy * cx_\n",
+          (_ANALYTIC, _FAST), "compiled Eq. 7 without the centripetal term ω × (ω × p_C)"),
+    Fault("fast-rnea-prismatic-coriolis-factor", "rnea", "manipdyn/dynamics/fast.py",
+          "                dvx += 2.0 * qd * (wiy * zz - wiz * zy) + qdd * zx\n"
+          "                dvy += 2.0 * qd * (wiz * zx - wix * zz) + qdd * zy\n"
+          "                dvz += 2.0 * qd * (wix * zy - wiy * zx) + qdd * zz\n",
+          "                dvx += qd * (wiy * zz - wiz * zy) + qdd * zx\n"
+          "                dvy += qd * (wiz * zx - wix * zz) + qdd * zy\n"
+          "                dvz += qd * (wix * zy - wiy * zx) + qdd * zz\n",
+          (_ANALYTIC, _FAST), "compiled Eq. 12 with ω × ḋ z instead of 2 ω × ḋ z (prismatic Coriolis)"),
+    # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, fast.py)
+    Fault("lagrange-christoffel-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
+          '- np.einsum("nijk,nk->nij", dM, V))',
+          '+ np.einsum("nijk,nk->nij", dM, V))',
+          (_PROPS,), "Christoffel symbol with + ∂M_jk/∂q_i instead of −"),
+    Fault("lagrange-dM-symmetrisation", "lagrange", "manipdyn/dynamics/lagrange.py",
+          "dM[:, k] += sym + np.swapaxes(sym, 1, 2)",
+          "dM[:, k] += 2.0 * sym",
+          (_PROPS,), "∂M/∂q_k = 2 Jᵀ ∂J instead of ∂Jᵀ J + Jᵀ ∂J (not symmetrised)"),
+    Fault("lagrange-g-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
+          'return unbatch(-np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
+          'return unbatch(np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
+          (_PROPS, "tests/unit/test_integrate.py"), "g(q) = +Σ m Jᵀ g (sign of ∂V/∂q)"),
+    Fault("fast-crba-shift-factor", "lagrange", "manipdyn/dynamics/fast.py",
+          "+ (2.0 * ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]",
+          "+ (ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]",
+          (_FAST, _PROPS), "compiled CRBA: composite inertia shifted with (p·h) 1 instead of 2 (p·h) 1"),
+    # ---------------------------------------------------------------- ABA (dynamics/aba.py, fast.py)
+    Fault("aba-bias-force-sign", "aba", "manipdyn/dynamics/aba.py",
+          'pA[i] = -np.einsum("nba,nb->na", _crm(vel[i]), Iv)',
+          'pA[i] = np.einsum("nba,nb->na", _crm(vel[i]), Iv)',
+          (_FAST, _PROPS), "readable ABA: bias force v ×* I v with the wrong sign"),
+    Fault("aba-gravity-sign", "aba", "manipdyn/dynamics/aba.py",
+          "a0 = np.concatenate([np.zeros(3), -model.gravity])",
+          "a0 = np.concatenate([np.zeros(3), model.gravity])",
+          (_FAST, _PROPS), "readable ABA: base acceleration +g"),
+    Fault("aba-fext-order", "aba", "manipdyn/dynamics/aba.py",
+          "pA -= np.concatenate([ext[1], ext[0]], axis=-1)",
+          "pA -= np.concatenate([ext[0], ext[1]], axis=-1)",
+          (_PROPS, _ANALYTIC), "readable ABA: external wrench stacked [force; moment] into [angular; linear]"),
+    Fault("fast-aba-pa-sign", "aba", "manipdyn/dynamics/fast.py",
+          "                t1[k] = pn[i, k] + uw[i, k] * g\n                t2[k] = pf[i, k] + uv[i, k] * g\n",
+          "                t1[k] = pn[i, k] - uw[i, k] * g\n                t2[k] = pf[i, k] - uv[i, k] * g\n",
+          (_FAST, _PROPS), "compiled ABA: pᵃ = pᴬ + Iᵃ c − U u / D"),
+    Fault("fast-aba-gravity-sign", "aba", "manipdyn/dynamics/fast.py",
+          "_rot3t(R[i], mg, t2)",
+          "_rot3t(R[i], -mg, t2)",
+          (_FAST, _PROPS), "compiled ABA: base acceleration +g"),
+    # ---------------------------------------------------------------- constraints (constraints/*)
+    Fault("closure-fast-orientation-bias-offset", "constraints", "manipdyn/constraints/fast.py",
+          "bias[row] = daxb @ (wA - wB) + axb @ (aA - aB)",
+          "bias[row] = daxb @ (wA - wB) + axb @ (aA - aB) + 0.1",
+          (_CLOSED_FAST, _FOURBAR), "compiled closures: a constant 0.1 added to every orientation row's Φ̇_q q̇"),
+    Fault("closure-fixed-pair-index", "constraints", "manipdyn/constraints/closures.py",
+          "return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 1])]",
+          "return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 2])]",
+          (_CLOSED_FAST, _FOURBAR), "fixed closure's third pair (x_A, z_B) instead of (x_A, y_B): rotation about z free"),
+    Fault("closure-fast-pair-slot", "constraints", "manipdyn/constraints/fast.py",
+          "flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 15 + 3 * m:18 + 3 * m] = a, b",
+          "flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 12 + 3 * m:15 + 3 * m] = a, b",
+          (_CLOSED_FAST, _FOURBAR), "compiled closures: b vectors stored one slot early (a fixed closure reads b2, b3, 0)"),
+    Fault("closure-baumgarte-alpha-sign", "constraints", "manipdyn/constraints/dynamics.py",
+          'c = c - 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi',
+          'c = c + 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi',
+          (_CLOSED_FAST, "tests/unit/test_closed_sim.py"), "readable Baumgarte: + 2α Φ_q q̇ (destabilising)"),
+    Fault("closure-fast-baumgarte-beta-sign", "constraints", "manipdyn/constraints/fast.py",
+          "c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi",
+          "c = -bias - 2.0 * alpha * (Jc @ V[s]) + beta * beta * Phi",
+          (_CLOSED_FAST, "tests/unit/test_closed_sim.py"), "compiled Baumgarte: + β² Φ (pushes away from the closure)"),
+    Fault("closure-fast-bias-sign", "constraints", "manipdyn/constraints/fast.py",
+          "c = -bias - 2.0 * alpha * (Jc @ V[s])",
+          "c = bias - 2.0 * alpha * (Jc @ V[s])",
+          (_CLOSED_FAST, _FOURBAR), "compiled Eq. 26: Φ_q q̈ = +Φ̇_q q̇"),
+    Fault("closure-fast-rank-tolerance-ignores-gap", "constraints", "manipdyn/constraints/fast.py",
+          "tol = max(rtol, 100.0 * phimax / max(scale, 1e-300))",
+          "tol = rtol",
+          ("tests/unit/test_closed_sim.py", _FOURBAR, _CLOSED_FAST),
+          "compiled rank test ignores |Φ| off the closures: redundant rows count as rank mid-step"),
+    Fault("closure-fast-lever-arm", "constraints", "manipdyn/constraints/fast.py",
+          "J[:3, j] = np.cross(z[j], x - pw[j])",
+          "J[:3, j] = np.cross(z[j], x - pw[b])",
+          (_CLOSED_FAST, _FOURBAR), "compiled closure Jacobian: lever arm from the body's origin, not joint j's"),
+    # ---------------------------------------------------------------- integrators (dynamics/integrate.py)
+    Fault("integrate-explicit-euler", "integrators", "manipdyn/dynamics/integrate.py",
+          "return q + h * v1, v1",
+          "return q + h * v, v1",
+          ("tests/unit/test_integrate.py",), "explicit Euler (q from v_k) in place of symplectic Euler (q from v_k+1)"),
+    Fault("integrate-rk4-weight", "integrators", "manipdyn/dynamics/integrate.py",
+          "v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)",
+          "v + h / 6 * (k1v + k2v + 2 * k3v + 2 * k4v)",
+          ("tests/unit/test_integrate.py",), "RK4 velocity update with weights 1, 1, 2, 2 (still consistent, wrong order)"),
+    # ---------------------------------------------------------------- the chapter's SPM model (examples/spm.py)
+    Fault("spm-eq59a-drop-term", "spm", "manipdyn/examples/spm.py",
+          "Ad = np.cross(vd, L.w) + np.cross(L.v, wd)",
+          "Ad = np.cross(vd, L.w)",
+          (_SPM, "tests/crosscheck/test_fig7.py"), "Eq. 59a without v_i × ẇ_i"),
+    Fault("spm-psi-33-as-printed", "spm", "manipdyn/examples/spm.py",
+          "[1 - ct, 0.0, ct]])",
+          "[1 - ct, 0.0, cf]])",
+          (_SPM,), "Ψ(3,3) = cos φ, the chapter's misprint, instead of cos θ"),
+    Fault("spm-distal-frame-axes-swapped", "spm", "manipdyn/examples/spm.py",
+          "cols = (v - w, v + w, np.cross(v, w))",
+          "cols = (v + w, v - w, np.cross(v, w))",
+          (_SPM, "tests/crosscheck/test_fig7.py"), "Eq. 47: e_x and e_y of the distal frame exchanged"),
+    Fault("spm-platform-inertia-about-P", "spm", "manipdyn/examples/spm.py",
+          "out.append((Apl, Q @ I_O @ Q.T, dom, P.M_P, Q @ P.P_STAR))",
+          "out.append((Apl, Q @ P.I_P @ Q.T, dom, P.M_P, Q @ P.P_STAR))",
+          (_SPM, "tests/crosscheck/test_fig7.py"), "Eq. 52 as printed: platform inertia about P used as if about O"),
+    Fault("spm-eq57-psidot-term-dropped", "spm", "manipdyn/examples/spm.py",
+          "return Bd * qd[:3] - Ad @ om - L.A @ (Psi_dot(q[3:], qd[3:]) @ qd[3:])",
+          "return Bd * qd[:3] - Ad @ om",
+          (_SPM, "tests/crosscheck/test_fig7.py"), "Eq. 57 as printed: Ċ_q q̇ without −A Ψ̇ φ̇"),
+    # ---------------------------------------------------------------- D-H tool (io/dh.py)
+    Fault("dh-convention-swapped", "dh", "manipdyn/io/dh.py",
+          "pre, post, kind = _pre_post(row, i, convention)",
+          'pre, post, kind = _pre_post(row, i, {"standard": "modified", "modified": "standard"}.get(convention, '
+          "convention))",
+          (_DH,), "a standard table read as modified and vice versa"),
+    Fault("dh-alpha-sign", "dh", "manipdyn/io/dh.py",
+          "return _T(np.array([[1, 0, 0], [0, c, -s], [0, s, c]]))",
+          "return _T(np.array([[1, 0, 0], [0, c, s], [0, -s, c]]))",
+          (_DH,), "Rx(α) built as Rx(−α): every link twist with the wrong sign"),
+    # ---------------------------------------------------------------- validation (validation/compare.py)
+    Fault("compare-lagrange-M-with-own-crba", "validation", "manipdyn/validation/compare.py",
+          'theirs.update(M_crba=theirs["M"], M_lagrange=theirs["M"],',
+          'theirs.update(M_crba=theirs["M"], M_lagrange=ours["M_crba"][s],',
+          ("tests/crosscheck/test_planted_fault.py",),
+          "validate compares the Lagrange-route M with our own CRBA instead of Pinocchio's"),
+    # ---------------------------------------------------------------- reduce (reduce.py)
+    Fault("reduce-locked-value-ignored", "reduce", "manipdyn/reduce.py",
+          "Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])",
+          "Ri, pi = _fixed_placement(model, i, 0.0)",
+          ("tests/crosscheck/test_reduce.py",), "a locked joint is frozen at 0 whatever value it was locked at"),
+)
+
+
+def by_name(names):
+    """The faults named, in the order given; KeyError names an unknown one."""
+    table = {f.name: f for f in FAULTS}
+    missing = [n for n in names if n not in table]
+    if missing:
+        raise KeyError(f"unknown fault(s): {', '.join(missing)}; see --list")
+    return [table[n] for n in names]
