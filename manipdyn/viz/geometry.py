@@ -34,7 +34,7 @@ MAX_MESH_TOTAL = 512 << 20       # all meshes of one URDF together
 MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae"}
 DEFAULT_RGBA = (0.7, 0.7, 0.75, 1.0)
 _PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")   # plain ASCII decimal
 
 
 @dataclass(frozen=True)
