@@ -94,7 +94,8 @@ def _inspect(args) -> int:
 def _play(args) -> int:
     from . import viz
     from .io.urdf import load_urdf
-    package_dirs = _package_dirs(args.package_dir)
+    from .viz.geometry import parse_package_dirs
+    package_dirs = parse_package_dirs(args.package_dir)
     if args.html:
         out = Path(args.html)
         if out.is_dir() or not out.resolve().parent.is_dir():
@@ -117,47 +118,7 @@ def _play(args) -> int:
         print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:.4g} fps over {t[-1] - t[0]:.3g} s "
               f"(open it in a browser; {args.html}#t=1.5 opens at 1.5 s)")
         return 0
-    return _serve(viz, sc)
-
-
-def _serve(viz, sc) -> int:
-    """Play a scene on a live loopback server until Ctrl-C, SIGTERM or SIGHUP; the server stops with us."""
-    import signal
-    import time
-
-    def stop(signum, frame):
-        raise KeyboardInterrupt(signal.Signals(signum).name)
-
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, stop)
-    live = None
-    try:
-        live = viz.LiveViewer()
-        live.show(sc)
-        print(f"playing on {live.url} (loopback only; zmq {live.zmq_url}); Ctrl-C to stop", flush=True)
-        while True:
-            time.sleep(1.0)
-    except KeyboardInterrupt:
-        return 0
-    finally:
-        if live is not None:
-            live.close()
-
-
-def _package_dirs(items) -> dict:
-    """{name: folder} from repeated --package-dir NAME=DIR; ManipdynError names a malformed item."""
-    from .viz.geometry import check_package_dirs
-    out = {}
-    for item in items:
-        name, sep, folder = item.partition("=")
-        if not sep or not folder:
-            raise ManipdynError(f"--package-dir {item!r}: expected NAME=DIR")
-        out[name] = folder
-    try:
-        check_package_dirs(out)
-    except ManipdynError as exc:
-        raise ManipdynError(f"--package-dir: {exc}") from None
-    return out
+    return viz.serve(sc)
 
 
 def _bench(args) -> int:

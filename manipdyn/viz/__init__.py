@@ -162,6 +162,31 @@ class LiveViewer:
             window.zmq_socket.close(linger=0)
 
 
+def serve(sc, out=print) -> int:
+    """Play a scene on a live loopback server until Ctrl-C, SIGTERM or SIGHUP (each stops it and returns 0);
+    the server stops with this process whatever ends it."""
+    import signal
+    import time
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, stop)
+    live = None
+    try:
+        live = LiveViewer()
+        live.show(sc)
+        out(f"playing on {live.url} (loopback only; zmq {live.zmq_url}); Ctrl-C to stop", flush=True)
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        if live is not None:
+            live.close()
+
+
 def demo(model, urdf_path):
     """Built-in demo motion (t, q): the AAU arm on the chapter's path, the SPM under the Fig. 7 scenario,
     any other model swinging every joint smoothly within its limits (at most ±π around their middle) for 4 s;

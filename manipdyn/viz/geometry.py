@@ -70,6 +70,21 @@ def check_package_dirs(package_dirs) -> dict:
     return out
 
 
+def parse_package_dirs(items) -> dict:
+    """{name: folder} from the CLI's repeated ``--package-dir NAME=DIR``; InputError names a bad item."""
+    out = {}
+    for item in items:
+        name, sep, folder = item.partition("=")
+        if not sep or not folder:
+            raise InputError(f"--package-dir {item!r}: expected NAME=DIR")
+        out[name] = folder
+    try:
+        check_package_dirs(out)
+    except InputError as exc:
+        raise InputError(f"--package-dir: {exc}") from None
+    return out
+
+
 def _installed_share():
     """example-robot-data's share folder (parent of robots/), or None when it is not installed."""
     try:
