@@ -145,31 +145,33 @@ def _inspect(args) -> int:
 
 
 def _play(args) -> int:
-    import time
-
     from . import viz
     from .io.urdf import load_urdf
-    model = load_urdf(args.urdf, **reduction(args))
-    if args.traj:
-        t, Q = viz.read_trajectory(args.traj, model)
-        Q = viz.complete(model, Q) if model.constraints else Q
-    else:
-        t, Q = viz.demo(model, args.urdf)
+    from .viz.geometry import parse_package_dirs
+    package_dirs = parse_package_dirs(args.package_dir)
     if args.html:
-        sc = viz.export_html(model, args.urdf, t, Q, args.html, show_frames=args.frames)
-        print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:g} fps over {t[-1] - t[0]:.3g} s "
+        out = Path(args.html)
+        if out.is_dir() or not out.resolve().parent.is_dir():
+            raise ManipdynError(f"--html {args.html}: not a file in an existing folder")
+    model = load_urdf(args.urdf, **reduction(args))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", viz.GeometryWarning)
+        warnings.simplefilter("always", viz.PlaybackWarning)
+        if args.traj:
+            t, Q = viz.read_trajectory(args.traj, model)
+            Q = viz.complete(model, Q) if model.constraints else Q
+        else:
+            t, Q = viz.demo(model, args.urdf)
+        sc = viz.scene_for(model, args.urdf, t, Q, show_frames=args.frames, package_dirs=package_dirs)
+    for w in caught:
+        print(f"{'note' if issubclass(w.category, viz.PlaybackWarning) else 'warning'}: {w.message}",
+              file=sys.stderr)
+    if args.html:
+        Path(args.html).write_text(viz.scene.html(sc), encoding="utf-8")
+        print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:.4g} fps over {t[-1] - t[0]:.3g} s "
               f"(open it in a browser; {args.html}#t=1.5 opens at 1.5 s)")
         return 0
-    live = viz.LiveViewer()
-    live.show(viz.scene_for(model, args.urdf, t, Q, show_frames=args.frames))
-    print(f"playing on {live.url} (loopback only); Ctrl-C to stop")
-    try:
-        while True:
-            time.sleep(1.0)
-    except KeyboardInterrupt:
-        return 0
-    finally:
-        live.close()
+    return viz.serve(sc)
 
 
 def _bench(args) -> int:
@@ -230,6 +232,9 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--traj", help="CSV (t, q_<joint>...) or NPZ (t, q, joint_names); default: a built-in demo")
     pl.add_argument("--html", help="write one self-contained HTML file instead of serving live")
     pl.add_argument("--frames", action="store_true", help="draw each body's frame")
+    pl.add_argument("--package-dir", action="append", default=[], metavar="NAME=DIR",
+                    help="folder of package://NAME/ meshes (repeatable); meshes are read only there, in the "
+                         "URDF's folder, or in an installed example-robot-data")
     add_reduction_options(pl)
     pl.set_defaults(func=_play)
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")

@@ -32,3 +32,7 @@ class DivergenceError(ManipdynError, ArithmeticError):
 
 class InertiaWarning(UserWarning):
     """A link's inertia is physically inconsistent (triangle inequality) but loadable."""
+
+
+class GeometryWarning(UserWarning):
+    """A visual element is skipped (bad numbers, unknown format, or a mesh file outside the allowed roots)."""

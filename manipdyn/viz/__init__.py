@@ -1,16 +1,23 @@
 """Browser 3D playback in meshcat: live (loopback-only server) or as one self-contained HTML file.
 
-Imported on demand: ``import manipdyn`` never loads meshcat or any geometry.
+Imported on demand: ``import manipdyn`` never loads meshcat or any geometry. A URDF is untrusted: mesh files
+are read only inside the URDF's folder or a package root (``package_dirs``, see geometry.py), names are
+escaped for the page (scene.py), the animation has at most MAX_FRAMES frames, and the live server binds
+loopback only and dies with its parent (server.py).
 """
 from __future__ import annotations
 
+import atexit
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ConstraintError, GeometryWarning, InputError, SingularError  # noqa: F401 (re-exported)
 from ..io.trajectory import read_trajectory_file
 from . import scene as _scene
+from .scene import MAX_FRAMES, PlaybackWarning  # noqa: F401 (re-exported)
+
+ASSEMBLY_STARTS = 24                 # starting guesses tried when a frame does not assemble from the last one
 
 
 def read_trajectory(path, model):
@@ -35,39 +42,85 @@ def _to_model_order(model, names, q, source):
 
 
 def complete(model, Q, guess=None):
-    """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame."""
-    from ..constraints import assemble
+    """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame: Q (T, nv).
+
+    Each frame starts from the previous one (the first from ``guess``, default the middle of the joint
+    ranges); a frame that does not assemble from there is retried from ASSEMBLY_STARTS guesses spread over
+    the joint ranges. Raises ConstraintError naming the frame and the actuated values when none assembles."""
+    Q = np.array(Q, dtype=float)
     if not np.isnan(Q).any():
         return Q
-    out, g = Q.copy(), np.zeros(model.nv) if guess is None else np.array(guess, float)
     known = ~np.isnan(Q[0])
+    if np.any(np.isnan(Q[:, known])) or not np.all(np.isfinite(Q[~np.isnan(Q)])):
+        raise InputError(f"complete({model.name!r}): the given coordinates must be finite in every frame")
+    fixed = [model.joint_names[i] for i in np.flatnonzero(known)]
+    out = Q.copy()
+    g = _mid_range(model) if guess is None else np.array(guess, dtype=float)
     for k in range(len(Q)):
-        g[known] = Q[k, known]
-        g = assemble(model, g, fixed=[model.joint_names[i] for i in np.flatnonzero(known)]).q
-        out[k] = g
+        out[k] = g = _assemble_frame(model, Q[k], known, fixed, g, k)
     return out
 
 
-def scene_for(model, urdf_path, t, Q, show_frames=False, fps=30.0):
-    """The animated scene (meshcat commands) of a trajectory."""
-    sc = _scene.build(model, urdf_path, Q_extent=Q, show_frames=show_frames)
+def _mid_range(model):
+    """Middle of every joint's range (±π where a range is unbounded or wider than a turn): (nv,)."""
+    lo, hi = _ranges(model)
+    return 0.5 * (lo + hi)
+
+
+def _ranges(model):
+    """(lo (nv,), hi (nv,)) joint ranges clipped to [−π, π] (a turn covers every revolute pose)."""
+    lo = np.clip(np.where(np.isfinite(model.lower), model.lower, -np.pi), -np.pi, np.pi)
+    hi = np.clip(np.where(np.isfinite(model.upper), model.upper, np.pi), -np.pi, np.pi)
+    return lo, np.maximum(hi, lo)
+
+
+def _assemble_frame(model, q_known, known, fixed, g, k):
+    """One frame assembled: the given coordinates held, the others found from g, else from spread starts."""
+    from ..constraints import assemble
+    lo, hi = _ranges(model)
+    rng = np.random.default_rng(k)
+    starts = [g, _mid_range(model)] + [lo + (hi - lo) * rng.random(model.nv) for _ in range(ASSEMBLY_STARTS)]
+    err = None
+    for s in starts:
+        s = np.array(s, dtype=float)
+        s[known] = q_known[known]
+        try:
+            return assemble(model, s, fixed=fixed).q
+        except (ConstraintError, SingularError) as exc:
+            err = exc
+    given = ", ".join(f"{n} = {v:.6g}" for n, v in zip(fixed, q_known[known]))
+    raise ConstraintError(f"{model.name!r}: the loop closures cannot be assembled at frame {k} ({given}) from "
+                          f"{len(starts)} starting guesses; last: {err}")
+
+
+def scene_for(model, urdf_path, t, Q, show_frames=False, fps=30.0, package_dirs=None):
+    """The animated scene (meshcat commands) of a trajectory t (T,), Q (T, nv).
+
+    Meshes resolve only inside the URDF's folder or a package root (``package_dirs={"pkg": dir}`` adds
+    roots); at most MAX_FRAMES frames (``sc.notes`` says when fps was lowered). Raises InputError for a
+    non-finite, unordered or oversized trajectory."""
+    t, Q = _scene.check_trajectory(model, t, Q)
+    sc = _scene.build(model, urdf_path, Q_extent=Q, show_frames=show_frames, package_dirs=package_dirs)
     return _scene.animate(sc, t, Q, fps)
 
 
 def export_html(model, urdf_path, t, Q, out, **kw):
-    """Write the animation as one self-contained HTML file (plays offline; out.html#t=1.5 opens at 1.5 s)."""
+    """Write the animation as one self-contained HTML file (plays offline; out.html#t=1.5 opens at 1.5 s).
+    Keywords as scene_for (show_frames, fps, package_dirs)."""
     sc = scene_for(model, urdf_path, t, Q, **kw)
     Path(out).write_text(_scene.html(sc), encoding="utf-8")
     return sc
 
 
 class LiveViewer:
-    """A meshcat viewer on a loopback-only server started for it (see viz/server.py)."""
+    """A meshcat viewer on a loopback-only server started for it (see viz/server.py). The server stops with
+    close(), at interpreter exit, and on its own when this process dies (it watches its stdin pipe)."""
 
     def __init__(self):
         import meshcat
         from .server import start
         self.proc, self.zmq_url, self.url = start()
+        atexit.register(self.close)
         self.vis = meshcat.Visualizer(zmq_url=self.zmq_url)
 
     def show(self, sc):
@@ -75,13 +128,44 @@ class LiveViewer:
             self.vis.window.send(cmd)
 
     def close(self):
-        self.proc.kill()
-        self.proc.wait()
+        """Stop the server (idempotent): SIGTERM, then SIGKILL after 3 s; close the pipes and the ZMQ socket."""
+        from .server import stop
+        stop(self.proc)
+        atexit.unregister(self.close)
+        window = getattr(getattr(self, "vis", None), "window", None)
+        if window is not None and hasattr(window, "zmq_socket"):
+            window.zmq_socket.close(linger=0)
+
+
+def serve(sc, out=print) -> int:
+    """Play a scene on a live loopback server until Ctrl-C, SIGTERM or SIGHUP (each stops it and returns 0);
+    the server stops with this process whatever ends it."""
+    import signal
+    import time
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, stop)
+    live = None
+    try:
+        live = LiveViewer()
+        live.show(sc)
+        out(f"playing on {live.url} (loopback only; zmq {live.zmq_url}); Ctrl-C to stop", flush=True)
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        if live is not None:
+            live.close()
 
 
 def demo(model, urdf_path):
     """Built-in demo motion (t, q): the AAU arm on the chapter's path, the SPM under the Fig. 7 scenario,
-    any other model swinging every joint smoothly within its limits for 4 s."""
+    any other model swinging every joint smoothly within its limits (at most ±π around their middle) for 4 s;
+    a closed chain's passive joints are completed by assembly."""
     name = Path(urdf_path).name if urdf_path else ""
     if name == "aau_arm.urdf":
         from ..examples.aau_arm import chapter_example
@@ -96,8 +180,7 @@ def demo(model, urdf_path):
         Q[:, [model.joint_index(j) for j in model.actuated]] = f.q[:, :3]
         return t, complete(model, Q, tree_guess(model, chapter.platform_rotation(f.q[0, 3:]), f.q[0, :3]))
     t = np.linspace(0.0, 4.0, 121)
-    lo = np.where(np.isfinite(model.lower), model.lower, -np.pi)
-    hi = np.where(np.isfinite(model.upper), model.upper, np.pi)
+    lo, hi = _ranges(model)
     mid, amp = 0.5 * (lo + hi), 0.4 * (hi - lo)
     Q = mid + amp * np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.nv)))
     if model.constraints:

@@ -1,18 +1,40 @@
 """Visual geometry of a URDF, loaded only when a viewer asks for it (never by the dynamics path).
 
-Each visual becomes (link, meshcat geometry, 4×4 placement in the link frame, rgba). Mesh files are resolved
-relative to the URDF's folder or through ``package://<pkg>/...`` (the folder named <pkg> above the URDF, or an
-installed example-robot-data); a path that leaves those roots is refused unless ``allow_outside=True``.
+Each <visual> becomes (link, meshcat geometry, 4×4 placement in the link frame, rgba). A URDF is untrusted, so
+its mesh files resolve only inside a root:
+
+- a relative path, an absolute path or a ``file://`` URI: the URDF's own folder;
+- ``package://<pkg>/<path>``: the folder the caller maps <pkg> to (``package_dirs={"pkg": dir}``, the CLI's
+  ``--package-dir pkg=dir``), the installed example-robot-data (for <pkg> = example-robot-data), or an ancestor
+  folder of the URDF named <pkg> that is a ROS package (holds a package.xml) or lies inside example-robot-data.
+
+A package name must be a plain name (no empty name, no ``.``/``..``, no path separator). A path is resolved
+(symlinks too) and only then checked to lie inside its root. Nothing the URDF says widens the roots. A visual
+whose file is refused, missing, too large or of an unknown format, or whose numbers are bad (sizes ≤ 0 or
+non-finite, a scale that is not 3 finite non-zero numbers, an rgba outside [0, 1]), is skipped with a
+GeometryWarning naming the link and the value: nothing outside the roots is ever opened.
 """
 from __future__ import annotations
 
-import os
+import re
+import stat
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import unquote, urlsplit
 
 import numpy as np
 
-from ..errors import InputError, URDFError
+from ..errors import GeometryWarning, InputError, URDFError
+from ..spatial import rpy_matrix
+
+MAX_URDF_BYTES = 64 << 20        # a URDF larger than this is refused (the loader reads it whole)
+MAX_MESH_BYTES = 64 << 20        # one mesh file (example-robot-data's largest: 29 MB)
+MAX_MESH_TOTAL = 512 << 20       # all meshes of one URDF together
+MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae"}
+DEFAULT_RGBA = (0.7, 0.7, 0.75, 1.0)
+_PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")   # plain ASCII decimal
 
 
 @dataclass(frozen=True)
@@ -20,83 +42,233 @@ class Visual:
     link: str
     geometry: object          # a meshcat.geometry.Geometry
     placement: np.ndarray     # (4, 4) in the link frame (scale included for meshes)
-    rgba: tuple
+    rgba: tuple               # 4 floats in [0, 1]
 
 
-def _package_roots(urdf_path: Path, pkg: str):
-    """Candidate folders for package://<pkg>: an ancestor named <pkg>, or installed example-robot-data."""
-    roots = [p for p in urdf_path.resolve().parents if p.name == pkg]
-    if pkg == "example-robot-data":
+class _Skip(Exception):
+    """A visual that is not drawn; the message says why (it becomes a GeometryWarning)."""
+
+
+def valid_package_name(pkg) -> bool:
+    """True for a plain package name: not empty, not '.' or '..', no path separator or other punctuation."""
+    return isinstance(pkg, str) and pkg not in (".", "..") and bool(_PACKAGE_NAME.match(pkg))
+
+
+def check_package_dirs(package_dirs) -> dict:
+    """{name: resolved folder} of the caller's package roots; InputError names a bad name or folder."""
+    out = {}
+    for name, folder in (package_dirs or {}).items():
+        if not valid_package_name(name):
+            raise InputError(f"package_dirs: {name!r} is not a package name (letters, digits, _ . -)")
         try:
-            from ..validation.zoo import robots_dir
-            roots.append(robots_dir().parent)
-        except Exception:          # not installed: only the ancestors
-            pass
+            path = Path(folder).resolve()
+        except (OSError, RuntimeError, ValueError, TypeError):
+            raise InputError(f"package_dirs[{name!r}]: {folder!r} is not a folder") from None
+        if not path.is_dir():
+            raise InputError(f"package_dirs[{name!r}]: {str(folder)!r} is not a folder")
+        out[name] = path
+    return out
+
+
+def parse_package_dirs(items) -> dict:
+    """{name: folder} from the CLI's repeated ``--package-dir NAME=DIR``; InputError names a bad item."""
+    out = {}
+    for item in items:
+        name, sep, folder = item.partition("=")
+        if not sep or not folder:
+            raise InputError(f"--package-dir {item!r}: expected NAME=DIR")
+        out[name] = folder
+    try:
+        check_package_dirs(out)
+    except InputError as exc:
+        raise InputError(f"--package-dir: {exc}") from None
+    return out
+
+
+def _installed_share():
+    """example-robot-data's share folder (parent of robots/), or None when it is not installed."""
+    try:
+        from ..validation.zoo import robots_dir
+        return robots_dir().parent.resolve()
+    except Exception:          # not installed: no installed package roots
+        return None
+
+
+def package_roots(urdf_path: Path, pkg: str, package_dirs=None) -> list:
+    """Folders (resolved) where package://<pkg>/ may point: the caller's, the installed one, a package ancestor."""
+    if not valid_package_name(pkg):
+        return []
+    dirs = check_package_dirs(package_dirs)
+    roots = [dirs[pkg]] if pkg in dirs else []
+    share = _installed_share()
+    if share is not None and pkg == "example-robot-data":
+        roots.append(share)
+    for p in Path(urdf_path).resolve().parents:
+        if p.name == pkg and ((p / "package.xml").is_file()
+                              or (share is not None and p.is_relative_to(share / "robots"))):
+            roots.append(p)
     return roots
 
 
-def resolve_mesh(filename: str, urdf_path: Path, allow_outside=False) -> Path:
-    """The mesh file a URDF names, checked to stay inside the URDF's folder or its package root."""
+def _resolve_inside(root: Path, rel: str):
+    """root/rel with symlinks resolved, or None when it leaves root (or cannot be resolved)."""
+    try:
+        cand = (root / rel).resolve()
+    except (OSError, RuntimeError, ValueError):      # loops, over-long names
+        return None
+    return cand if cand.is_relative_to(root) else None
+
+
+def resolve_mesh(filename: str, urdf_path, package_dirs=None) -> Path:
+    """The mesh file a URDF names, resolved and checked to lie inside the URDF's folder or its package root.
+
+    Raises URDFError (naming the URI) when the name is refused, leaves its root, or names no file."""
+    urdf_path = Path(urdf_path)
+    if not isinstance(filename, str) or not filename or "\x00" in filename:
+        raise URDFError(f"{urdf_path}: mesh filename {filename!r} is empty or not a path")
     if filename.startswith("package://"):
         pkg, _, rel = filename[len("package://"):].partition("/")
-        for root in _package_roots(urdf_path, pkg):
-            cand = (root / rel).resolve()
-            if cand.is_file():
-                if not (allow_outside or _inside(cand, root)):
-                    break
+        if not valid_package_name(pkg):
+            raise URDFError(f"{urdf_path}: mesh {filename!r}: package name {pkg!r} refused "
+                            f"(empty, '.', '..' or not a plain name)")
+        roots = package_roots(urdf_path, pkg, package_dirs)
+        if not roots:
+            raise URDFError(f"{urdf_path}: mesh {filename!r}: package {pkg!r} is unknown "
+                            f"(give its folder with package_dirs / --package-dir {pkg}=DIR)")
+        for root in roots:
+            cand = _resolve_inside(root, rel)
+            if cand is not None and cand.is_file():
                 return cand
-        raise URDFError(f"{urdf_path}: mesh {filename!r} not found under package {pkg!r} (or it escapes it)")
-    path = filename[len("file://"):] if filename.startswith("file://") else filename
+        raise URDFError(f"{urdf_path}: mesh {filename!r} not found inside package {pkg!r} "
+                        f"({', '.join(map(str, roots))}) or it leaves the package")
+    if filename.startswith("file://"):
+        parts = urlsplit(filename)
+        if parts.netloc not in ("", "localhost"):
+            raise URDFError(f"{urdf_path}: mesh {filename!r}: file URI with a host is refused")
+        path = unquote(parts.path)
+    elif re.match(r"[A-Za-z][A-Za-z0-9+.\-]*://", filename):
+        raise URDFError(f"{urdf_path}: mesh {filename!r}: only package://, file:// and paths are read")
+    else:
+        path = filename
     root = urdf_path.resolve().parent
-    cand = (root / path).resolve()
-    if not (allow_outside or _inside(cand, root)):
-        raise URDFError(f"{urdf_path}: mesh path {filename!r} leaves the URDF's folder (allow_outside=True to permit)")
+    cand = _resolve_inside(root, path)
+    if cand is None:
+        raise URDFError(f"{urdf_path}: mesh path {filename!r} leaves the URDF's folder {str(root)!r} "
+                        f"(meshes elsewhere: package://<pkg>/... with --package-dir <pkg>=DIR)")
     if not cand.is_file():
         raise URDFError(f"{urdf_path}: mesh file {filename!r} not found")
     return cand
 
 
-def _inside(path: Path, root: Path) -> bool:
-    return os.path.commonpath([str(path), str(root.resolve())]) == str(root.resolve())
+def load_visuals(urdf_path, package_dirs=None):
+    """Every drawable <visual> of the URDF as Visual records; the others are skipped with a GeometryWarning.
 
-
-def load_visuals(urdf_path, allow_outside=False):
-    """Every <visual> of the URDF as Visual records (meshcat imported here, lazily)."""
-    import meshcat.geometry as g
-    import yourdfpy
+    The XML is read with the loader's hardened parser; meshcat is imported here, lazily."""
+    from ..io.urdf import _parse_xml
     urdf_path = Path(urdf_path)
-    robot = yourdfpy.URDF.load(str(urdf_path), build_scene_graph=False, load_meshes=False).robot
-    out = []
-    for link in robot.links:
-        for vis in link.visuals:
-            T = np.eye(4) if vis.origin is None else np.array(vis.origin, float)
-            geom, S = _geometry(g, vis.geometry, urdf_path, allow_outside)
-            if geom is None:
-                continue
-            rgba = (0.7, 0.7, 0.75, 1.0)
-            if vis.material is not None and vis.material.color is not None:
-                rgba = tuple(float(x) for x in vis.material.color.rgba)
-            out.append(Visual(link.name, geom, T @ S, rgba))
+    package_dirs = check_package_dirs(package_dirs)
+    try:
+        size = urdf_path.stat().st_size
+    except OSError:
+        raise URDFError(f"{urdf_path}: no such URDF file") from None
+    if size > MAX_URDF_BYTES:
+        raise URDFError(f"{urdf_path}: {size} bytes, more than the {MAX_URDF_BYTES} a URDF may have")
+    root = _parse_xml(urdf_path.read_bytes(), str(urdf_path))
+    materials = {}
+    for m in root.findall("material"):
+        rgba = _material_rgba(m, {})
+        if m.get("name") and rgba is not None:
+            materials[m.get("name")] = rgba
+    out, budget = [], [MAX_MESH_TOTAL]
+    for link in root.findall("link"):
+        for k, vis in enumerate(link.findall("visual")):
+            try:
+                out.append(_visual(link.get("name"), vis, urdf_path, package_dirs, materials, budget))
+            except _Skip as why:
+                warnings.warn(f"{urdf_path}: link {link.get('name')!r}: visual {k} skipped: {why}",
+                              GeometryWarning, stacklevel=2)
     return out
 
 
-def _geometry(g, geometry, urdf_path, allow_outside):
-    """(meshcat geometry, 4×4 intrinsic transform) of a URDF geometry element."""
-    S = np.eye(4)
-    if geometry.box is not None:
-        return g.Box(list(np.asarray(geometry.box.size, float))), S
-    if geometry.sphere is not None:
-        return g.Sphere(float(geometry.sphere.radius)), S
-    if geometry.cylinder is not None:        # meshcat cylinders run along y, URDF ones along z
+def _visual(link, vis, urdf_path, package_dirs, materials, budget) -> Visual:
+    """One <visual> element as a Visual; _Skip says why it cannot be drawn."""
+    import meshcat.geometry as g
+    T = np.eye(4)
+    origin = vis.find("origin")
+    if origin is not None:
+        T[:3, :3] = rpy_matrix(_numbers(origin, "rpy", 3, "0 0 0"))
+        T[:3, 3] = _numbers(origin, "xyz", 3, "0 0 0")
+    rgba = DEFAULT_RGBA
+    if vis.find("material") is not None:
+        rgba = _material_rgba(vis.find("material"), materials) or rgba
+    geometry = vis.find("geometry")
+    shapes = [] if geometry is None else [e for e in geometry if e.tag in ("box", "sphere", "cylinder", "mesh")]
+    if len(shapes) != 1:
+        raise _Skip(f"<geometry> needs exactly one of box, sphere, cylinder, mesh (found {len(shapes)})")
+    shape, S = shapes[0], np.eye(4)
+    if shape.tag == "box":
+        return Visual(link, g.Box(list(_numbers(shape, "size", 3, None, positive=True))), T, rgba)
+    if shape.tag == "sphere":
+        return Visual(link, g.Sphere(float(_numbers(shape, "radius", 1, None, positive=True)[0])), T, rgba)
+    if shape.tag == "cylinder":              # meshcat cylinders run along y, URDF ones along z
+        r = _numbers(shape, "radius", 1, None, positive=True)[0]
+        L = _numbers(shape, "length", 1, None, positive=True)[0]
         S[:3, :3] = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
-        return g.Cylinder(float(geometry.cylinder.length), float(geometry.cylinder.radius)), S
-    if geometry.mesh is not None:
-        path = resolve_mesh(geometry.mesh.filename, urdf_path, allow_outside)
-        loaders = {".stl": g.StlMeshGeometry, ".obj": g.ObjMeshGeometry, ".dae": g.DaeMeshGeometry}
-        loader = loaders.get(path.suffix.lower())
-        if loader is None:
-            raise InputError(f"{urdf_path}: mesh {path.name}: format {path.suffix!r} not supported (stl, obj, dae)")
-        if geometry.mesh.scale is not None:
-            S[:3, :3] = np.diag(np.broadcast_to(np.asarray(geometry.mesh.scale, float), 3))
-        return loader.from_file(str(path)), S
-    return None, S
+        return Visual(link, g.Cylinder(float(L), float(r)), T @ S, rgba)
+    scale = _numbers(shape, "scale", 3, "1 1 1")
+    if np.any(scale == 0):
+        raise _Skip(f"<mesh scale={shape.get('scale')!r}> has a zero factor")
+    S[:3, :3] = np.diag(scale)
+    return Visual(link, _mesh(shape.get("filename"), urdf_path, package_dirs, budget), T @ S, rgba)
+
+
+def _numbers(e, key, n, default, positive=False) -> np.ndarray:
+    """Attribute ``key`` of element e as n finite plain-decimal numbers (> 0 if ``positive``): (n,)."""
+    text = e.get(key, default)
+    if text is None:
+        raise _Skip(f"<{e.tag}> has no {key} attribute")
+    words = text.split()
+    if len(words) != n or not all(_NUMBER.match(w) for w in words):
+        raise _Skip(f"<{e.tag} {key}={text!r}> is not {n} plain number(s)")
+    x = np.array([float(w) for w in words])
+    if not np.all(np.isfinite(x)) or (positive and np.any(x <= 0)):
+        raise _Skip(f"<{e.tag} {key}={text!r}> must be finite{' and > 0' if positive else ''}")
+    return x
+
+
+def _material_rgba(mat, materials):
+    """rgba (4 floats in [0, 1]) of a <material>: its own <color>, else the named robot-level material."""
+    color = mat.find("color")
+    if color is None:
+        return materials.get(mat.get("name"))
+    rgba = _numbers(color, "rgba", 4, None)
+    if np.any(rgba < 0) or np.any(rgba > 1):
+        raise _Skip(f"<color rgba={color.get('rgba')!r}> must lie in [0, 1]")
+    return tuple(float(x) for x in rgba)
+
+
+def _mesh(filename, urdf_path, package_dirs, budget):
+    """The meshcat geometry of a mesh file: resolved, confined, bounded in size, then read once."""
+    import meshcat.geometry as g
+    import umsgpack
+    try:
+        path = resolve_mesh(filename, urdf_path, package_dirs)
+    except URDFError as exc:
+        raise _Skip(str(exc).removeprefix(f"{urdf_path}: ")) from None
+    fmt = MESH_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise _Skip(f"mesh {filename!r}: format {path.suffix!r} not supported (stl, obj, dae)")
+    info = path.stat()
+    if not stat.S_ISREG(info.st_mode) or info.st_size > min(MAX_MESH_BYTES, budget[0]):
+        raise _Skip(f"mesh {filename!r}: {info.st_size} bytes, more than the {MAX_MESH_BYTES} a mesh may "
+                    f"have (or than the {MAX_MESH_TOTAL} of all meshes)")
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_MESH_BYTES + 1)[:MAX_MESH_BYTES]
+    budget[0] -= len(data)
+    if fmt == "stl":
+        return g.MeshGeometry(umsgpack.Ext(g.threejs_type(np.uint8)[1], data), "stl")   # as meshcat's from_file
+    try:
+        return g.MeshGeometry(data.decode("utf-8"), fmt)
+    except UnicodeDecodeError:
+        raise _Skip(f"mesh {filename!r}: a .{fmt} file must be UTF-8 text") from None
+
