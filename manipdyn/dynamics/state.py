@@ -223,15 +223,18 @@ def raise_kernel_error(model, code, names, batches, call="", out_name="", out=No
     raise InputError(f"{call}: a non-finite input at state {s}, joint {model.joint_names[i]!r}")
 
 
-def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint", axis=1):
+def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint", axis=1, labels=None):
     """NumericalError naming the call, the result entry x[idx] (x in batch form (N, ...)), its row, the
-    joint or link (``what``) of index ``axis``, and the largest input magnitude of that row."""
+    joint, link or other ``what`` (named by ``labels``) of index ``axis``, and the largest input magnitude
+    of that row."""
     idx = tuple(int(i) for i in idx)
     row, single = idx[0], x.shape[0] == 1
     shown = idx[1:] if single else idx                       # one state: no row to name
     where = [] if single else [f"row {row}"]
-    if model is not None and len(idx) > axis and idx[axis] < model.nv:
-        where.append(f"{what} {(model.joint_names if what == 'joint' else model.body_names)[idx[axis]]!r}")
+    if labels is None and model is not None:
+        labels = model.joint_names if what == "joint" else model.body_names if what == "link" else None
+    if labels is not None and len(idx) > axis and idx[axis] < len(labels):
+        where.append(f"{what} {labels[idx[axis]]!r}")
     big = max(((float(np.max(np.abs(v.reshape(-1, v.shape[-1]) if v.ndim == 1 else v[row]), initial=0.0)), n)
                for n, v in (inputs or {}).items() if isinstance(v, np.ndarray) and v.size), default=None)
     hint = f"; largest input{'' if single else ' of that row'}: |{big[1]}| = {big[0]:.3g}" if big else ""
@@ -242,11 +245,11 @@ def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint"
                          f"out of scale{hint}{grav}")
 
 
-def check_output(call, name, x, model=None, inputs=None, what="joint", axis=1):
+def check_output(call, name, x, model=None, inputs=None, what="joint", axis=1, labels=None):
     """x (batch form (N, ...)) unchanged if finite; else NumericalError naming call, row and joint/link."""
     bad = ~np.isfinite(x)
     if bad.any():
-        raise_output_error(call, name, x, np.argwhere(bad)[0], model, inputs, what, axis)
+        raise_output_error(call, name, x, np.argwhere(bad)[0], model, inputs, what, axis, labels)
     return x
 
 
