@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError, SingularError
+from ..errors import InputError, NumericalError, SingularError
 from ..model import REVOLUTE
 from ..spatial import skew
 from .lagrange import mass_matrix
@@ -160,8 +160,11 @@ def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
     check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
     if model.nv == 0:
         return unbatch(np.zeros(Q.shape), single)
-    rhs = check_output("forward_dynamics", "τ − h", T - rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext,
-                                                                 f_ext_frame=f_ext_frame), model, dict(q=Q, v=V, tau=T))
+    try:
+        h = rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)
+    except NumericalError as exc:
+        raise NumericalError(f"forward_dynamics (method='cholesky'), in {exc}") from None
+    rhs = check_output("forward_dynamics", "τ − h", T - h, model, dict(q=Q, v=V, tau=T))
     M = mass_matrix(model, Q)
     try:
         L = np.linalg.cholesky(M)
