@@ -198,7 +198,7 @@ def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw
         rates.append(np.broadcast_to(x, (Q.shape[0], len(idx))))
     asm = assemble(model, Q, fixed=[model.joint_names[i] for i in idx], **assemble_kw)
     out = [_complete_one(model, a.q, idx, va, aa) for a, va, aa in zip(asm, *rates)]
-    q, v, a = (np.array(x) for x in zip(*out))
+    q, v, a = (np.array(x).reshape(Q.shape) for x in zip(*out)) if out else (np.zeros(Q.shape),) * 3
     for name, x in (("q", q), ("v", v), ("a", a)):
         check_output("complete_state", name, x, model, dict(q=Q))
     return (q[0], v[0], a[0], asm[0]) if single else (q, v, a, asm)

@@ -1,8 +1,8 @@
 """Argument and result checks shared by every public algorithm.
 
 What every public function accepts (and refuses with InputError naming the argument):
-- a state array is one state (nv,) or a batch (N, nv) with N ≥ 1 (an empty batch is refused: there is
-  nothing to compute, and a silent empty result hides an upstream bug), all arrays of one call of one shape;
+- a state array is one state (nv,) or a batch (N, nv), all arrays of one call of one shape; an empty batch
+  (N = 0) is computed like any other and gives empty results of the matching shape (N = 0 leading);
 - real numbers only: float arrays as they are, integer and bool arrays converted to float64; complex,
   object, string, datetime and masked arrays, and None, are refused (nothing is dropped silently);
 - finite values; frame and joint names that exist (the error lists the closest names);
@@ -51,7 +51,7 @@ def as_real(name, x):
 def as_batch(model, **arrays):
     """Check named state arrays and return (batches (N, nv) in the given order, single: bool).
 
-    Every array must be real, (nv,) or (N, nv) with N ≥ 1 and the same shape as the others, and finite.
+    Every array must be real, (nv,) or (N, nv) (N = 0 allowed) with the same shape as the others, finite.
     Errors name the array and the offending shape, row or joint.
     """
     check_model(model)
@@ -61,8 +61,6 @@ def as_batch(model, **arrays):
         if x.ndim not in (1, 2) or x.shape[-1] != model.nv:
             raise InputError(f"{name} has shape {x.shape}; expected ({model.nv},) or (N, {model.nv}) "
                              f"for model {model.name!r} (q order: {', '.join(model.joint_names)})")
-        if x.ndim == 2 and x.shape[0] == 0:
-            raise InputError(f"{name} is an empty batch, shape {x.shape}: a batch needs at least one state")
         if shape is not None and x.shape != shape:
             raise InputError(f"{name} has shape {x.shape} but {first} has {shape}")
         shape, first = x.shape, first or name
@@ -186,7 +184,7 @@ _F64 = np.dtype(np.float64)
 
 
 def fast_shape(model, *arrays):
-    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N ≥ 1, nv) with nv ≥ 1 — the
+    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N, nv) with nv ≥ 1 — the
     compiled kernels then take them as they are (any memory layout) and check finiteness themselves; 0
     otherwise (take as_batch's checks and conversions)."""
     x0 = arrays[0]
@@ -197,7 +195,7 @@ def fast_shape(model, *arrays):
         if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != shape:
             return 0
     nd, nv = len(shape), len(model.joint_names)
-    return nd if 1 <= nd <= 2 and shape[-1] == nv and nv and shape[0] else 0
+    return nd if 1 <= nd <= 2 and shape[-1] == nv and nv else 0
 
 
 def raise_kernel_error(model, code, names, batches, call="", out_name="", out=None):
@@ -206,7 +204,9 @@ def raise_kernel_error(model, code, names, batches, call="", out_name="", out=No
     (SingularError); ≤ −2 − nv a non-finite result at flat index −2 − nv − code of ``out`` in batch form
     (NumericalError)."""
     nv = model.nv
-    if code <= -2 - nv:
+    if code <= -2 - nv:                         # a later row's bad input is the cause to report first
+        for name, x in zip(names, batches):
+            check_finite(name, x, model.joint_names)
         res = out[None] if batches[0].ndim == 1 else out
         idx = np.unravel_index(-2 - nv - code, res.shape)
         raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))

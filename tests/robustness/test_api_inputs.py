@@ -56,7 +56,6 @@ def bad_inputs(nv):
         "wrong_length": np.zeros(nv + 1),
         "scalar": 0.0,
         "3d": np.zeros((2, 2, nv)),
-        "empty_batch": np.zeros((0, nv)),
         "nan": np.r_[np.zeros(nv - 1), np.nan],
         "inf": np.r_[-np.inf, np.zeros(nv - 1)],
         "nan_in_batch_row": np.vstack([np.zeros(nv), np.r_[np.nan, np.zeros(nv - 1)]]),
@@ -82,6 +81,40 @@ def test_int_and_bool_arrays_are_read_as_float():
     assert np.array_equal(md.rnea(ARM, q, Z, Z), md.rnea(ARM, q.astype(float), Z, Z))
     b = np.array([True, False, True, False, True])
     assert np.array_equal(md.mass_matrix(ARM, b), md.mass_matrix(ARM, b.astype(float)))
+
+
+EMPTY = {   # public function -> call on a state argument x (one state or a batch)
+    "rnea": lambda x: md.rnea(ARM, x, x, x),
+    "rnea_f_ext": lambda x: md.rnea(ARM, x, x, x, f_ext={"tool": (np.zeros(3), np.zeros(3))}),
+    "rnea_terms": lambda x: md.rnea_terms(ARM, x, x, x)["R"],
+    "aba": lambda x: md.aba(ARM, x, x, x),
+    "forward_dynamics_cholesky": lambda x: md.forward_dynamics(ARM, x, x, x, method="cholesky"),
+    "mass_matrix": lambda x: md.mass_matrix(ARM, x),
+    "coriolis_matrix": lambda x: md.coriolis_matrix(ARM, x, x),
+    "gravity_torques": lambda x: md.gravity_torques(ARM, x),
+    "frame_placement": lambda x: md.frame_placement(ARM, x, "tool")[1],
+    "frame_jacobian_dot": lambda x: md.frame_jacobian_dot(ARM, x, x, "tool"),
+    "kinetic_energy": lambda x: md.kinetic_energy(ARM, x, x),
+    "simulate": lambda x: md.simulate(ARM, x, x, (0, 0.01)).q,
+    "project": lambda x: md.project(FOURBAR, np.broadcast_to(QF, x.shape[:-1] + (N3,)), x[..., :N3])[0],
+    "constrained_forward_dynamics": lambda x: md.constrained_forward_dynamics(
+        FOURBAR, np.broadcast_to(QF, x.shape[:-1] + (N3,)), x[..., :N3], x[..., :N3])[1],
+    "closure_terms": lambda x: mc.closure_terms(FOURBAR, np.broadcast_to(QF, x.shape[:-1] + (N3,)))[1],
+}
+
+
+@pytest.mark.parametrize("fn", list(EMPTY))
+def test_empty_batch_gives_empty_result_of_the_batch_shape(fn):
+    # the documented choice: N = 0 is a batch like any other; its result has the one-state shape after N
+    one = np.asarray(EMPTY[fn](np.zeros(N5)))
+    out = np.asarray(EMPTY[fn](np.zeros((0, N5))))
+    assert out.shape == (0,) + one.shape
+
+
+def test_empty_batch_of_guesses_in_the_iterative_solvers():
+    assert md.assemble(FOURBAR, np.zeros((0, N3))) == []
+    q, v, a, asm = md.complete_state(FOURBAR, np.zeros((0, N3)), np.zeros((0, 1)), np.zeros((0, 1)))
+    assert q.shape == v.shape == a.shape == (0, N3) and asm == []
 
 
 TOOL = (np.zeros(3), np.zeros(3))
