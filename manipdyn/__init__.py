@@ -12,7 +12,7 @@ from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_place
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
 from .errors import (ConstraintError, DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
-                     SingularError, URDFError)
+                     NumericalError, SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
 from .model import PRISMATIC, REVOLUTE, Frame, Model
 from .reduce import reduce
@@ -32,4 +32,4 @@ __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "proj
            "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
-           "SingularError", "DivergenceError", "ConstraintError", "InertiaWarning"]
+           "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning"]

@@ -22,6 +22,11 @@ class SingularError(ManipdynError, ArithmeticError):
     """A matrix that must be inverted is singular: names the joints or closures involved."""
 
 
+class NumericalError(ManipdynError, ArithmeticError):
+    """A computation produced a non-finite value from finite inputs: names the call and the first offending
+    row and joint or link (an intermediate overflowed; the inputs or the model are out of scale)."""
+
+
 class ConstraintError(ManipdynError, ValueError):
     """Loop closures cannot be satisfied (assembly fails, a state violates them): names the closure."""
 

@@ -21,6 +21,17 @@ from .spatial import axis_angle
 REVOLUTE, PRISMATIC = 0, 1
 
 
+def check_gravity(gravity, where="gravity") -> np.ndarray:
+    """gravity as a float array (3,), finite; InputError otherwise (a NaN here makes every result NaN)."""
+    try:
+        g = np.asarray(gravity)
+    except (TypeError, ValueError):
+        g = None
+    if g is None or g.dtype.kind not in "fiu" or g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise InputError(f"{where}: gravity must be 3 finite real numbers (m/s², base frame), not {gravity!r}")
+    return g.astype(float)
+
+
 @dataclass(frozen=True, eq=False)
 class Frame:
     """A named frame rigidly attached to a body: x_body = R x_frame + p. body = -1 is the fixed base."""
@@ -86,6 +97,9 @@ class Model:
     locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q)
 
     def __post_init__(self):
+        if not (isinstance(self.gravity, np.ndarray) and self.gravity.dtype == np.float64):
+            raise InputError(f"model {self.name!r}: gravity must be a float array (3,), not {self.gravity!r}")
+        check_gravity(self.gravity, f"model {self.name!r}")
         for value in vars(self).values():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.kinematics import axes_world, body_twists, placements, point_jacobian, point_jacobian_dot
+from ..dynamics.state import as_batch, as_real, check_finite, check_model, check_output, quiet, unbatch
+from ..errors import InputError
 from ..spatial import cross
 
 
@@ -38,6 +40,7 @@ def _pairs(c):
 
 def row_labels(model):
     """Name of every constraint row, in order."""
+    check_model(model)
     out = []
     for c in model.constraints:
         out += [f"{c.name}.{k}" for k in ("x", "y", "z")]
@@ -50,8 +53,25 @@ def _pose(R, p, b, N):
     return (np.broadcast_to(np.eye(3), (N, 3, 3)), np.zeros((N, 3))) if b < 0 else (R[b], p[b])
 
 
-def closure_terms(model, Q, V=None):
-    """Φ (N, m), Φ_q (N, m, nv) and, with V, Φ̇_q q̇ (N, m) for a batch of states."""
+@quiet
+def closure_terms(model, q, v=None):
+    """Φ (N, m), Φ_q (N, m, nv) and, with v, Φ̇_q q̇ (N, m) (None without v) for a batch q, v (N, nv), or
+    Φ (m,), Φ_q (m, nv), Φ̇_q q̇ (m,) for one state (nv,)."""
+    if v is None:
+        (Q,), single = as_batch(model, q=q)
+        V = None
+    else:
+        (Q, V), single = as_batch(model, q=q, v=v)
+    out = _closure_terms(model, Q, V)
+    inputs = dict(q=Q) if V is None else dict(q=Q, v=V)
+    for name, x in zip(("Φ", "Φ_q", "Φ̇_q q̇"), out):
+        if x is not None:
+            check_output("closure_terms", name, x, model, inputs, what="closure row", labels=row_labels(model))
+    return tuple(None if x is None else unbatch(x, single) for x in out)
+
+
+def _closure_terms(model, Q, V=None):
+    """closure_terms on checked batches Q, V (N, nv)."""
     N = Q.shape[0]
     R, p = placements(model, Q)
     z = axes_world(model, R)
@@ -99,6 +119,10 @@ def independent_rows(J, rtol=RANK_RTOL, phi=None):
     inside an integrator step) the ideally redundant rows gain spurious components of the order of |Φ|:
     given Φ, the tolerance is raised to 100 max|Φ| / (max row norm) so they are not taken as rank.
     """
+    J = as_real("J", J)
+    if J.ndim != 2:
+        raise InputError(f"J has shape {J.shape}; expected one closure Jacobian (m, nv)")
+    check_finite("J", J)
     scale = max(float(np.max(np.linalg.norm(J, axis=1), initial=0.0)), 1e-300)
     if phi is not None and len(phi):
         rtol = max(rtol, 100.0 * float(np.max(np.abs(phi))) / scale)

@@ -15,7 +15,8 @@ import numpy as np
 
 from ..dynamics.lagrange import mass_matrix
 from ..dynamics.rnea import rnea
-from ..dynamics.state import as_batch, unbatch
+from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output,
+                              check_scalar, joint_indices, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
 from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
 
@@ -35,6 +36,13 @@ class RankReport:
 
 def rank_report(model, J, rtol=None) -> RankReport:
     """Rank of one state's Φ_q (m, nv), naming the redundant rows."""
+    labels = row_labels(model)
+    J = as_real("J", J)
+    if J.shape != (len(labels), model.nv):
+        raise InputError(f"J has shape {J.shape}; expected one state's closure Jacobian "
+                         f"({len(labels)}, {model.nv}) of {model.name!r}")
+    check_finite("J", J)
+    rtol = None if rtol is None else check_scalar("rtol", rtol, positive=True)
     keep, labels = independent_rows(J, RANK_RTOL if rtol is None else rtol), row_labels(model)
     sv = np.linalg.svd(J[keep], compute_uv=False) if keep else np.ones(1)
     return RankReport(len(keep), J.shape[0], tuple(l for k, l in enumerate(labels) if k not in keep),
@@ -51,16 +59,18 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     Without f_ext this runs the compiled kernel (constraints/fast.py), held by the tests to
     ``constrained_forward_dynamics_reference``, the readable solve below.
     """
-    if f_ext:
+    (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+    baumgarte = _baumgarte(baumgarte)
+    if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None or not model.nv:
         return constrained_forward_dynamics_reference(model, q, v, tau, baumgarte=baumgarte, f_ext=f_ext,
                                                       f_ext_frame=f_ext_frame, info=info)
     from .fast import constrained_fd_fast
-    (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
     code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
     if code == -2:
         raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")
     if code >= 0:                       # as_batch checked finiteness already: this cannot happen silently
         raise InputError(f"non-finite input at state {code // model.nv}, joint {model.joint_names[code % model.nv]!r}")
+    _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
     out = (unbatch(qdd, single), unbatch(lam, single))
     if not info:
         return out
@@ -72,6 +82,8 @@ def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, 
                                            f_ext_frame="local", info=False):
     """The readable KKT solve of Eq. 27 (same contract as constrained_forward_dynamics)."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+    baumgarte = _baumgarte(baumgarte)
+    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
     Phi, Jc, bias = closure_terms(model, Q, V)
     c = -bias
     if baumgarte is not None:
@@ -85,8 +97,26 @@ def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, 
         qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
         if info:
             reports.append(rank_report(model, Jc[s]))
+    _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
     out = (unbatch(qdd, single), unbatch(lam, single))
     return out + ((reports[0] if single else reports),) if info else out
+
+
+def _baumgarte(baumgarte):
+    """None, or (alpha, beta): two finite real numbers ≥ 0."""
+    if baumgarte is None:
+        return None
+    try:
+        a, b = baumgarte
+    except (TypeError, ValueError):
+        raise InputError(f"baumgarte must be None or a pair (alpha, beta), not {baumgarte!r}") from None
+    return tuple(check_scalar(f"baumgarte[{k}]", x, nonnegative=True) for k, x in enumerate((a, b)))
+
+
+def _check_results(call, model, qdd, lam, inputs):
+    """NumericalError naming the call, row and joint (q̈) or closure row (λ) of a non-finite result."""
+    check_output(call, "q̈", qdd, model, inputs)
+    check_output(call, "λ", lam, model, inputs, what="closure row", labels=row_labels(model))
 
 
 def _kkt(M, G, r, c, model):
@@ -99,17 +129,22 @@ def _kkt(M, G, r, c, model):
     if G.shape[0] == 0:
         return Minv_r, np.zeros(0)
     Minv_Gt = np.linalg.solve(L.T, np.linalg.solve(L, G.T))
-    lam = np.linalg.solve(G @ Minv_Gt, G @ Minv_r - c)
+    try:
+        lam = np.linalg.solve(G @ Minv_Gt, G @ Minv_r - c)
+    except np.linalg.LinAlgError:
+        raise SingularError(f"closed-chain dynamics of {model.name!r}: Φ_q M⁻¹ Φ_qᵀ is singular") from None
     return Minv_r - Minv_Gt @ lam, lam
 
 
 def actuation(model, actuated=None):
     """Indices of the actuated joints (default: joints with a <transmission>)."""
-    names = model.actuated if actuated is None else tuple(actuated)
-    if not names:
+    check_model(model)
+    names = model.actuated if actuated is None else actuated
+    idx = joint_indices(model, names, "actuated joints")
+    if not idx:
         raise InputError(f"model {model.name!r} has no actuated joints: pass actuated=[joint names] "
                          f"or mark them with <transmission> in the URDF")
-    return [model.joint_index(n) for n in names]
+    return idx
 
 
 def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local",
@@ -123,6 +158,8 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
     idx = actuation(model, actuated)
+    tol = check_scalar("tol", tol, positive=True)
+    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
     Phi, Jc, bias = closure_terms(model, Q, V)
     _check_consistent(model, Phi, Jc, bias, V, A, tol)
     tau_tree = rnea(model, Q, V, A, f_ext=f_ext, f_ext_frame=f_ext_frame)
@@ -138,8 +175,12 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
             raise ConstraintError(f"the actuators {[model.joint_names[i] for i in idx]} cannot produce this "
                                   f"motion (under-actuated; residual {np.max(np.abs(resid)):.3g})")
         ta[s], lam[s, keep] = x[:len(idx)], x[len(idx):]
+    check_output("constrained_inverse_dynamics", "τ_a", ta, model, dict(q=Q, v=V, a=A), what="actuator",
+                 labels=[model.joint_names[i] for i in idx])
+    check_output("constrained_inverse_dynamics", "λ", lam, model, dict(q=Q, v=V, a=A), what="closure row",
+                 labels=row_labels(model))
     out = (unbatch(ta, single), unbatch(lam, single))
-    return out + (actuation_status(model, Q[0], actuated),) if info else out
+    return out + (actuation_status(model, unbatch(Q, single), actuated),) if info else out
 
 
 def _check_consistent(model, Phi, Jc, bias, V, A, tol):
@@ -157,9 +198,13 @@ def _check_consistent(model, Phi, Jc, bias, V, A, tol):
 
 
 def actuation_status(model, q, actuated=None):
-    """"fully", "under" or "over" actuated at q: compares n_actuated + rank(Φ_q) with nv."""
-    (Q,), _ = as_batch(model, q=q)
-    _, Jc, _ = closure_terms(model, Q[:1])
-    r, na = len(independent_rows(Jc[0])), len(actuation(model, actuated))
-    dof = model.nv - r
-    return "fully" if na == dof else ("under" if na < dof else "over")
+    """"fully", "under" or "over" actuated at q (nv,): compares n_actuated + rank(Φ_q) with nv; a batch
+    (N, nv) gives a list, row by row."""
+    (Q,), single = as_batch(model, q=q)
+    na = len(actuation(model, actuated))
+    _, Jc, _ = closure_terms(model, Q)
+    out = []
+    for J in Jc:
+        dof = model.nv - len(independent_rows(J))
+        out.append("fully" if na == dof else ("under" if na < dof else "over"))
+    return out[0] if single else out

@@ -11,7 +11,7 @@ from numba import njit
 
 from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays, rnea_kernel
 from ..dynamics.kinematics import supports
-from ..errors import SingularError
+from ..errors import NumericalError, SingularError
 from .closures import RANK_RTOL, _pairs
 
 TYPES = {"spherical": 0, "revolute": 1, "fixed": 2}
@@ -187,9 +187,21 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     try:
         code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
     except np.linalg.LinAlgError:
+        _overflowed(model, Q, V)
         raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "
                             f"(a singular configuration, or closures that cannot hold together)") from None
     return code, QDD, LAM, RANK
+
+
+def _overflowed(model, Q, V):
+    """NumericalError if M or h = C q̇ + g of a state is not finite (what made the kernel's solve fail)."""
+    from ..dynamics.lagrange import mass_matrix
+    from ..dynamics.rnea import rnea
+    try:
+        rnea(model, Q, V, np.zeros_like(Q))
+        mass_matrix(model, Q)
+    except NumericalError as exc:
+        raise NumericalError(f"constrained_forward_dynamics, in {exc}") from None
 
 
 def closure_rows(model, q, v=None):

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError, SingularError
+from ..errors import InputError, NumericalError, SingularError
 from ..model import REVOLUTE
 from ..spatial import skew
 from .lagrange import mass_matrix
 from .rnea import rnea
 from .fast import aba_kernel, aba_one, kernel_arrays
-from .state import as_batch, external_wrenches, fast_shape, raise_kernel_error, unbatch
+from .state import (as_batch, check_f_ext, check_output, external_wrenches, fast_shape, raise_kernel_error,
+                    quiet, raise_output_error, unbatch)
 
 
 def _motion_subspace(model):
@@ -62,23 +63,33 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     subtree without mass or inertia: M is singular there). Without f_ext this runs the compiled kernel
     (dynamics/fast.py), held by the tests to ``aba_reference``, the readable algorithm.
     """
-    nd = 0 if f_ext else fast_shape(model, q, v, tau)
-    if nd == 0:
-        if f_ext:
-            return aba_reference(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
-        (q, v, tau), single = as_batch(model, q=q, v=v, tau=tau)  # checked and converted: (N, nv)
-        return unbatch(aba(model, q, v, tau), single)
+    nd = fast_shape(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else 0
+    if nd == 0:                                                 # checked and converted first
+        (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+        if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None:
+            return unbatch(_aba(model, Q, V, T, f_ext, f_ext_frame, "aba"), single)
+        if model.nv == 0:
+            return unbatch(np.zeros(Q.shape), single)
+        q, v, tau = (unbatch(x, single) for x in (Q, V, T))
+        nd = 1 if single else 2
     qdd = np.empty(q.shape)
     code = (aba_one if nd == 1 else aba_kernel)(*kernel_arrays(model), q, v, tau, qdd)
     if code != -1:
-        raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau))
+        raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau), "aba", "q̈", qdd)
     return qdd
 
 
 def aba_reference(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     """The readable articulated-body algorithm (RBDA Table 7.1); same contract as ``aba``."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+    return unbatch(_aba(model, Q, V, T, f_ext, f_ext_frame, "aba_reference"), single)
+
+
+@quiet
+def _aba(model, Q, V, T, f_ext, f_ext_frame, call):
+    """The articulated-body algorithm on checked batches (N, nv): q̈ (N, nv), checked finite."""
     N, nv = Q.shape[0], model.nv
+    check_f_ext(model, f_ext, f_ext_frame, N)                   # before the work
     Rp, pp = model.joint_transforms(Q)
     S, I = _motion_subspace(model), spatial_inertia(model)
     X = [_xform(Rp[i], pp[i]) for i in range(nv)]
@@ -119,10 +130,12 @@ def aba_reference(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         ap = ap + c[i]
         qdd[:, i] = (u[i] - np.einsum("na,na->n", U[i], ap)) / D[i]
         a[i] = ap + qdd[:, i, None] * S[i]
-    return unbatch(qdd, single)
+    return check_output(call, "q̈", qdd, model, dict(q=Q, v=V, tau=T))
 
 
 def _check_D(model, i, D):
+    if not np.all(np.isfinite(D)):
+        raise_output_error("aba", "articulated inertia D", D[:, None], (int(np.argmin(np.isfinite(D))), 0))
     scale = max(float(np.max(np.abs(model.inertia))), float(np.max(model.mass)), 1e-300)
     if np.any(~(D > 1e-14 * scale)):
         raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
@@ -133,12 +146,25 @@ def _check_D(model, i, D):
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
-    if method == "aba":
+    if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if method != "cholesky":
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
+    return _cholesky(model, q, v, tau, f_ext, f_ext_frame)
+
+
+@quiet
+def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
+    """q̈ by the M⁻¹ route: Cholesky of the CRBA mass matrix, right-hand side τ − rnea(q, q̇, 0, f_ext)."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
-    rhs = T - rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)
+    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
+    if model.nv == 0:
+        return unbatch(np.zeros(Q.shape), single)
+    try:
+        h = rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)
+    except NumericalError as exc:
+        raise NumericalError(f"forward_dynamics (method='cholesky'), in {exc}") from None
+    rhs = check_output("forward_dynamics", "τ − h", T - h, model, dict(q=Q, v=V, tau=T))
     M = mass_matrix(model, Q)
     try:
         L = np.linalg.cholesky(M)
@@ -147,4 +173,5 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
         raise SingularError(f"mass matrix is not positive definite (joints with zero diagonal: "
                             f"{', '.join(bad) or 'none; a dependent column'})") from None
     y = np.linalg.solve(L, rhs[..., None])
-    return unbatch(np.linalg.solve(np.swapaxes(L, 1, 2), y)[..., 0], single)
+    qdd = np.linalg.solve(np.swapaxes(L, 1, 2), y)[..., 0]
+    return unbatch(check_output("forward_dynamics", "q̈", qdd, model, dict(q=Q, v=V, tau=T)), single)

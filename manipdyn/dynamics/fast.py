@@ -4,7 +4,9 @@ state costs no numpy dispatch and a batch runs in one compiled loop.
 
 The kernels take the model as plain arrays (``kernel_arrays``), states as (N, nv) C-contiguous float64, and
 write into preallocated outputs. Finiteness is checked inside the loop: a kernel returns the flat index of
-the first non-finite input entry, or -1. Compiled code is cached on disk (numba ``cache=True``).
+the first non-finite input entry, -2 - nv - k when entry k (flat) of its result is not finite (an
+overflow, checked at the end of each state's pass), or -1. Compiled code is cached on disk (numba
+``cache=True``).
 """
 from __future__ import annotations
 
@@ -66,8 +68,8 @@ def _joint_translation(R0, p0, axis, rev, q, out):
 
 @njit(cache=True)
 def rnea_kernel(I, F, Q, V, A, tau):
-    """τ for every state of (Q, V, A) (N, nv) into tau (N, nv): the chapter's Eqs. 3–18. Returns -1, or the
-    flat index of the first non-finite input."""
+    """τ for every state of (Q, V, A) (N, nv) into tau (N, nv): the chapter's Eqs. 3–18. Returns -1, the
+    flat index of the first non-finite input, or -2 - nv - (flat index) of the first non-finite τ."""
     parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
     N, nv = Q.shape
     R = np.empty((nv, 3, 3))
@@ -158,6 +160,9 @@ def rnea_kernel(I, F, Q, V, A, tau):
                 n[j, 0] += Ri[0, 0] * n[i, 0] + Ri[0, 1] * n[i, 1] + Ri[0, 2] * n[i, 2] + py * rfz - pz * rfy
                 n[j, 1] += Ri[1, 0] * n[i, 0] + Ri[1, 1] * n[i, 1] + Ri[1, 2] * n[i, 2] + pz * rfx - px * rfz
                 n[j, 2] += Ri[2, 0] * n[i, 0] + Ri[2, 1] * n[i, 1] + Ri[2, 2] * n[i, 2] + px * rfy - py * rfx
+        for i in range(nv):                      # the result is finite (else an intermediate overflowed)
+            if not np.isfinite(tau[s, i]):
+                return -2 - nv - (s * nv + i)
     return -1
 
 
@@ -200,8 +205,8 @@ def _sandwich(R, X, tmp, out):
 def aba_kernel(I, F, Q, V, T, out):
     """q̈ by the articulated-body algorithm (RBDA Table 7.1) for every state; spatial quantities in blocks
     [angular; linear] of 3-vectors and 3×3 matrices: Iᴬ = [[A, B], [Bᵀ, C]], pᴬ = [pn; pf], c = [cw; cv],
-    U = [uw; uv]. Returns -1, the flat index of the first non-finite input, or -2 - i when the articulated
-    inertia D_i of joint i vanishes (singular mass matrix)."""
+    U = [uw; uv]. Returns -1, the flat index of the first non-finite input, -2 - i when the articulated
+    inertia D_i of joint i vanishes (singular mass matrix), or -2 - nv - (flat index) of a non-finite q̈."""
     parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
     N, nv = Q.shape
     R = np.empty((nv, 3, 3))
@@ -282,7 +287,10 @@ def aba_kernel(I, F, Q, V, T, out):
                 D[i] = uv[i, 0] * z[0] + uv[i, 1] * z[1] + uv[i, 2] * z[2]
                 u[i] = T[s, i] - (pf[i, 0] * z[0] + pf[i, 1] * z[1] + pf[i, 2] * z[2])
             if not D[i] > dmin:                               # as aba._check_D: massless moving subtree
-                return -2 - i
+                if np.isfinite(D[i]):
+                    return -2 - i
+                out[s, i] = D[i]                              # D overflowed: reported as q̈_i
+                return -2 - nv - (s * nv + i)
             j = parent[i]
             if j < 0:
                 continue
@@ -350,6 +358,8 @@ def aba_kernel(I, F, Q, V, T, out):
             qdd = (u[i] - (uw[i, 0] * t1[0] + uw[i, 1] * t1[1] + uw[i, 2] * t1[2]
                            + uv[i, 0] * t2[0] + uv[i, 1] * t2[1] + uv[i, 2] * t2[2])) / D[i]
             out[s, i] = qdd
+            if not np.isfinite(qdd):                          # an intermediate overflowed
+                return -2 - nv - (s * nv + i)
             z = axis[i]
             for k in range(3):
                 aw[i, k] = t1[k] + (qdd * z[k] if rev[i] else 0.0)
@@ -360,8 +370,8 @@ def aba_kernel(I, F, Q, V, T, out):
 @njit(cache=True)
 def crba_kernel(I, F, Q, M):
     """M(q) (N, nv, nv) by the composite-rigid-body algorithm, as lagrange._crba: composites (m, h = m c,
-    I_O about the frame origin) carried to the parent, then columns by force transmission. Returns -1 or
-    the flat index of the first non-finite q."""
+    I_O about the frame origin) carried to the parent, then columns by force transmission. Returns -1,
+    the flat index of the first non-finite q, or -2 - nv - (flat index) of the first non-finite entry of M."""
     parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
     N, nv = Q.shape
     R = np.empty((nv, 3, 3))
@@ -426,6 +436,10 @@ def crba_kernel(I, F, Q, M):
                 x = (n[0] * zk[0] + n[1] * zk[1] + n[2] * zk[2]) if rev[k] else (f[0] * zk[0] + f[1] * zk[1] + f[2] * zk[2])
                 M[s, i, k] = x
                 M[s, k, i] = x
+        for i in range(nv):                      # the result is finite (else an intermediate overflowed)
+            for k in range(nv):
+                if not np.isfinite(M[s, i, k]):
+                    return -2 - nv - ((s * nv + i) * nv + k)
     return -1
 
 

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DivergenceError, InputError
+from ..errors import DivergenceError, InputError, NumericalError
 from .aba import forward_dynamics
-from .state import as_batch
+from .state import as_batch, as_real, check_finite, check_scalar
 
 
 @dataclass(frozen=True)
@@ -28,16 +28,44 @@ class SimResult:
     wall_time: float
 
 
-def _torque(tau, nv):
-    """τ(t, q, v) for None, a constant (nv,) array or a callable."""
+class _TorqueError(InputError):
+    """tau(t, q, v) returned something that is not a torque array of the state's shape (``shape``) or a
+    non-finite torque."""
+
+    def __init__(self, message, shape=False):
+        super().__init__(message)
+        self.shape = shape
+
+
+def _torque(tau, shape, single, names):
+    """τ(t, q, v) for None, a constant (nv,) or (N, nv) array or a callable, checked on every call: the
+    callable must return real values of the state's shape ((nv,) for one state), finite."""
     if tau is None:
         return lambda t, q, v: np.zeros_like(q)
-    if callable(tau):
-        return tau
-    tau = np.asarray(tau, float)
-    if tau.shape != (nv,):
-        raise InputError(f"tau has shape {tau.shape}; expected ({nv},), None or a callable tau(t, q, v)")
-    return lambda t, q, v: np.broadcast_to(tau, q.shape)
+    if not callable(tau):
+        tau = as_real("tau", tau)
+        if tau.shape not in (shape[1:], shape):
+            raise InputError(f"tau has shape {tau.shape}; expected {shape[1:]}"
+                             + ("" if single else f" or {shape}") + ", None or a callable tau(t, q, v)")
+        check_finite("tau", tau)
+        return lambda t, q, v: np.broadcast_to(tau, q.shape)
+    user = tau
+
+    def checked(t, q, v):
+        try:
+            out = as_real(f"tau(t, q, v) at t = {t:.6g} s", user(t, q[0], v[0]) if single else user(t, q, v))
+        except InputError as exc:
+            raise _TorqueError(str(exc), True) from None
+        want = q.shape[1:] if single else q.shape
+        if out.shape != want:
+            raise _TorqueError(f"tau(t, q, v) returned shape {out.shape} at t = {t:.6g} s; expected {want}", True)
+        bad = ~np.isfinite(out)
+        if bad.any():
+            i = np.argwhere(bad)[0]
+            raise _TorqueError(f"tau(t, q, v) returned {out[tuple(i)]} at t = {t:.6g} s"
+                               + ("" if single else f", initial state {i[0]}") + f", joint {names[i[-1]]!r}")
+        return out.reshape(q.shape)
+    return checked
 
 
 def accelerations(model, forward="aba", stabilization="none", baumgarte=(10.0, 10.0)):
@@ -61,54 +89,136 @@ def _step(method, accel, torque, t, q, v, h):
     return q + h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
 
 
+MAX_POSITION = 1e6  # |q| (rad, m) and |q̇| (rad/s, m/s) beyond any manipulator's range: a runaway (at
+MAX_RATE = 1e4      # |q| = 1e6 a double resolves 1e-10, the default rtol; 1e4 rad/s ≈ 95 000 rpm)
+
+
 def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-10, atol=1e-12,
-             forward="aba", stabilization="none", baumgarte=(10.0, 10.0)):
+             forward="aba", stabilization="none", baumgarte=(10.0, 10.0), max_steps=None, max_position=MAX_POSITION,
+             max_rate=MAX_RATE):
     """Integrate the equations of motion from (q0, v0) over t_span = (t0, t1).
 
-    tau: None, a constant (nv,) array or a callable tau(t, q, v) (batches: (N, nv) in and out).
+    tau: None, a constant (nv,) (or (N, nv)) array or a callable tau(t, q, v) (batches: (N, nv) in and out).
     method: "euler" (semi-implicit), "rk4" (fixed dt; the last step is shortened to end at t1), or
     "adaptive" (scipy DOP853 at rtol/atol, one state at a time, every internal step returned).
     Closed chains: stabilization "none", "baumgarte" (alpha, beta) or "projection" (after every step).
-    Raises DivergenceError naming the time (and row) at which the state stops being finite.
+
+    The work is bounded: fixed-step runs refuse a dt whose step count (t1 − t0)/dt exceeds ``max_steps``
+    (default 10⁷) with InputError before starting; adaptive runs stop after ``max_steps`` steps (default
+    10⁵) with DivergenceError. A non-finite state, |q| beyond ``max_position`` (default 10⁶ rad or m) or
+    |q̇| beyond ``max_rate`` (default 10⁴ rad/s or m/s) raise DivergenceError naming the time, the joint
+    (and the initial state of a batch): huge torques end there within a few steps instead of driving
+    the adaptive method into ever smaller steps.
+    tau(t, q, v) must return real values of the state's shape: InputError otherwise (a non-finite
+    torque at t0 is an InputError; later, DivergenceError: the controller followed a diverging state).
     """
     (Q, V), single = as_batch(model, q0=q0, v0=v0)
-    t0, t1 = (float(x) for x in t_span)
-    if not t1 > t0:
-        raise InputError(f"t_span {t_span}: the end must come after the start")
-    if stabilization not in ("none", "baumgarte", "projection"):
+    t0, t1 = _span(t_span)
+    if not isinstance(method, str) or method not in ("euler", "rk4", "adaptive"):
+        raise InputError(f"method must be 'euler', 'rk4' or 'adaptive', not {method!r}")
+    if not isinstance(stabilization, str) or stabilization not in ("none", "baumgarte", "projection"):
         raise InputError(f"stabilization must be 'none', 'baumgarte' or 'projection', not {stabilization!r}")
-    accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, model.nv)
-    if single and callable(tau):               # a single state: the callable sees (nv,) arrays
-        user = torque
-        torque = lambda t, q, v: np.asarray(user(t, q[0], v[0]), float).reshape(1, -1)  # noqa: E731
+    if stabilization == "baumgarte":
+        baumgarte = _pair("baumgarte", baumgarte)
+    bounds = tuple(check_scalar(n, x, positive=True) for n, x in (("max_position", max_position),
+                                                                   ("max_rate", max_rate)))
+    max_steps = check_scalar("max_steps", (10**5 if method == "adaptive" else 10**7) if max_steps is None
+                             else max_steps, positive=True, integer=True)
+    accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, Q.shape, single, model.joint_names)
+    if not isinstance(forward, str) or forward not in ("aba", "cholesky"):
+        raise InputError(f"forward must be 'aba' or 'cholesky', not {forward!r}")
+    watch = _Watch(model, single, bounds, t0)
+    try:
+        watch(t0, Q, V)
+    except DivergenceError as exc:
+        raise InputError(f"initial state: {str(exc).split(': ', 1)[1]}") from None
     start = time.perf_counter()
     if method == "adaptive":
         if not single:
             raise InputError("method='adaptive' runs one initial state at a time; pass q0, v0 of shape (nv,)")
-        T, Qs, Vs = _adaptive(model, accel, torque, Q[0], V[0], t0, t1, rtol, atol)
+        rtol, atol = (check_scalar(n, x, positive=True) for n, x in (("rtol", rtol), ("atol", atol)))
+        T, Qs, Vs = _adaptive(model, accel, torque, Q[0], V[0], t0, t1, rtol, atol, max_steps, watch)
         return SimResult(T, Qs, Vs, method, float("nan"), len(T) - 1, time.perf_counter() - start)
-    if method not in ("euler", "rk4"):
-        raise InputError(f"method must be 'euler', 'rk4' or 'adaptive', not {method!r}")
-    n = int(np.ceil((t1 - t0) / dt - 1e-9))
-    T = np.minimum(t0 + dt * np.arange(n + 1), t1)
+    T = _grid(t0, t1, check_scalar("dt", dt, positive=True), max_steps)
+    n = len(T) - 1
     Qs, Vs = np.empty((n + 1,) + Q.shape), np.empty((n + 1,) + V.shape)
     Qs[0], Vs[0] = Q, V
     project = _projector(model) if stabilization == "projection" else None
     for k in range(n):
         try:
             Q, V = _step(method, accel, torque, T[k], Q, V, T[k + 1] - T[k])
-        except InputError as exc:               # a non-finite state or torque met inside the step
+            if project is not None:
+                Q, V = project(Q, V)
+        except _TorqueError as exc:
+            watch.torque(T[k], exc)
+        except (InputError, NumericalError) as exc:     # a non-finite state met inside the step
             raise DivergenceError(f"simulation of {model.name!r} diverged at t = {T[k]:.6g} s: {exc}") from None
-        if project is not None:
-            Q, V = project(Q, V)
-        if not (np.all(np.isfinite(Q)) and np.all(np.isfinite(V))):
-            row = int(np.argwhere(~np.isfinite(np.hstack([Q, V])))[0][0])
-            raise DivergenceError(f"simulation of {model.name!r} diverged at t = {T[k + 1]:.6g} s"
-                                  + ("" if single else f" (initial state {row})") + ": state is not finite")
+        watch(T[k + 1], Q, V)
         Qs[k + 1], Vs[k + 1] = Q, V
     Qs, Vs = np.moveaxis(Qs, 0, 1), np.moveaxis(Vs, 0, 1)       # (N, T, nv)
-    return SimResult(T, Qs[0] if single else Qs, Vs[0] if single else Vs, method, dt, n,
+    return SimResult(T, Qs[0] if single else Qs, Vs[0] if single else Vs, method, float(dt), n,
                      time.perf_counter() - start)
+
+
+def _span(t_span):
+    """(t0, t1): two finite real numbers with t1 > t0."""
+    try:
+        t0, t1 = t_span
+    except (TypeError, ValueError):
+        raise InputError(f"t_span must be a pair (t0, t1), not {t_span!r}") from None
+    t0, t1 = (check_scalar(f"t_span[{k}]", x) for k, x in enumerate((t0, t1)))
+    if not t1 > t0:
+        raise InputError(f"t_span {t_span}: the end must come after the start")
+    return t0, t1
+
+
+def _pair(name, x):
+    """Two finite real numbers ≥ 0 (Baumgarte's alpha, beta)."""
+    try:
+        a, b = x
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a pair (alpha, beta), not {x!r}") from None
+    return tuple(check_scalar(f"{name}[{k}]", y, nonnegative=True) for k, y in enumerate((a, b)))
+
+
+def _grid(t0, t1, dt, max_steps):
+    """Step times t0, t0 + dt, ..., t1 (the last step shortened), at most max_steps steps, increasing."""
+    steps = (t1 - t0) / dt
+    if not steps <= max_steps:
+        raise InputError(f"dt = {dt:g} s over t_span ({t0:g}, {t1:g}) needs {steps:.3g} steps, more than "
+                         f"max_steps = {max_steps}; take a larger dt or raise max_steps")
+    n = max(int(np.ceil(steps - 1e-9)), 1)
+    T = np.minimum(t0 + dt * np.arange(n + 1), t1)
+    T[-1] = t1
+    if np.any(np.diff(T) <= 0):
+        raise InputError(f"dt = {dt:g} s is below the resolution of t near {t0:g} s: time would not advance")
+    return T
+
+
+class _Watch:
+    """Raises DivergenceError when a state is non-finite or beyond max_state, naming time and row."""
+
+    def __init__(self, model, single, bounds, t0):
+        self.model, self.single, self.bounds, self.t0 = model, single, bounds, t0
+
+    def __call__(self, t, Q, V):
+        X = np.hstack([Q, V])
+        nv = self.model.nv
+        bad = ~(np.abs(X) <= np.repeat(self.bounds, nv))      # NaN counts as bad
+        if bad.any():
+            row, col = (int(i) for i in np.argwhere(bad)[0])
+            what, joint = ("q", "v")[col // nv], self.model.joint_names[col % nv]
+            why = "is not finite" if not np.isfinite(X[row, col]) else \
+                f"exceeds {('max_position', 'max_rate')[col // nv]} = {self.bounds[col // nv]:g}"
+            raise DivergenceError(f"simulation of {self.model.name!r} diverged at t = {t:.6g} s"
+                                  + ("" if self.single else f" (initial state {row})")
+                                  + f": {what}[{joint!r}] = {X[row, col]:.3g} {why}")
+
+    def torque(self, t, exc):
+        """A bad torque: wrong shape always InputError; non-finite at t0 InputError, later divergence."""
+        if exc.shape or t == self.t0:
+            raise InputError(str(exc)) from None
+        raise DivergenceError(f"simulation of {self.model.name!r} diverged at t = {t:.6g} s: {exc}") from None
 
 
 def _projector(model):
@@ -116,22 +226,41 @@ def _projector(model):
     return lambda Q, V: project(model, Q, V)
 
 
-def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol):
-    """scipy solve_ivp (DOP853) on x = (q, q̇); raises DivergenceError on a non-finite state."""
-    from scipy.integrate import solve_ivp
+def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol, max_steps, watch):
+    """scipy's DOP853 on x = (q, q̇), stepped here so every step is watched (non-finite, beyond the
+    bounds) and counted (at most max_steps); returns every accepted step as solve_ivp does."""
     nv = model.nv
 
     def rhs(t, x):
         q, v = x[:nv], x[nv:]
         try:
-            a = accel(q, v, np.asarray(torque(t, q[None], v[None]), float).reshape(-1))
-        except InputError as exc:
+            a = accel(q, v, torque(t, q[None], v[None])[0])
+        except _TorqueError as exc:
+            watch.torque(t, exc)
+        except (InputError, NumericalError) as exc:
             raise DivergenceError(f"simulation of {model.name!r} diverged at t = {t:.6g} s: {exc}") from None
-        if not np.all(np.isfinite(a)):
-            raise DivergenceError(f"simulation of {model.name!r} diverged at t = {t:.6g} s: q̈ is not finite")
         return np.concatenate([v, a])
 
-    sol = solve_ivp(rhs, (t0, t1), np.concatenate([q0, v0]), method="DOP853", rtol=rtol, atol=atol)
-    if sol.status != 0:
-        raise DivergenceError(f"simulation of {model.name!r} stopped at t = {sol.t[-1]:.6g} s: {sol.message}")
-    return sol.t, sol.y[:nv].T, sol.y[nv:].T
+    with np.errstate(over="ignore", invalid="ignore"):       # the watch reports what overflows
+        return _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch)
+
+
+def _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch):
+    """The stepping loop of _adaptive."""
+    from scipy.integrate import DOP853
+    nv = model.nv
+    solver = DOP853(rhs, t0, np.concatenate([q0, v0]), t1, rtol=rtol, atol=atol)
+    ts, ys = [t0], [solver.y.copy()]
+    while solver.status == "running":
+        if len(ts) > max_steps:
+            raise DivergenceError(f"simulation of {model.name!r} did not reach t = {t1:g} s within max_steps = "
+                                  f"{max_steps} adaptive steps (stopped at t = {solver.t:.6g} s, max |q̇| = "
+                                  f"{np.max(np.abs(solver.y[nv:]), initial=0.0):.3g}); raise max_steps or rtol")
+        msg = solver.step()
+        if solver.status == "failed":
+            raise DivergenceError(f"simulation of {model.name!r} stopped at t = {solver.t:.6g} s: {msg}")
+        watch(solver.t, solver.y[None, :nv], solver.y[None, nv:])
+        ts.append(solver.t)
+        ys.append(solver.y.copy())
+    Y = np.array(ys)
+    return np.array(ts), Y[:, :nv], Y[:, nv:]

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
-from .state import as_batch, unbatch
+from .state import as_batch, check_output, frame_of, quiet, unbatch
 
 
 def placements(model, Q):
@@ -65,18 +65,22 @@ def point_jacobian(model, R, p, z, body, point):
 
 def _frame_world(model, R, p, frame):
     """(body, R_frame (N, 3, 3), p_frame (N, 3)) of a named frame in world coordinates."""
-    fr = model.frame(frame)
+    fr = frame_of(model, frame)
     if fr.body < 0:
         N = R.shape[1]
         return fr.body, np.broadcast_to(fr.R, (N, 3, 3)), np.broadcast_to(fr.p, (N, 3))
     return fr.body, R[fr.body] @ fr.R, p[fr.body] + np.einsum("nij,j->ni", R[fr.body], fr.p)
 
 
+@quiet
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3))."""
     (Q,), single = as_batch(model, q=q)
+    frame_of(model, frame)
     _, Rf, pf = _frame_world(model, *placements(model, Q), frame)
-    return unbatch(np.array(Rf), single), unbatch(np.array(pf), single)
+    Rf, pf = (check_output("frame_placement", k, np.array(x), model, dict(q=Q))
+              for k, x in (("R", Rf), ("p", pf)))
+    return unbatch(Rf, single), unbatch(pf, single)
 
 
 def _to_local(J, Rf):
@@ -86,16 +90,20 @@ def _to_local(J, Rf):
     return Jl
 
 
+@quiet
 def frame_jacobian(model, q, frame, reference="world"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: twist of ``frame`` = J q̇ (Eqs. 29–30)."""
     _check_reference(reference)
     (Q,), single = as_batch(model, q=q)
+    frame_of(model, frame)
     R, p = placements(model, Q)
     body, Rf, pf = _frame_world(model, R, p, frame)
     J = point_jacobian(model, R, p, axes_world(model, R), body, pf)
-    return unbatch(J if reference == "world" else _to_local(J, Rf), single)
+    J = J if reference == "world" else _to_local(J, Rf)
+    return unbatch(check_output("frame_jacobian", "J", J, model, dict(q=Q), axis=2), single)
 
 
+@quiet
 def frame_jacobian_dot(model, q, v, frame, reference="world"):
     """J̇ (6, nv) or (N, 6, nv), exact time derivative of frame_jacobian along q̇.
 
@@ -104,6 +112,7 @@ def frame_jacobian_dot(model, q, v, frame, reference="world"):
     """
     _check_reference(reference)
     (Q, V), single = as_batch(model, q=q, v=v)
+    frame_of(model, frame)
     R, p = placements(model, Q)
     z = axes_world(model, R)
     body, Rf, pf = _frame_world(model, R, p, frame)
@@ -114,7 +123,7 @@ def frame_jacobian_dot(model, q, v, frame, reference="world"):
         W = skew(np.einsum("nji,nj->ni", Rf, w[body]) if body >= 0 else np.zeros_like(pf))   # [ω'_f]×
         Jl = _to_local(J, Rf)
         dJ = _to_local(dJ, Rf) - np.concatenate([W @ Jl[:, :3], W @ Jl[:, 3:]], axis=1)
-    return unbatch(dJ, single)
+    return unbatch(check_output("frame_jacobian_dot", "J̇", dJ, model, dict(q=Q, v=V), axis=2), single)
 
 
 def point_jacobian_dot(model, p, z, w, vel, body, point):
@@ -147,5 +156,5 @@ def body_twists(model, p, z, V):
 
 
 def _check_reference(reference):
-    if reference not in ("world", "local"):
+    if not isinstance(reference, str) or reference not in ("world", "local"):
         raise InputError(f"reference must be 'world' or 'local', not {reference!r}")

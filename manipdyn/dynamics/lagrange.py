@@ -14,14 +14,15 @@ from ..model import REVOLUTE
 from ..spatial import cross, skew
 from .kinematics import axes_world, placements, point_jacobian, supports
 from .fast import crba_kernel, crba_one, kernel_arrays
-from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
 
 
 def _com_jacobians(model, R, p):
     """Per body: world CoM (nv, N, 3), CoM Jacobian (nv, N, 6, nv), world inertia about CoM (nv, N, 3, 3)."""
     z = axes_world(model, R)
     c = p + np.einsum("bnij,bj->bni", R, model.com)
-    J = np.stack([point_jacobian(model, R, p, z, b, c[b]) for b in range(model.nv)])
+    J = np.stack([point_jacobian(model, R, p, z, b, c[b]) for b in range(model.nv)]) if model.nv else \
+        np.zeros((0, R.shape[1], 6, 0))
     Iw = R @ model.inertia[:, None] @ np.swapaxes(R, -1, -2)
     return c, J, Iw, z
 
@@ -34,15 +35,18 @@ def mass_matrix(model, q, method="crba"):
     M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links (costly, as the chapter warns).
     """
     nd = fast_shape(model, q) if method == "crba" else 0
+    if nd == 0:                                         # checked and converted first
+        (Q,), single = as_batch(model, q=q)
+        if method == "crba" and model.nv:
+            q, nd = unbatch(Q, single), 1 if single else 2
     if nd:                                              # compiled; held by the tests to crba_reference
         M = np.empty(q.shape + (model.nv,))
         code = (crba_one if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
         if code != -1:
-            raise_kernel_error(model, code, ("q",), (q,))
+            raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
         return M
-    (Q,), single = as_batch(model, q=q)
-    if method == "crba":
-        return unbatch(mass_matrix(model, Q), single)
+    if method == "crba":                                # nv = 0
+        M = np.zeros((Q.shape[0], 0, 0))
     elif method == "crba_reference":
         M = _crba(model, Q)
     elif method == "lagrange":
@@ -51,7 +55,7 @@ def mass_matrix(model, q, method="crba"):
         M = np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
     else:
         raise InputError(f"mass_matrix method must be 'crba', 'crba_reference' or 'lagrange', not {method!r}")
-    return unbatch(M, single)
+    return unbatch(check_output("mass_matrix", "M", M, model, dict(q=Q)), single)
 
 
 def _crba(model, Q):
@@ -108,11 +112,13 @@ def _shift(mass, h_rot, p):
     return mass * _point(p) + 2 * ph * np.eye(3) - p[:, :, None] * h_rot[:, None, :] - h_rot[:, :, None] * p[:, None, :]
 
 
+@quiet
 def gravity_torques(model, q):
     """g(q) = ∂V/∂q with V = −Σ_b m_b gᵀ c_b(q): g = −Σ_b m_b J_vbᵀ g (nv,) or (N, nv)."""
     (Q,), single = as_batch(model, q=q)
     _, J, _, _ = _com_jacobians(model, *placements(model, Q))
-    return unbatch(-np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)
+    g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)
+    return unbatch(check_output("gravity_torques", "g", g, model, dict(q=Q)), single)
 
 
 def mass_matrix_derivatives(model, Q):
@@ -146,6 +152,7 @@ def mass_matrix_derivatives(model, Q):
     return dM
 
 
+@quiet
 def coriolis_matrix(model, q, v):
     """C(q, q̇) (nv, nv) or (N, nv, nv) from the Christoffel symbols of M:
 
@@ -155,4 +162,4 @@ def coriolis_matrix(model, q, v):
     dM = mass_matrix_derivatives(model, Q)                   # dM[n, k, i, j] = ∂M_ij/∂q_k
     C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
                - np.einsum("nijk,nk->nij", dM, V))
-    return unbatch(C, single)
+    return unbatch(check_output("coriolis_matrix", "C", C, model, dict(q=Q, v=V)), single)

@@ -12,7 +12,8 @@ import numpy as np
 from ..model import REVOLUTE
 from ..spatial import cross, rot, rot_t
 from .fast import kernel_arrays, rnea_kernel, rnea_one
-from .state import as_batch, external_wrenches, fast_shape, raise_kernel_error, unbatch
+from .state import (as_batch, check_f_ext, check_output, external_wrenches, fast_shape, raise_kernel_error,
+                    quiet, unbatch)
 
 
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -30,16 +31,19 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     Without f_ext this runs the compiled kernel (dynamics/fast.py), held by the tests to ``rnea_terms``,
     the readable recursion below; with f_ext it runs the readable recursion.
     """
-    nd = 0 if f_ext else fast_shape(model, q, v, a)
-    if nd == 0:
-        if f_ext:
-            return rnea_terms(model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)["tau"]
-        (q, v, a), single = as_batch(model, q=q, v=v, a=a)      # checked and converted: (N, nv)
-        return unbatch(rnea(model, q, v, a), single)
+    nd = fast_shape(model, q, v, a) if f_ext is None and f_ext_frame == "local" else 0
+    if nd == 0:                                                 # checked and converted first
+        (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
+        if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None:
+            return unbatch(_terms(model, Q, V, A, f_ext, f_ext_frame, "rnea")["tau"], single)
+        if model.nv == 0:
+            return unbatch(np.zeros(Q.shape), single)
+        q, v, a = (unbatch(x, single) for x in (Q, V, A))
+        nd = 1 if single else 2
     tau = np.empty(q.shape)
     code = (rnea_one if nd == 1 else rnea_kernel)(*kernel_arrays(model), q, v, a, tau)
     if code != -1:
-        raise_kernel_error(model, code, _QVA, (q, v, a))
+        raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
     return tau
 
 
@@ -61,12 +65,23 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
       tau      (N, nv) joint torques/forces (Eqs. 17, 18)
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
+    out = _terms(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms")
+    return {k: unbatch(x, single) for k, x in out.items()}
+
+
+@quiet
+def _terms(model, Q, V, A, f_ext, f_ext_frame, call):
+    """rnea_terms on checked batches (N, nv); every array checked finite (NumericalError names ``call``)."""
+    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])           # before the work
     out = _outward(model, Q, V, A)
     ext = external_wrenches(model, f_ext, f_ext_frame, Q.shape[0], out["R"])
     out.update(_inward(model, out, ext))
     out = {k: np.moveaxis(x, 0, 1) for k, x in out.items() if k != "Rp"}
     out["tau"] = out["tau"][..., 0]
-    return {k: unbatch(x, single) for k, x in out.items()}
+    inputs = dict(q=Q, v=V, a=A)
+    for k in ("tau", "w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n", "R"):   # τ first: the result
+        check_output(call, k, out[k], model, inputs, "joint" if k == "tau" else "link")
+    return out
 
 
 def _outward(model, Q, V, A):

@@ -1,31 +1,71 @@
-"""Argument checks shared by every public algorithm: one state (nv,) or a batch (N, nv), finite values."""
+"""Argument and result checks shared by every public algorithm.
+
+What every public function accepts (and refuses with InputError naming the argument):
+- a state array is one state (nv,) or a batch (N, nv), all arrays of one call of one shape; an empty batch
+  (N = 0) is computed like any other and gives empty results of the matching shape (N = 0 leading);
+- real numbers only: float arrays as they are, integer and bool arrays converted to float64; complex,
+  object, string, datetime and masked arrays, and None, are refused (nothing is dropped silently);
+- finite values; frame and joint names that exist (the error lists the closest names);
+- f_ext = None or {frame name: (force, moment)}, each (3,) or (N, 3), finite.
+What every public function returns: finite numbers, or NumericalError naming the call, the array, the
+row and the joint or link of the first non-finite entry (an intermediate overflowed).
+"""
 from __future__ import annotations
+
+import difflib
+import functools
+from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, NumericalError, SingularError
+from ..model import Model
+
+_REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
+
+
+def check_model(model):
+    """Refuse anything but a Model (a path or a Pinocchio model are common mistakes)."""
+    if not isinstance(model, Model):
+        raise InputError(f"model must be a manipdyn Model (from load_urdf), not {type(model).__name__}")
+
+
+def as_real(name, x):
+    """x as a float64 ndarray; InputError naming ``name`` for None, complex, object, string or masked input."""
+    if x is None:
+        raise InputError(f"{name} is None; expected an array of real numbers")
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():
+        raise InputError(f"{name} is a masked array with masked entries; fill them first")
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError) as exc:          # ragged nesting, unconvertible objects
+        raise InputError(f"{name}: cannot be read as an array of real numbers ({exc})") from None
+    if a.dtype.kind not in _REAL_KINDS:
+        kind = {"c": "complex", "O": "object", "U": "string", "S": "bytes", "M": "datetime",
+                "m": "timedelta", "V": "structured"}.get(a.dtype.kind, str(a.dtype))
+        raise InputError(f"{name}: cannot be read as real numbers: dtype {a.dtype} ({kind}); expected float, "
+                         f"int or bool values")
+    return a.astype(np.float64, copy=False)
 
 
 def as_batch(model, **arrays):
     """Check named state arrays and return (batches (N, nv) in the given order, single: bool).
 
-    Every array must be (nv,) or (N, nv) with the same N, finite. Errors name the array and the
-    offending shape, row or joint.
+    Every array must be real, (nv,) or (N, nv) (N = 0 allowed) with the same shape as the others, finite.
+    Errors name the array and the offending shape, row or joint.
     """
-    out, shape = [], None
+    check_model(model)
+    out, shape, first = [], None, None
     for name, x in arrays.items():
-        try:
-            x = np.asarray(x, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{name}: cannot be read as an array of floats ({exc})") from None
+        x = as_real(name, x)
         if x.ndim not in (1, 2) or x.shape[-1] != model.nv:
             raise InputError(f"{name} has shape {x.shape}; expected ({model.nv},) or (N, {model.nv}) "
                              f"for model {model.name!r} (q order: {', '.join(model.joint_names)})")
         if shape is not None and x.shape != shape:
-            raise InputError(f"{name} has shape {x.shape} but {next(iter(arrays))} has {shape}")
-        shape = x.shape
+            raise InputError(f"{name} has shape {x.shape} but {first} has {shape}")
+        shape, first = x.shape, first or name
         check_finite(name, x, model.joint_names)
-        out.append(np.atleast_2d(x))
+        out.append(x[None] if x.ndim == 1 else x)
     return out, len(shape) == 1
 
 
@@ -38,9 +78,81 @@ def check_finite(name, x, labels=None):
         raise InputError(f"{name}{list(idx)}{what} is {x[idx]}: inputs must be finite")
 
 
+def check_scalar(name, x, *, positive=False, nonnegative=False, integer=False):
+    """A finite real scalar (int when ``integer``), > 0 or ≥ 0 if asked; InputError naming ``name``."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name} must be a real number, not {type(x).__name__} {x!r}")
+    if integer and not isinstance(x, (int, np.integer)):
+        raise InputError(f"{name} must be an integer, not {x!r}")
+    if not np.isfinite(x):
+        raise InputError(f"{name} is {x}; it must be finite")
+    if (positive and not x > 0) or (nonnegative and not x >= 0):
+        raise InputError(f"{name} is {x}; it must be {'> 0' if positive else '≥ 0'}")
+    return int(x) if integer else float(x)
+
+
 def unbatch(x: np.ndarray, single: bool) -> np.ndarray:
     """Drop the batch axis again for a single-state call."""
     return x[0] if single else x
+
+
+def _unknown(model, name, known, what):
+    close = difflib.get_close_matches(str(name), known, n=5, cutoff=0.5)
+    hint = f"closest: {', '.join(close)}" if close else f"known: {', '.join(sorted(known)[:20])}" + \
+        (f" … ({len(known)} in all)" if len(known) > 20 else "")
+    return InputError(f"model {model.name!r} has no {what} named {name!r}; {hint}")
+
+
+def frame_of(model, name):
+    """The Frame of a link or frame name; InputError lists the closest names."""
+    check_model(model)
+    if not isinstance(name, str):
+        raise InputError(f"a frame name must be a string, not {type(name).__name__} {name!r}")
+    fr = model.frames.get(name)
+    if fr is None:
+        raise _unknown(model, name, list(model.frames), "link or frame")
+    return fr
+
+
+def joint_indices(model, names, what="joints"):
+    """Indices of a list of joint names in q order; InputError lists the closest names."""
+    if isinstance(names, (str, bytes)) or not hasattr(names, "__iter__"):
+        raise InputError(f"{what} must be a list of joint names, not {type(names).__name__} {names!r}")
+    out = []
+    for n in names:
+        if n not in model.joint_names:
+            raise _unknown(model, n, list(model.joint_names), "moving joint")
+        out.append(model.joint_names.index(n))
+    return out
+
+
+def check_f_ext(model, f_ext, f_ext_frame, N):
+    """Validated wrenches [(Frame, force (N, 3), moment (N, 3)), ...], or None for no f_ext.
+
+    f_ext must be None or a dict {link or frame name: (force, moment)}, each (3,) or (N, 3), real, finite.
+    """
+    if f_ext_frame not in ("local", "world"):
+        raise InputError(f"f_ext_frame must be 'local' or 'world', not {f_ext_frame!r}")
+    if f_ext is None:
+        return None
+    if not isinstance(f_ext, Mapping):
+        raise InputError(f"f_ext must be None or a dict {{link or frame name: (force, moment)}}, "
+                         f"not {type(f_ext).__name__}")
+    out = []
+    for name, wrench in f_ext.items():
+        fr = frame_of(model, name)
+        if isinstance(wrench, (str, bytes, Mapping)) or not hasattr(wrench, "__len__") or len(wrench) != 2:
+            raise InputError(f"f_ext[{name!r}] must be a pair (force, moment), each (3,) or ({N}, 3); "
+                             f"got {type(wrench).__name__}")
+        pair = []
+        for what, w in zip(("force", "moment"), wrench):
+            w = as_real(f"f_ext[{name!r}] {what}", w)
+            if w.shape not in ((3,), (N, 3)):
+                raise InputError(f"f_ext[{name!r}] {what} has shape {w.shape}; expected (3,) or ({N}, 3)")
+            check_finite(f"f_ext[{name!r}] {what}", w)
+            pair.append(np.broadcast_to(w, (N, 3)))
+        out.append((fr, pair[0], pair[1]))
+    return out or None
 
 
 def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
@@ -51,18 +163,11 @@ def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     R_world (nv, N, 3, 3) is the bodies' orientation, needed for "world". Wrenches on the fixed base
     (frames of the root body) change no joint torque and are dropped.
     """
-    if not f_ext:
+    wrenches = check_f_ext(model, f_ext, f_ext_frame, N)
+    if wrenches is None:
         return None
-    if f_ext_frame not in ("local", "world"):
-        raise InputError(f"f_ext_frame must be 'local' or 'world', not {f_ext_frame!r}")
     F, Mo = np.zeros((model.nv, N, 3)), np.zeros((model.nv, N, 3))
-    for name, wrench in f_ext.items():
-        fr = model.frame(name)
-        try:
-            f, m = (np.broadcast_to(np.asarray(w, float), (N, 3)) for w in wrench)
-        except (TypeError, ValueError):
-            raise InputError(f"f_ext[{name!r}] must be (force, moment), each (3,) or ({N}, 3)") from None
-        check_finite(f"f_ext[{name!r}]", np.stack([f, m]))
+    for fr, f, m in wrenches:
         if fr.body < 0:
             continue
         if f_ext_frame == "world":       # world axes -> body axes, then -> frame-independent below
@@ -79,30 +184,80 @@ _F64 = np.dtype(np.float64)
 
 
 def fast_shape(model, *arrays):
-    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N, nv) — the compiled kernels
-    then take them as they are (any memory layout) and check finiteness themselves; 0 otherwise (take
-    as_batch's checks and conversions)."""
+    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N, nv) with nv ≥ 1 — the
+    compiled kernels then take them as they are (any memory layout) and check finiteness themselves; 0
+    otherwise (take as_batch's checks and conversions)."""
     x0 = arrays[0]
-    if type(x0) is not np.ndarray or x0.dtype is not _F64:
+    if type(x0) is not np.ndarray or x0.dtype is not _F64 or type(model) is not Model:
         return 0
     shape = x0.shape
     for x in arrays[1:]:
         if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != shape:
             return 0
-    nd = len(shape)
-    return nd if 1 <= nd <= 2 and shape[-1] == len(model.joint_names) else 0
+    nd, nv = len(shape), len(model.joint_names)
+    return nd if 1 <= nd <= 2 and shape[-1] == nv and nv else 0
 
 
-def raise_kernel_error(model, code, names, batches):
-    """Turn a kernel's return code into the InputError/SingularError the reference code would raise."""
-    from ..errors import SingularError
+def raise_kernel_error(model, code, names, batches, call="", out_name="", out=None):
+    """Turn a kernel's return code into the error the reference code would raise: ≥ 0 the flat index
+    (state·nv + joint) of a non-finite input (InputError); −2 − i a vanishing articulated inertia at joint i
+    (SingularError); ≤ −2 − nv a non-finite result at flat index −2 − nv − code of ``out`` in batch form
+    (NumericalError)."""
+    nv = model.nv
+    if code <= -2 - nv:                         # a later row's bad input is the cause to report first
+        for name, x in zip(names, batches):
+            check_finite(name, x, model.joint_names)
+        res = out[None] if batches[0].ndim == 1 else out
+        idx = np.unravel_index(-2 - nv - code, res.shape)
+        raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))
     if code <= -2:
         i = -2 - code
         raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
                             f"without mass or inertia about its axis")
-    s, i = divmod(code, model.nv)
+    s, i = divmod(code, nv)
     for name, x in zip(names, batches):
-        x = np.atleast_2d(x)
+        x = x[None] if x.ndim == 1 else x
         if not np.isfinite(x[s, i]):
             idx = [i] if x.shape[0] == 1 else [s, i]
             raise InputError(f"{name}{idx} (joint {model.joint_names[i]!r}) is {x[s, i]}: inputs must be finite")
+    raise InputError(f"{call}: a non-finite input at state {s}, joint {model.joint_names[i]!r}")
+
+
+def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint", axis=1, labels=None):
+    """NumericalError naming the call, the result entry x[idx] (x in batch form (N, ...)), its row, the
+    joint, link or other ``what`` (named by ``labels``) of index ``axis``, and the largest input magnitude
+    of that row."""
+    idx = tuple(int(i) for i in idx)
+    row, single = idx[0], x.shape[0] == 1
+    shown = idx[1:] if single else idx                       # one state: no row to name
+    where = [] if single else [f"row {row}"]
+    if labels is None and model is not None:
+        labels = model.joint_names if what == "joint" else model.body_names if what == "link" else None
+    if labels is not None and len(idx) > axis and idx[axis] < len(labels):
+        where.append(f"{what} {labels[idx[axis]]!r}")
+    big = max(((float(np.max(np.abs(v.reshape(-1, v.shape[-1]) if v.ndim == 1 else v[row]), initial=0.0)), n)
+               for n, v in (inputs or {}).items() if isinstance(v, np.ndarray) and v.size), default=None)
+    hint = f"; largest input{'' if single else ' of that row'}: |{big[1]}| = {big[0]:.3g}" if big else ""
+    grav = f"; model gravity {np.asarray(model.gravity).tolist()}" if model is not None else ""
+    raise NumericalError(f"{call}: the result {name}{list(shown) if shown else ''}"
+                         f"{' (' + ', '.join(where) + ')' if where else ''} "
+                         f"is {x[idx]}: an intermediate overflowed or was undefined — the inputs or the model are "
+                         f"out of scale{hint}{grav}")
+
+
+def check_output(call, name, x, model=None, inputs=None, what="joint", axis=1, labels=None):
+    """x (batch form (N, ...)) unchanged if finite; else NumericalError naming call, row and joint/link."""
+    bad = ~np.isfinite(x)
+    if bad.any():
+        raise_output_error(call, name, x, np.argwhere(bad)[0], model, inputs, what, axis, labels)
+    return x
+
+
+def quiet(fn):
+    """Run a numpy-path function without overflow/invalid warnings: its results are checked instead
+    (check_output raises NumericalError), so the warnings would only repeat the error."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return fn(*args, **kwargs)
+    return wrapper
