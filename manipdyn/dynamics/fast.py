@@ -9,8 +9,8 @@ the first non-finite input entry, or -1. Compiled code is cached on disk (numba 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..model import REVOLUTE
 
 def kernel_arrays(model):
