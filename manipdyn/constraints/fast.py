@@ -7,8 +7,8 @@ Gram–Schmidt, and Eq. 27 on them by the Schur complement with Cholesky of M.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays, rnea_kernel
 from ..dynamics.kinematics import supports
 from ..errors import NumericalError, SingularError

@@ -11,8 +11,8 @@ overflow, checked at the end of each state's pass), or -1. Compiled code is cach
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from .._jit import njit
 from ..model import REVOLUTE
 
 def kernel_arrays(model):

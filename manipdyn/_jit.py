@@ -1,0 +1,109 @@
+"""The decorator of every compiled kernel: numba's ``njit``, with an on-disk cache that no edit can outlive,
+and a switch to run the kernels as plain Python.
+
+numba stamps a cached function with its own source file only. constraints/fast.py calls (and inlines)
+kernels of dynamics/fast.py, so after an edit to dynamics/fast.py numba would load the closed-chain
+kernel's stale machine code. Here every kernel's cache lives in a folder named by a hash of all the kernel
+sources (``KERNEL_SOURCES``): editing any of them selects a fresh folder, and everything recompiles.
+
+Cache folder: ``<base>/numba-<sha256[:16]>``, base = numba's ``NUMBA_CACHE_DIR`` if the user set it, else
+``manipdyn/__pycache__`` if writable (older ``numba-*`` folders there are removed), else the user cache
+directory (``~/.cache/manipdyn``). If none is writable the kernels compile without a disk cache.
+
+Switches (environment, read at import):
+  MANIPDYN_NOJIT=1     the kernels run uncompiled, as the Python functions they are written as (slow: for
+                       reading, stepping through with pdb, or checking the compiled code against itself)
+  NUMBA_DISABLE_JIT=1  numba's own switch: the same for every numba function in the process
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+from contextlib import contextmanager
+from pathlib import Path
+
+import numba
+
+PACKAGE = Path(__file__).resolve().parent
+KERNEL_SOURCES = ("_jit.py", "dynamics/fast.py", "constraints/fast.py")   # every file a kernel's code lives in
+NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
+_FOLDER = re.compile(r"numba-[0-9a-f]{16}")
+
+
+def source_hash(root=PACKAGE, files=KERNEL_SOURCES):
+    """sha256 (hex) over the names and bytes of the kernel sources, or None if one cannot be read."""
+    h = hashlib.sha256()
+    try:
+        for name in files:
+            h.update(name.encode() + b"\0" + (Path(root) / name).read_bytes() + b"\0")
+    except OSError:
+        return None
+    return h.hexdigest()
+
+
+def _writable(path):
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / f".probe-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+        return True
+    except OSError:
+        return False
+
+
+def cache_dir(root=PACKAGE, user_base=None):
+    """The folder every kernel of this source tree caches into (Path), or None (no disk cache)."""
+    digest = source_hash(root)
+    if digest is None:
+        return None
+    name = f"numba-{digest[:16]}"
+    user_base = numba.config.CACHE_DIR if user_base is None else user_base
+    if user_base:
+        return Path(user_base) / name if _writable(Path(user_base) / name) else None
+    in_tree = Path(root) / "__pycache__"
+    if _writable(in_tree / name):
+        _prune(in_tree, name)
+        return in_tree / name
+    home = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "manipdyn"
+    return home / name if _writable(home / name) else None
+
+
+def _prune(base, keep):
+    """Remove the cache folders of earlier sources from base (never a user-given folder)."""
+    for p in base.iterdir():
+        if p.name != keep and _FOLDER.fullmatch(p.name) and p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+
+
+@contextmanager
+def _numba_cache_dir(path):
+    """numba.config.CACHE_DIR = path while a dispatcher picks its cache locator (at decoration)."""
+    old = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = str(path)
+    try:
+        yield
+    finally:
+        numba.config.CACHE_DIR = old
+
+
+_CACHE = None if NOJIT else cache_dir()
+
+
+def njit(*args, cache=False, **options):
+    """numba.njit; with cache=True the disk cache is the keyed folder above. Under MANIPDYN_NOJIT=1 the
+    function is returned as it is."""
+    def decorate(func):
+        if NOJIT:
+            return func
+        if not (cache and _CACHE is not None):
+            return numba.njit(*sigs, **options)(func)
+        with _numba_cache_dir(_CACHE):
+            return numba.njit(*sigs, cache=True, **options)(func)
+    if args and callable(args[0]):
+        sigs = ()
+        return decorate(args[0])
+    sigs = args
+    return decorate

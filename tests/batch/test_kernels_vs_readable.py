@@ -1,0 +1,267 @@
+"""Every compiled kernel against the plain recursion it compiles (DESIGN.md §4b, §5), output array by
+output array, one state (the *_one kernels) and batches of 1 and 7 (the batch kernels), on the bundled
+models, the example-robot-data arms, random trees and random spatial loops — closed-chain kernels also
+off the closures (random q, q̇ that violate them).
+
+The kernels are called directly (dynamics/fast.py, constraints/fast.py), so no wrapper can route around
+them; the references are the readable modules: rnea_terms (rnea.py), aba_reference (aba.py), _crba
+(lagrange.py, method="crba_reference"), closure_terms and independent_rows (closures.py) and the KKT solve
+of constraints/dynamics.py, fed by those readable references only — never by a compiled kernel.
+"""
+import functools
+import warnings
+
+import numpy as np
+import pytest
+from conftest import ROOT, err, inertial_xml, urdf, zoo_paths
+
+import manipdyn as md
+from manipdyn.constraints.closures import RANK_RTOL, closure_terms, independent_rows
+from manipdyn.constraints.dynamics import _kkt
+from manipdyn.constraints.fast import closure_arrays, closure_kernel, constrained_fd_kernel
+from manipdyn.dynamics.aba import aba_reference
+from manipdyn.dynamics.fast import aba_kernel, aba_one, crba_kernel, crba_one, kernel_arrays, rnea_kernel, rnea_one
+from manipdyn.spatial import rpy_matrix
+from manipdyn.validation import random_states
+
+SHAPES = (None, 1, 7)                     # None: one state (nv,) through *_one; else a batch (N, nv)
+
+
+# ---- models ---------------------------------------------------------------------------------------------
+
+def _random_tree_text(seed, n, kinds=("revolute", "continuous", "prismatic", "fixed"), parents=None):
+    """URDF of a random tree of n joints: random parents (unless given: link index, -1 = base), axes,
+    placements, inertias."""
+    rng = np.random.default_rng(seed)
+    links, joints = {"base": ""}, []
+    for k in range(n):
+        parent = "base" if k == 0 or rng.random() < 0.2 else f"L{rng.integers(0, k)}"
+        if parents is not None:
+            parent = "base" if parents[k] < 0 else f"L{parents[k]}"
+        d = rng.uniform(0.05, 1.0, 3)                                # principal moments from a valid body
+        m = rng.uniform(0.1, 3.0)
+        I = np.array([d[1] + d[2], d[0] + d[2], d[0] + d[1]]) * m / 10
+        links[f"L{k}"] = inertial_xml(m, rng.uniform(-0.3, 0.3, 3), (*I, 0, 0, 0), rng.uniform(-np.pi, np.pi, 3))
+        axis = rng.normal(size=3)
+        joints.append((f"j{k:02d}", kinds[rng.integers(len(kinds))] if k else "revolute", parent, f"L{k}",
+                       rng.uniform(-0.5, 0.5, 3), rng.uniform(-np.pi, np.pi, 3), axis / np.linalg.norm(axis)))
+    return urdf(links, joints, name=f"random{seed}")
+
+
+def _rpy(R):
+    """URDF roll-pitch-yaw of R = Rz(y) Ry(p) Rx(r)."""
+    return np.arctan2(R[2, 1], R[2, 2]), -np.arcsin(np.clip(R[2, 0], -1, 1)), np.arctan2(R[1, 0], R[0, 0])
+
+
+def _num(x):
+    return " ".join(repr(float(t)) for t in x)
+
+
+def _closed_text(seed, n, closures):
+    """A random spatial tree (revolute and prismatic joints) with <constraint>s (type, parent link, child
+    link) that hold at a random configuration q0: the closure frame is a random world pose, written in each
+    link's frame. Returns (URDF text, q0)."""
+    text = _random_tree_text(seed, n, kinds=("revolute", "revolute", "prismatic"), parents=TWO_ARMS)
+    tree = md.load_urdf_string(text)
+    rng = np.random.default_rng(seed + 1000)
+    q0 = rng.uniform(-1.0, 1.0, tree.nv)
+    out = []
+    for i, (kind, a, b) in enumerate(closures):
+        x, Rw, e = rng.uniform(-0.5, 0.5, 3), rpy_matrix(rng.uniform(-np.pi, np.pi, 3)), rng.normal(size=3)
+        side = []
+        for role, link in (("parent", a), ("child", b)):
+            R, p = md.frame_placement(tree, q0, link)
+            xl, Rl, el = R.T @ (x - p), R.T @ Rw, R.T @ e / np.linalg.norm(e)
+            side.append(f'<{role} link="{link}"/><{role}_origin xyz="{_num(xl)}" rpy="{_num(_rpy(Rl))}"/>'
+                        f'<{role}_axis xyz="{_num(el)}"/>')
+        out.append(f'<constraint name="c{i}" type="{kind}">{"".join(side)}</constraint>')
+    return text.replace("</robot>", "".join(out) + "</robot>"), q0
+
+
+# Spatial loops whose closure rows are all independent: a trunk L0-L3 carrying two arms L4-L10 and L11-L17
+# (18 joints); a fixed closure between the arms' tips (14 joints in its loop), a spherical one from the
+# base to arm 1 and a revolute one from the base to arm 2 (8 joints each): 6 + 3 + 5 = 14 rows, 4 dof.
+TWO_ARMS = [-1, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 3, 11, 12, 13, 14, 15, 16]
+SPATIAL_LOOPS = {name: (seed, 18, [("fixed", "L10", "L17"), ("spherical", "base", "L7"), ("revolute", "base", "L14")])
+                 for name, seed in (("loops11", 11), ("loops12", 12))}
+RANDOM_TREES = {"tree5": (5, 12), "tree6": (6, 20)}
+
+
+@functools.lru_cache(maxsize=None)
+def _load(name):
+    """The model, and an assembled configuration for the spatial loops (else None)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if name in RANDOM_TREES:
+            return md.load_urdf_string(_random_tree_text(*RANDOM_TREES[name])), None
+        if name in SPATIAL_LOOPS:
+            text, q0 = _closed_text(*SPATIAL_LOOPS[name])
+            return md.load_urdf_string(text), q0
+        if (ROOT / "urdf" / f"{name}.urdf").is_file():
+            return md.load_urdf(ROOT / "urdf" / f"{name}.urdf"), None
+        return md.load_urdf(next(p for p in zoo_paths() if p.stem == name)), None
+
+
+OPEN = ["aau_arm", "spm", "fourbar"] + [p.stem for p in zoo_paths()] + list(RANDOM_TREES)
+CLOSED = ["fourbar", "spm"] + list(SPATIAL_LOOPS)
+
+
+# ---- the kernels, called directly, and their readable references ----------------------------------------
+
+def _states(model, n, seed):
+    Q, V, A = random_states(model, 7 if n is None else n, np.random.default_rng(seed))
+    return (Q[0], V[0], A[0]) if n is None else (Q, V, A)
+
+
+def _call(one, batch, n, *args, out):
+    code = (one if n is None else batch)(*args, out)
+    assert code == -1, f"kernel returned {code}"
+    return out
+
+
+def open_chain_errors(model, n):
+    """err (§3 measure) of τ, M and q̈ of the kernels against the readable recursions, for shape n."""
+    I, F = kernel_arrays(model)
+    q, v, a = _states(model, n, 31)
+    tau = _call(rnea_one, rnea_kernel, n, I, F, q, v, a, out=np.empty(q.shape))
+    M = _call(crba_one, crba_kernel, n, I, F, q, out=np.empty(q.shape + (model.nv,)))
+    t = np.random.default_rng(32).normal(0.0, 5.0, q.shape)
+    qdd = _call(aba_one, aba_kernel, n, I, F, q, v, t, out=np.empty(q.shape))
+    return {"tau": err(tau, md.rnea_terms(model, q, v, a)["tau"]),
+            "M": err(M, md.mass_matrix(model, q, method="crba_reference")),
+            "qdd": err(qdd, aba_reference(model, q, v, t))}
+
+
+def readable_constrained_fd(model, Q, V, T, baumgarte):
+    """q̈, λ and rank of Eq. 27 from the readable modules only (no compiled M or h)."""
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    c = -bias
+    if baumgarte is not None:
+        c = c - 2.0 * baumgarte[0] * np.einsum("nij,nj->ni", Jc, V) - baumgarte[1] ** 2 * Phi
+    rhs = T - md.rnea_terms(model, Q, V, np.zeros_like(Q))["tau"]
+    M = md.mass_matrix(model, Q, method="crba_reference")
+    qdd, lam, rank = np.empty_like(Q), np.zeros_like(Phi), np.empty(len(Q), int)
+    for s in range(len(Q)):
+        keep = independent_rows(Jc[s], phi=Phi[s])
+        qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
+        rank[s] = len(keep)
+    return qdd, lam, rank
+
+
+def closed_states(model, q0, n, where, rng):
+    """n states (q, q̇): "on" the closures (assembled, q̇ consistent), "near" them (q off by N(0, 1e-6²),
+    as inside an integrator step, q̇ random) or "far" (random q and q̇; Φ of order 1)."""
+    from manipdyn.validation.closed import manifold_states
+    if where == "far":
+        return random_states(model, n, rng)[:2]
+    if q0 is None:
+        Q, V = manifold_states(model, n, rng)
+    else:                                              # local sampling around the assembled q0
+        out = []
+        while len(out) < n:
+            try:
+                out.append(md.project(model, q0 + rng.normal(0.0, 0.1, model.nv), rng.normal(0.0, 2.0, model.nv)))
+            except md.ConstraintError:                 # Newton from too far: draw again
+                continue
+        Q, V = np.array([q for q, _ in out]), np.array([v for _, v in out])
+    if where == "near":
+        Q, V = Q + rng.normal(0.0, 1e-6, Q.shape), rng.normal(0.0, 2.0, Q.shape)
+    return Q, V
+
+
+def closed_chain_errors(model, q0, n, where, baumgarte):
+    """err of Φ, Φ_q, Φ̇_q q̇ (closure_kernel, state by state) and of q̈, λ (constrained_fd_kernel) against
+    the readable code, for n states (None: one); the ranks must agree exactly. Returns the errors and the
+    smallest rank."""
+    N = 1 if n is None else n
+    rng = np.random.default_rng(41)
+    Q, V = closed_states(model, q0, N, where, rng)
+    T = rng.normal(0.0, 5.0, Q.shape)
+    I, F = kernel_arrays(model)
+    CI, CF, S = closure_arrays(model)
+    m = sum(c.n_rows for c in model.constraints)
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    out = {"phi": 0.0, "jac": 0.0, "bias": 0.0}
+    for s in range(N):
+        k_phi, k_jac, k_bias = np.empty(m), np.empty((m, model.nv)), np.empty(m)
+        closure_kernel(I, F, CI, CF, S, Q[s], V[s], k_phi, k_jac, k_bias)
+        for key, x, y in (("phi", k_phi, Phi[s]), ("jac", k_jac, Jc[s]), ("bias", k_bias, bias[s])):
+            out[key] = max(out[key], err(x, y))
+    alpha, beta = (0.0, 0.0) if baumgarte is None else baumgarte
+    QDD, LAM, RANK = np.empty(Q.shape), np.empty((N, m)), np.empty(N, np.int64)
+    code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    assert code == -1, f"kernel returned {code}"
+    qdd, lam, rank = readable_constrained_fd(model, Q, V, T, baumgarte)
+    assert RANK.tolist() == rank.tolist(), f"rank {RANK} != readable {rank}"
+    out["qdd"], out["lam"] = err(QDD, qdd), err(LAM, lam)
+    return out, int(rank.min())
+
+
+# ---- tolerances: §3 error measure, the worst over the three shapes (and both Baumgarte settings) as
+# measured on correct code, × 30 rounded up; "measured" beside each --------------------------------------
+OPEN_TOL = {                                                              # measured: τ, M, q̈
+    "aau_arm": dict(tau=2e-14, M=6e-15, qdd=5e-15),                       # 4.2e-16 2.0e-16 1.4e-16
+    "spm": dict(tau=7e-16, M=2e-17, qdd=2e-14),                           # 2.1e-17 4.3e-19 3.9e-16
+    "fourbar": dict(tau=7e-15, M=3e-16, qdd=6e-15),                       # 2.2e-16 6.9e-18 1.7e-16
+    "ur5_robot": dict(tau=9e-15, M=9e-15, qdd=8e-16),                     # 2.9e-16 2.7e-16 2.6e-17
+    "ur10_robot": dict(tau=2e-14, M=1e-14, qdd=4e-15),                    # 4.1e-16 3.3e-16 1.0e-16
+    "ur3_robot": dict(tau=2e-14, M=7e-15, qdd=3e-15),                     # 5.8e-16 2.2e-16 8.6e-17
+    "ur5_gripper": dict(tau=2e-14, M=2e-14, qdd=2e-15),                   # 4.4e-16 4.1e-16 5.3e-17
+    "panda": dict(tau=2e-14, M=8e-15, qdd=8e-15),                         # 5.9e-16 2.5e-16 2.6e-16
+    "kinova": dict(tau=7e-15, M=7e-15, qdd=2e-15),                        # 2.2e-16 2.1e-16 4.8e-17
+    "xarm7": dict(tau=3e-14, M=8e-15, qdd=6e-16),                         # 9.0e-16 2.4e-16 1.9e-17
+    "z1": dict(tau=2e-14, M=7e-15, qdd=2e-14),                            # 4.9e-16 2.2e-16 3.4e-16
+    "so100": dict(tau=5e-15, M=3e-16, qdd=2e-15),                         # 1.7e-16 6.9e-18 6.6e-17
+    "so101": dict(tau=2e-14, M=6e-17, qdd=2e-15),                         # 4.4e-16 1.7e-18 5.1e-17
+    "double_pendulum": dict(tau=4e-15, M=8e-17, qdd=8e-15),               # 1.1e-16 2.6e-18 2.6e-16
+    "double_pendulum_continuous": dict(tau=4e-15, M=8e-17, qdd=8e-15),    # 1.1e-16 2.6e-18 2.6e-16
+    "TwoDofs": dict(tau=9e-16, M=2e-16, qdd=6e-15),                       # 2.8e-17 3.5e-18 1.8e-16
+    "finger_edu": dict(tau=3e-15, M=3e-17, qdd=3e-14),                    # 8.3e-17 8.7e-19 7.9e-16
+    "allegro_right_hand": dict(tau=7e-16, M=5e-18, qdd=2e-14),            # 2.1e-17 1.6e-19 4.1e-16
+    "allegro_left_hand": dict(tau=5e-16, M=5e-18, qdd=7e-15),             # 1.4e-17 1.6e-19 2.1e-16
+    "baxter": dict(tau=2e-14, M=6e-15, qdd=2e-14),                        # 5.6e-16 2.0e-16 5.9e-16
+    "talos_left_arm": dict(tau=2e-14, M=7e-15, qdd=2e-14),                # 6.4e-16 2.2e-16 3.9e-16
+    "tree5": dict(tau=2e-14, M=8e-15, qdd=1e-14),                         # 6.5e-16 2.6e-16 3.1e-16
+    "tree6": dict(tau=3e-14, M=9e-15, qdd=3e-14),                         # 6.8e-16 2.9e-16 7.3e-16
+}
+CLOSED_TOL = {                                                          # measured: Φ, Φ_q, Φ̇_q q̇, q̈, λ
+    ("fourbar", "on"):  (3e-15, 2e-15, 2e-14, 4e-14, 5e-14),            # 8.3e-17 5.6e-17 4.2e-16 1.2e-15 1.7e-15
+    ("fourbar", "near"): (3e-15, 3e-15, 2e-14, 5e-14, 5e-14),           # 8.3e-17 8.3e-17 3.7e-16 1.4e-15 1.5e-15
+    ("fourbar", "far"): (2e-15, 2e-15, 8e-15, 3e-15, 0.0),              # 5.6e-17 5.6e-17 2.5e-16 9.0e-17 0.0e+00
+    ("spm", "on"):      (1e-14, 2e-14, 2e-14, 7e-14, 3e-14),            # 3.2e-16 4.4e-16 6.0e-16 2.3e-15 8.5e-16
+    ("spm", "near"):    (3e-14, 2e-14, 5e-14, 8e-14, 4e-14),            # 7.7e-16 4.4e-16 1.4e-15 2.4e-15 1.2e-15
+    ("spm", "far"):     (2e-14, 2e-14, 3e-14, 9e-15, 0.0),              # 3.6e-16 4.4e-16 9.8e-16 3.0e-16 0.0e+00
+    ("loops11", "on"):  (4e-14, 2e-14, 7e-14, 2e-12, 4e-12),            # 1.0e-15 6.2e-16 2.2e-15 6.1e-14 1.0e-13
+    ("loops11", "near"): (4e-14, 2e-14, 3e-14, 2e-12, 3e-12),           # 1.3e-15 6.2e-16 8.5e-16 6.4e-14 9.6e-14
+    ("loops11", "far"): (3e-14, 4e-14, 4e-14, 1e-13, 0.0),              # 6.8e-16 1.0e-15 1.3e-15 3.2e-15 0.0e+00
+    ("loops12", "on"):  (2e-14, 2e-14, 1e-13, 5e-13, 2e-13),            # 6.7e-16 6.2e-16 3.3e-15 1.6e-14 5.5e-15
+    ("loops12", "near"): (3e-14, 2e-14, 5e-14, 6e-13, 5e-13),           # 8.9e-16 6.1e-16 1.3e-15 1.8e-14 1.6e-14
+    ("loops12", "far"): (3e-14, 3e-14, 2e-13, 7e-14, 0.0),              # 9.3e-16 8.3e-16 3.4e-15 2.2e-15 0.0e+00
+}
+CLOSED_KEYS = ("phi", "jac", "bias", "qdd", "lam")
+RANK = {"fourbar": 2, "spm": 4, "loops11": 14, "loops12": 14}     # on or near the closures; far: 0 rows kept
+
+
+def _check(errors, tol, what):
+    bad = [f"{k}: err {e:.2e} > tol {tol[k]:.0e}" for k, e in errors.items() if not e <= tol[k]]
+    assert not bad, f"{what}: " + "; ".join(bad)
+
+
+@pytest.mark.parametrize("n", SHAPES, ids=lambda n: "one" if n is None else f"N{n}")
+@pytest.mark.parametrize("name", OPEN)
+def test_open_chain_kernels_equal_readable(name, n):
+    model, _ = _load(name)
+    _check(open_chain_errors(model, n), OPEN_TOL[name], f"{name}, {n} states")
+
+
+@pytest.mark.parametrize("baumgarte", [None, (3.0, 4.0)], ids=["plain", "baumgarte"])
+@pytest.mark.parametrize("where", ["on", "near", "far"])
+@pytest.mark.parametrize("n", SHAPES, ids=lambda n: "one" if n is None else f"N{n}")
+@pytest.mark.parametrize("name", CLOSED)
+def test_closed_chain_kernels_equal_readable(name, n, where, baumgarte):
+    model, q0 = _load(name)
+    errors, rank = closed_chain_errors(model, q0, n, where, baumgarte)
+    _check(errors, dict(zip(CLOSED_KEYS, CLOSED_TOL[name, where])), f"{name}, {where}, {n} states")
+    assert rank == (0 if where == "far" else RANK[name])
+    if name in SPATIAL_LOOPS and where != "far":        # every closure row independent: no bug can hide
+        assert rank == sum(c.n_rows for c in model.constraints)

@@ -1,0 +1,134 @@
+"""numba's on-disk cache must never hide an edit: changing any kernel source recompiles every compiled
+function that depends on it, across modules (constraints/fast.py inlines callees of dynamics/fast.py).
+
+The end-to-end case copies the package to a temporary folder, runs it in a fresh interpreter to fill the
+cache, flips a sign in a callee of dynamics/fast.py in the copy, and runs it again in a fresh interpreter:
+the numbers must be those of the edited source — checked against the same edited source run uncompiled
+(MANIPDYN_NOJIT=1) in a second copy, not merely "different".
+"""
+import ast
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import ROOT, assert_close
+
+from manipdyn import _jit
+
+# rnea_one (dynamics/fast.py) and closure_kernel (constraints/fast.py, which inlines _joint_rotation of
+# dynamics/fast.py) on one fixed state of the spherical parallel manipulator (spatial axes).
+PROBE = f"""
+import json, numpy as np, manipdyn as md
+from manipdyn.constraints.fast import closure_rows
+m = md.load_urdf({str(ROOT / "urdf" / "spm.urdf")!r})
+rng = np.random.default_rng(3)
+q, v, a = rng.uniform(-3, 3, m.nv), rng.normal(0, 2, m.nv), rng.normal(0, 5, m.nv)
+phi, jac, bias = closure_rows(m, q, v)
+import os; assert md.__file__.startswith(os.getcwd()), md.__file__    # the copy, not the checkout
+print(json.dumps(dict(tau=md.rnea(m, q, v, a).tolist(), phi=phi.tolist(), jac=jac.tolist(),
+                      bias=bias.tolist())))
+"""
+
+
+def _run(pkg_root, **env_extra):
+    env = {k: x for k, x in os.environ.items() if not k.startswith(("NUMBA_", "MANIPDYN_"))}
+    env.update(PYTHONPATH=str(pkg_root), **env_extra)
+    out = subprocess.run([sys.executable, "-c", PROBE], env=env, cwd=pkg_root, capture_output=True, text=True,
+                         timeout=900)                          # cwd: `-c` puts it first on sys.path
+    assert out.returncode == 0, out.stderr[-3000:]
+    return {k: np.array(x) for k, x in json.loads(out.stdout.splitlines()[-1]).items()}
+
+
+def _copy_package(dst):
+    shutil.copytree(ROOT / "manipdyn", dst / "manipdyn", ignore=shutil.ignore_patterns("__pycache__"))
+    return dst
+
+
+def _flip_rotation_sign(pkg_root):
+    """Plant a visible edit in a callee: _joint_rotation turns by −q instead of q."""
+    path = pkg_root / "manipdyn" / "dynamics" / "fast.py"
+    new, n = re.subn(r"s, c = np\.sin\(q\), np\.cos\(q\)", "s, c = -np.sin(q), np.cos(q)", path.read_text())
+    assert n == 1, "the edit site in _joint_rotation moved; update this test"
+    path.write_text(new)
+
+
+def _files(folder):
+    return {p: p.stat().st_mtime_ns for p in folder.rglob("*") if p.is_file()}
+
+
+def test_callee_edit_reaches_every_compiled_caller(tmp_path):
+    pkg, cache = _copy_package(tmp_path / "pkg"), tmp_path / "numba-cache"
+    before = _run(pkg, NUMBA_CACHE_DIR=str(cache))              # compiles and fills the cache
+    filled = _files(cache)
+    assert any(p.suffix == ".nbi" for p in filled)
+    assert _run(pkg, NUMBA_CACHE_DIR=str(cache)).keys() == before.keys()
+    assert _files(cache) == filled                              # unchanged sources: the cache is reused
+    _flip_rotation_sign(pkg)
+    after = _run(pkg, NUMBA_CACHE_DIR=str(cache))               # must recompile, not load the stale cache
+    fresh = _copy_package(tmp_path / "fresh")                   # the edited source, uncompiled, no cache
+    _flip_rotation_sign(fresh)
+    truth = _run(fresh, MANIPDYN_NOJIT="1")
+    for k in before:
+        assert np.max(np.abs(before[k] - truth[k])) > 1e-3, f"the planted edit does not change {k}"
+        # compiled vs uncompiled: the same arithmetic (measured 0 on all four; 1e-13 allows operation reordering)
+        assert_close(after[k], truth[k], 1e-13, f"{k} after editing a callee (stale compiled cache?)")
+
+
+def test_cache_folder_is_keyed_by_every_kernel_source(tmp_path):
+    pkg = _copy_package(tmp_path / "pkg") / "manipdyn"
+    first = _jit.cache_dir(pkg, user_base=str(tmp_path / "user"))
+    assert first.parent == tmp_path / "user" and first.is_dir()          # a user's NUMBA_CACHE_DIR is the base
+    in_tree = _jit.cache_dir(pkg, user_base="")
+    assert in_tree.parent == pkg / "__pycache__" and in_tree.name == first.name
+    for name in _jit.KERNEL_SOURCES:
+        path = pkg / name
+        text = path.read_text()
+        path.write_text(text + "\n# edited\n")
+        assert _jit.cache_dir(pkg, user_base="").name != first.name, f"an edit of {name} keeps the cache"
+        path.write_text(text)
+    assert _jit.cache_dir(pkg, user_base="").name == first.name
+    path.write_text(text + "\n# edited\n")
+    _jit.cache_dir(pkg, user_base="")
+    assert not in_tree.exists()                                          # stale in-tree folders are pruned
+
+
+def _jitted_functions(tree):
+    """Names of the module's functions decorated with njit."""
+    def is_njit(d):
+        d = d.func if isinstance(d, ast.Call) else d
+        return isinstance(d, ast.Name) and d.id == "njit" or isinstance(d, ast.Attribute) and d.attr == "njit"
+    return [f for f in ast.walk(tree) if isinstance(f, ast.FunctionDef) and any(map(is_njit, f.decorator_list))]
+
+
+def test_kernel_sources_cover_every_compiled_dependency():
+    """Every module with a compiled function, and every package module a compiled function takes a
+    name from, is hashed into the cache key."""
+    pkg = ROOT / "manipdyn"
+    listed = set(_jit.KERNEL_SOURCES)
+    for path in pkg.rglob("*.py"):
+        rel = path.relative_to(pkg).as_posix()
+        tree = ast.parse(path.read_text())
+        jitted = _jitted_functions(tree)
+        if not jitted:
+            continue
+        assert rel in listed, f"{rel} defines compiled functions but is not in _jit.KERNEL_SOURCES"
+        assert "from numba import njit" not in path.read_text(), f"{rel}: use manipdyn._jit.njit"
+        imported = {}                          # name -> source file of `from .x import name` (package only)
+        for node in tree.body:
+            if isinstance(node, ast.ImportFrom) and node.level > 0:
+                base = path.parent
+                for _ in range(node.level - 1):
+                    base = base.parent
+                src = (base / (node.module or "").replace(".", "/")).with_suffix(".py").relative_to(pkg)
+                for a in node.names:
+                    imported[a.asname or a.name] = src.as_posix()
+        for f in jitted:
+            used = {n.id for n in ast.walk(f) if isinstance(n, ast.Name)}
+            for name in used & imported.keys():
+                assert imported[name] in listed, \
+                    f"{rel}:{f.name} compiles {name} from {imported[name]}, which is not in _jit.KERNEL_SOURCES"
