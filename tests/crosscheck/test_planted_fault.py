@@ -56,4 +56,4 @@ def test_cli_passes_on_bundled_models(tmp_path, capsys):
     data = json.loads(out.read_text())
     assert data and all(r["passed"] for r in data)
     assert any(r["name"] for r in data)
-    assert np.all([t["err"] <= 1e-12 for r in data for t in r["terms"]])
+    assert np.all([t["err"] <= 1e-13 for r in data for t in r["terms"]])   # measured 3.3e-15 (fourbar v̇')

@@ -22,7 +22,7 @@ def test_every_term_matches_pinocchio(path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = load_urdf(path)
-    rep = validate(model, path, n_states=1000, seed=1, tol=1e-12)
+    rep = validate(model, path, n_states=1000, seed=1, tol=5e-13)   # measured ≤ 7.4e-15 on every term (talos nle)
     bad = [f"{t.label}: {t.err:.2e}" for t in rep.terms if not t.passed]
     assert not bad, f"{path.name}: {bad}; {rep.fault}"
     assert rep.fault is None

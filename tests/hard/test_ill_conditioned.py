@@ -17,7 +17,7 @@ def test_well_conditioned_chain_is_exact():
     rows = ill_conditioned(n=6, spread=(1.0, 1.0), states=4, seed=1)
     _report(rows, "uniform masses")
     for r in rows:
-        assert max(r["aba"], r["cholesky"], r["pinocchio"]) <= 1e-12
+        assert max(r["aba"], r["cholesky"], r["pinocchio"]) <= 5e-13      # measured 1.7e-14
 
 
 @pytest.mark.parametrize("n", [6, 8])
@@ -28,7 +28,7 @@ def test_heavy_tip_on_light_root(n):
     for r in rows:
         assert all(np.isfinite([r["aba"], r["cholesky"], r["pinocchio"]]))
         for route in ("aba", "cholesky", "pinocchio"):       # backward-stable: error ≲ eps · cond(M)
-            assert r[route] <= 1e-14 * r["cond_M"]
+            assert r[route] <= 1e-15 * r["cond_M"]             # measured 2.8e-17 × cond (cholesky)
     # which route to trust: the recursive ABA never forms M, and beats the Cholesky route here
     assert np.median([r["aba"] for r in rows]) < 0.1 * np.median([r["cholesky"] for r in rows])
 
@@ -37,4 +37,4 @@ def test_heavy_root_light_tip_stays_accurate():
     rows = ill_conditioned(n=8, spread=(1e-6, 1e3), states=4, seed=3, lengths=(0.001, 0.5))
     _report(rows, "masses 1e3 (root) … 1e-6 kg (tip)")
     for r in rows:
-        assert r["cond_M"] > 1e8 and max(r["aba"], r["cholesky"], r["pinocchio"]) <= 1e-12
+        assert r["cond_M"] > 1e8 and max(r["aba"], r["cholesky"], r["pinocchio"]) <= 1e-13   # measured 2.1e-15

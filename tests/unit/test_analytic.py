@@ -17,7 +17,7 @@ def test_single_pendulum():
                                   [("j1", "revolute", "base", "l1", (0, 0, 0), (0, 0, 0), (0, 1, 0))]))
     for q, v, a in STATES[:, :, :1]:
         tau = (Iyy + m * c**2) * a + m * g * c * np.sin(q)
-        assert_close(rnea(model, q, v, a), tau, 1e-14, "pendulum")
+        assert_close(rnea(model, q, v, a), tau, 1e-14, "pendulum")  # measured 3.3e-16
 
 
 def test_double_pendulum():
@@ -35,7 +35,7 @@ def test_double_pendulum():
         Cv = np.array([-h * (2 * v[0] * v[1] + v[1]**2), h * v[0]**2])
         G = np.array([(m1 * c1 + m2 * l1) * g * np.sin(q[0]) + m2 * c2 * g * np.sin(q[0] + q[1]),
                       m2 * c2 * g * np.sin(q[0] + q[1])])
-        assert_close(rnea(model, q, v, a), M @ a + Cv + G, 1e-13, "double pendulum")
+        assert_close(rnea(model, q, v, a), M @ a + Cv + G, 2e-14, "double pendulum")  # measured 7.3e-16
 
 
 def test_polar_arm_revolute_prismatic():
@@ -50,14 +50,14 @@ def test_polar_arm_revolute_prismatic():
     for q, v, a in STATES:
         r, rd = q[1], v[1]
         tau = [(I0 + Izz + m * r**2) * a[0] + 2 * m * r * rd * v[0], m * (a[1] - r * v[0]**2)]
-        assert_close(rnea(model, q, v, a), np.array(tau), 1e-13, "polar arm")
+        assert_close(rnea(model, q, v, a), np.array(tau), 2e-14, "polar arm")  # measured 5.0e-16
 
 
 def test_vertical_slider_carries_its_weight():
     m = 3.0
     model = load_urdf_string(urdf({"base": "", "s": inertial_xml(m)},
                                   [("lift", "prismatic", "base", "s", (0, 0, 0), (0, 0, 0), (0, 0, 1))]))
-    assert_close(rnea(model, [0.2], [0.5], [1.5]), np.array([m * (1.5 + g)]), 1e-15, "slider")
+    assert_close(rnea(model, [0.2], [0.5], [1.5]), np.array([m * (1.5 + g)]), 1e-15, "slider")  # measured 0
 
 
 @pytest.mark.parametrize("frame", ["local", "world"])
@@ -73,7 +73,7 @@ def test_static_payload_equals_added_mass(frame):
         weight_world = np.array([0, 0, -mp * g])
         f = weight_world if frame == "world" else bare.frame("tool").R.T @ _Ry(q).T @ weight_world
         tau = rnea(bare, [q], [0.0], [0.0], f_ext={"tool": (f, np.zeros(3))}, f_ext_frame=frame)
-        assert_close(tau, rnea(loaded, [q], [0.0], [0.0]), 1e-14, "payload")
+        assert_close(tau, rnea(loaded, [q], [0.0], [0.0]), 1e-14, "payload")  # measured 2.9e-16
 
 
 def _Ry(t):

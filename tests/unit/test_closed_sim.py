@@ -26,9 +26,9 @@ def test_fourbar_torque_free_10s():
     print("\nfour-bar, 10 s torque-free, RK4 dt 0.5 ms: max |Φ| and energy drift")
     for k, (phi, drift) in out.items():
         print(f"  {k:<11} |Φ| {phi:.1e}   drift {drift:.1e}")
-    assert out["baumgarte"][0] <= 1e-10 and out["projection"][0] <= 1e-10
+    assert out["baumgarte"][0] <= 5e-10 and out["projection"][0] <= 5e-11   # measured 1.5e-11, 1.0e-12
     assert out["none"][0] > out["baumgarte"][0]                 # the drift stabilization removes
-    assert max(d for _, d in out.values()) < 1e-6               # torque-free: energy is kept
+    assert max(d for _, d in out.values()) < 1e-6               # measured 3.3e-8; torque-free: energy is kept
 
 
 def _spm_start():
@@ -52,5 +52,5 @@ def test_spm_held_by_pd_10s(stab):
                     baumgarte=(20.0, 20.0))
     phi = _phi(SPM, r)
     print(f"\nSPM, PD-held actuators, 10 s, {stab}: max |Φ| {phi.max():.1e}")
-    assert phi.max() <= 1e-10
+    assert phi.max() <= 1e-10                                   # measured 5.5e-12
     assert np.abs(r.q[:, act] - q0[act]).max() < 1.0            # the motion stays bounded

@@ -22,9 +22,9 @@ def states(request):
 def test_mass_matrix_symmetric_positive_definite(states):
     model, Q, _, _ = states
     M = md.mass_matrix(model, Q)
-    assert_close(M, np.swapaxes(M, 1, 2), 1e-15, "symmetry")
+    assert_close(M, np.swapaxes(M, 1, 2), 1e-15, "symmetry")  # measured 0 (symmetric by construction)
     assert np.all(np.linalg.eigvalsh(M)[:, 0] > 0)
-    assert_close(md.mass_matrix(model, Q, method="lagrange"), M, 1e-13, "Lagrange route = CRBA")
+    assert_close(md.mass_matrix(model, Q, method="lagrange"), M, 5e-14, "Lagrange route = CRBA")  # measured 1.0e-15
 
 
 def test_Mdot_minus_2C_is_skew(states):
@@ -33,9 +33,9 @@ def test_Mdot_minus_2C_is_skew(states):
     Mdot = np.einsum("nkij,nk->nij", mass_matrix_derivatives(model, Q), V)
     h = 1e-6
     fd = (md.mass_matrix(model, Q + h * V) - md.mass_matrix(model, Q - h * V)) / (2 * h)
-    assert_close(Mdot, fd, 1e-7, "Ṁ vs central difference")
+    assert_close(Mdot, fd, 5e-9, "Ṁ vs central difference")  # measured 1.1e-10 (central difference, h = 1e-6)
     N = Mdot - 2 * md.coriolis_matrix(model, Q, V)
-    assert_close(N, -np.swapaxes(N, 1, 2), 1e-13, "Ṁ − 2C skew")
+    assert_close(N, -np.swapaxes(N, 1, 2), 1e-14, "Ṁ − 2C skew")  # measured 1.4e-16
 
 
 def test_forward_routes_agree_and_invert_rnea(states):
@@ -45,7 +45,7 @@ def test_forward_routes_agree_and_invert_rnea(states):
         qdd = md.forward_dynamics(model, Q, V, tau, method=method)
         cond = np.linalg.cond(md.mass_matrix(model, Q))
         for s in range(len(Q)):
-            assert_close(qdd[s], A[s], 1e-14 * cond[s], f"{method} inverts rnea")
+            assert_close(qdd[s], A[s], 1e-14 * cond[s], f"{method} inverts rnea")  # measured 5.2e-16 × cond
 
 
 def test_f_ext_in_forward_dynamics(states):
@@ -65,7 +65,7 @@ def test_lagrange_equals_newton_euler(states):
     model, Q, V, A = states
     M, C, g = md.mass_matrix(model, Q), md.coriolis_matrix(model, Q, V), md.gravity_torques(model, Q)
     lhs = np.einsum("nij,nj->ni", M, A) + np.einsum("nij,nj->ni", C, V) + g
-    assert_close(lhs, md.rnea(model, Q, V, A), 1e-13, "M q̈ + C q̇ + g = τ")
+    assert_close(lhs, md.rnea(model, Q, V, A), 2e-14, "M q̈ + C q̇ + g = τ")  # measured 4.1e-16
 
 
 def test_singular_mass_matrix_names_the_joint():

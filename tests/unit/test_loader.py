@@ -57,9 +57,9 @@ def test_fixed_joints_merge_and_frames_stay_addressable():
     # merged mass and CoM against a hand computation (parallel-axis theorem checked against Pinocchio)
     c_tool = fr.p + fr.R @ np.array([0, 0, 0.05])
     assert model.mass[0] == 3.0
-    assert_close(model.com[0], (2.0 * np.array([0.1, 0, 0]) + 1.0 * c_tool) / 3.0, 1e-15, "com")
+    assert_close(model.com[0], (2.0 * np.array([0.1, 0, 0]) + 1.0 * c_tool) / 3.0, 1e-15, "com")  # measured 0
     pm = pin.buildModelFromXML(urdf(links, joints))
-    assert_close(model.inertia[0], pm.inertias[1].inertia, 1e-14, "merged inertia")
+    assert_close(model.inertia[0], pm.inertias[1].inertia, 2e-15, "merged inertia")  # measured 5.6e-17
 
 
 def test_massless_links_and_zero_inertia_are_valid():
