@@ -22,6 +22,11 @@ class Fault:
     tests: tuple
     what: str
 
+    @property
+    def relevant(self) -> tuple:
+        """The fault's own test paths, then the strongest tests of its area (AREA_TESTS), without repeats."""
+        return tuple(dict.fromkeys(self.tests + AREA_TESTS.get(self.area, ())))
+
     def __post_init__(self):
         if not isinstance(self.tests, tuple) or not self.tests:
             raise TypeError(f"fault {self.name!r}: tests must be a non-empty tuple of paths")
@@ -40,6 +45,17 @@ _CLOSED_FAST = "tests/batch/test_fast_paths.py::test_closed_chain_kernel_equals_
 _SPM = "tests/unit/test_spm_chapter.py"
 _DH = "tests/unit/test_dh.py"
 
+# The tests written to hold each area to an independent reference, run right after a fault's own tests.
+AREA_TESTS = {
+    "loader": ("tests/unit/test_q_order.py",),
+    "kinematics": ("tests/unit/test_analytic_spatial.py",),
+    "rnea": ("tests/batch/test_kernels_vs_readable.py", "tests/unit/test_analytic_spatial.py"),
+    "lagrange": ("tests/unit/test_analytic_spatial.py", "tests/batch/test_kernels_vs_readable.py"),
+    "aba": ("tests/batch/test_kernels_vs_readable.py",),
+    "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
+    "integrators": ("tests/unit/test_symplectic_euler.py",),
+}
+
 FAULTS = (
     # ---------------------------------------------------------------- loader (io/urdf.py, spatial.py)
     Fault("urdf-q-order-by-link-name", "loader", "manipdyn/io/urdf.py",
@@ -51,8 +67,8 @@ FAULTS = (
           "inertias = [combine_inertias(parts[i][:1]) for i in range(nv)]",
           (_LOADER,), "a body keeps only its own link's inertia: links merged by fixed joints lose their mass"),
     Fault("urdf-axis-not-normalised", "loader", "manipdyn/io/urdf.py",
-          "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a / n\n",
-          "        notes.append(f\"joint {j.name!r}: axis {a.tolist()} normalised\")\n    return a\n",
+          "    u = u / np.linalg.norm(u)\n",
+          "    u = u / np.linalg.norm(u) * np.linalg.norm(a / scale) * scale\n",
           (_LOADER, "tests/properties/test_random_trees.py"),
           "a joint axis of length ≠ 1 is noted as normalised but kept as written"),
     Fault("urdf-inertial-rpy-ignored", "loader", "manipdyn/io/urdf.py",
@@ -65,10 +81,10 @@ FAULTS = (
           "y, p, r = (float(x) for x in rpy)",
           (_LOADER, _DH, _FOURBAR), "rpy read as (yaw, pitch, roll): constraint origins and D-H tool frames turn wrongly"),
     Fault("spatial-parallel-axis-sign", "loader", "manipdyn/spatial.py",
-          "return mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
-          "return mass * (np.dot(d, d) * np.eye(3) + np.outer(d, d))",
+          "[-x * y, x * x + z * z, -y * z],",
+          "[x * y, x * x + z * z, -y * z],",
           (_LOADER, "tests/crosscheck/test_reduce.py"),
-          "parallel-axis theorem with + d dᵀ: merged (fixed-joint) and reduced bodies get wrong inertia"),
+          "parallel-axis theorem with one product term of the wrong sign: merged (fixed-joint) and reduced bodies get wrong inertia"),
     # ---------------------------------------------------------------- kinematics (dynamics/kinematics.py)
     Fault("kin-jdot-local-term-sign", "kinematics", "manipdyn/dynamics/kinematics.py",
           "dJ = _to_local(dJ, Rf) - np.concatenate(",
@@ -137,8 +153,8 @@ FAULTS = (
           "dM[:, k] += 2.0 * sym",
           (_PROPS,), "∂M/∂q_k = 2 Jᵀ ∂J instead of ∂Jᵀ J + Jᵀ ∂J (not symmetrised)"),
     Fault("lagrange-g-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
-          'return unbatch(-np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
-          'return unbatch(np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity), single)',
+          'g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)',
+          'g = np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)',
           (_PROPS, "tests/unit/test_integrate.py"), "g(q) = +Σ m Jᵀ g (sign of ∂V/∂q)"),
     Fault("fast-crba-shift-factor", "lagrange", "manipdyn/dynamics/fast.py",
           "+ (2.0 * ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]",

@@ -80,7 +80,7 @@ def check_faults(faults, root=ROOT):
             problems.append(f"fault {f.name!r}: old and new snippets are the same")
         if f.area not in AREAS:
             problems.append(f"fault {f.name!r}: unknown area {f.area!r}")
-        for t in f.tests:
+        for t in f.relevant:
             if not (root / t.split("::")[0]).exists():
                 problems.append(f"fault {f.name!r}: test path {t} does not exist")
     return problems
@@ -143,7 +143,7 @@ def run_fault(fault: Fault, *, rest=True, timeout=3600.0, keep=False, root=ROOT)
         copy_root, cache = make_copy(tmp / "repo", root), tmp / "numba-cache"
         cache.mkdir()
         apply_fault(fault, copy_root)
-        phases = [("relevant", list(fault.tests))] + ([("rest", _rest_args(fault.tests))] if rest else [])
+        phases = [("relevant", list(fault.relevant))] + ([("rest", _rest_args(fault.relevant))] if rest else [])
         for phase, args in phases:
             left = timeout - (time.perf_counter() - t0)
             code, out = _pytest(copy_root, cache, args, max(left, 1.0))
@@ -253,7 +253,7 @@ def main(argv=None) -> int:
         return 2
     if args.list:
         for f in chosen:
-            print(f"{f.name:<42} {f.area:<12} {f.file:<36} {f.what}\n{'':<55}tests: {', '.join(f.tests)}")
+            print(f"{f.name:<42} {f.area:<12} {f.file:<36} {f.what}\n{'':<55}tests: {', '.join(f.relevant)}")
         print(f"{len(chosen)} faults")
         return 0
     t0 = time.perf_counter()

@@ -34,8 +34,8 @@ import numpy as np
 import yourdfpy
 from lxml import etree
 
-from ..errors import InertiaWarning, InputError, ModelError, URDFError
-from ..model import PRISMATIC, REVOLUTE, Constraint, Frame, Model
+from ..errors import InertiaWarning, ModelError, URDFError
+from ..model import PRISMATIC, REVOLUTE, Constraint, Frame, Model, check_gravity
 from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
@@ -86,12 +86,7 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
     if len(data) > max_bytes:
         raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
                         f"(pass max_bytes=... to load_urdf to raise it)")
-    try:
-        g = np.asarray(gravity, float)
-    except (TypeError, ValueError):
-        g = np.full(1, np.nan)
-    if g.shape != (3,) or not np.all(np.isfinite(g)):
-        raise InputError(f"gravity must be 3 finite numbers, got {gravity!r}")
+    g = check_gravity(gravity, source)
     root = _parse_xml(data, source)
     _check_xml(root, source)
     model = _build(_read_elements(root, source), source, g, strict)

@@ -15,7 +15,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 from conftest import ROOT, assert_close
 
 from manipdyn import _jit
