@@ -17,6 +17,7 @@ from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.rnea import rnea, rnea_terms
+from ..errors import ManipdynError
 from ..model import PRISMATIC
 from .reference import Reference
 
@@ -46,6 +47,8 @@ CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
 def error(x, y) -> float:
     """DESIGN.md's measure: max|x − y| / max(max|y|, 1)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
+    if x.shape != y.shape:     # never let broadcasting compare the wrong entries
+        raise ManipdynError(f"validation compares arrays of shapes {x.shape} and {y.shape}")
     return float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1.0)) if y.size else 0.0
 
 
@@ -169,8 +172,8 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, chunk=250):
             for k in DYN_TERMS:
                 x, y = ours[k][s], theirs[k]
                 scale = theirs["cond"] if k.startswith("qdd") else 1.0
-                worst[k][0] = max(worst[k][0], float(np.max(np.abs(x - y))))
                 worst[k][1] = max(worst[k][1], error(x, y) / scale)
+                worst[k][0] = max(worst[k][0], float(np.max(np.abs(x - y))))
             if progress is not None:
                 progress(1)
     return worst

@@ -114,6 +114,8 @@ class Reference:
         out = {}
         for key, ref in (("world", P.LOCAL_WORLD_ALIGNED), ("local", P.LOCAL)):
             ids = [pm.getFrameId(b, P.FrameType.BODY) for b in self.model.body_names]
-            out["J_" + key] = np.array([P.getFrameJacobian(pm, pd, f, ref) for f in ids])
-            out["dJ_" + key] = np.array([P.getFrameJacobianTimeVariation(pm, pd, f, ref) for f in ids])
+            # (6, nv) each: eigenpy hands a 6 × 1 matrix back as a vector (6,) when nv = 1
+            out["J_" + key] = np.array([np.reshape(P.getFrameJacobian(pm, pd, f, ref), (6, pm.nv)) for f in ids])
+            out["dJ_" + key] = np.array([np.reshape(P.getFrameJacobianTimeVariation(pm, pd, f, ref), (6, pm.nv))
+                                         for f in ids])
         return out
