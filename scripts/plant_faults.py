@@ -127,6 +127,9 @@ def _first_failure(out: str) -> str:
     return m.group(2) if m else "(pytest reported a failure; no test id found)"
 
 
+REST_WORKERS = int(os.environ.get("PLANT_FAULTS_REST_WORKERS", "2"))   # pytest-xdist workers for the rest phase
+
+
 def _rest_args(relevant):
     """pytest arguments for 'the suite without the relevant paths already run'."""
     args = ["tests"]
@@ -143,7 +146,8 @@ def run_fault(fault: Fault, *, rest=True, timeout=3600.0, keep=False, root=ROOT)
         copy_root, cache = make_copy(tmp / "repo", root), tmp / "numba-cache"
         cache.mkdir()
         apply_fault(fault, copy_root)
-        phases = [("relevant", list(fault.relevant))] + ([("rest", _rest_args(fault.relevant))] if rest else [])
+        rest_args = _rest_args(fault.relevant) + (["-n", str(REST_WORKERS)] if REST_WORKERS > 1 else [])
+        phases = [("relevant", list(fault.relevant))] + ([("rest", rest_args)] if rest else [])
         for phase, args in phases:
             left = timeout - (time.perf_counter() - t0)
             code, out = _pytest(copy_root, cache, args, max(left, 1.0))
