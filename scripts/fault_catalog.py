@@ -48,7 +48,8 @@ _DH = "tests/unit/test_dh.py"
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
     "loader": ("tests/unit/test_q_order.py", "tests/crosscheck/test_single_joint.py",
-               "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py"),
+               "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py",
+               "tests/properties/test_random_trees.py"),
     "kinematics": ("tests/unit/test_analytic_spatial.py",),
     "rnea": ("tests/batch/test_kernels_vs_readable.py", "tests/unit/test_analytic_spatial.py"),
     "lagrange": ("tests/unit/test_analytic_spatial.py", "tests/batch/test_kernels_vs_readable.py"),
