@@ -56,6 +56,7 @@ AREA_TESTS = {
     "aba": ("tests/batch/test_kernels_vs_readable.py",),
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
     "integrators": ("tests/unit/test_symplectic_euler.py",),
+    "validation": ("tests/crosscheck/test_single_joint.py",),
 }
 
 FAULTS = (

@@ -30,3 +30,16 @@ def test_one_joint_arm_passes_every_term(tmp_path, jtype, axis):
 def test_error_measure_refuses_mismatched_shapes():
     with pytest.raises(ManipdynError, match="shapes"):
         error(np.zeros((6, 1)), np.zeros(6))
+
+
+def test_validate_holds_the_lagrange_mass_matrix_to_pinocchio(tmp_path, monkeypatch):
+    """Both our M routes shifted alike: validate must flag each against Pinocchio, not one against the other."""
+    import manipdyn.validation.compare as compare
+    text = urdf({"base": "", "arm": BODY}, [("j", "revolute", "base", "arm", (0.1, 0, 0.2), (0.3, 0, 0), (0, 0, 1))])
+    path = tmp_path / "one.urdf"
+    path.write_text(text)
+    real = compare.mass_matrix
+    monkeypatch.setattr(compare, "mass_matrix", lambda *a, **k: real(*a, **k) + 1e-6)
+    rep = validate(load_urdf_string(text), path, n_states=5, seed=3, tol=1e-13)
+    failed = {t.term for t in rep.terms if not t.passed}
+    assert {"M_crba", "M_lagrange"} <= failed, failed
