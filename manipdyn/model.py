@@ -1,12 +1,15 @@
 """The Model: a frozen set of arrays built once from a URDF, read by every algorithm.
 
 Conventions owned here:
-- One *body* per moving joint; body i is the child link of joint i, and its frame is that link's frame
-  (the joint frame after the joint's motion), so joint i turns or slides along ``axis[i]`` expressed in
-  body i's own frame. Links attached by fixed joints are merged into the body they hang from.
+- One *body* per joint; body i is the child link of joint i, and its frame is that link's frame (the
+  joint frame after the joint's motion), so joint i turns or slides along ``axis[i]`` expressed in body
+  i's own frame. Links attached by fixed joints are merged into the body they hang from. The joint types
+  (nq, nv, X_J(q), S, integrate/difference) are described once, in ``manipdyn.joints``.
 - q order: depth-first from the root link, children of a link visited in the order of their joint
-  names (as Pinocchio's URDF reader does), fixed joints skipped; ``parent[i] < i``.
-- nq == nv: a continuous joint is one angle. SI units; gravity in the base frame, default [0, 0, -9.81].
+  names (as Pinocchio's URDF reader does), fixed joints skipped; ``parent[i] < i``. Joint i owns
+  q[idx_q[i]:idx_q[i] + nqs[i]] and v[idx_v[i]:idx_v[i] + nvs[i]].
+- nq = nv for revolute (continuous: one angle) and prismatic joints; a free-flyer root (7 q, 6 v) makes
+  nq = nv + 1. SI units; gravity in the base frame, default [0, 0, -9.81].
 """
 from __future__ import annotations
 
@@ -15,10 +18,12 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InputError
-from .spatial import axis_angle
+from types import MappingProxyType
 
-REVOLUTE, PRISMATIC = 0, 1
+from .errors import InputError
+from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES
+
+__all__ = ["Model", "Frame", "Constraint", "check_gravity", "REVOLUTE", "PRISMATIC", "FREEFLYER"]
 
 
 def check_gravity(gravity, where="gravity") -> np.ndarray:
@@ -68,27 +73,30 @@ class Constraint:
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """Kinematic tree with merged rigid bodies; immutable (arrays are read-only)."""
+    """Kinematic tree with merged rigid bodies; immutable (arrays are read-only, mappings are proxies).
+
+    nb = number of joints = number of moving bodies (``njoints``); arrays indexed by joint have nb rows.
+    """
     name: str
     root_link: str
-    joint_names: tuple     # (nv,) q order
-    body_names: tuple      # (nv,) child link of each joint (the body's frame)
-    parent: np.ndarray     # (nv,) int, parent body, -1 = fixed base; parent[i] < i
-    kind: np.ndarray       # (nv,) int, REVOLUTE or PRISMATIC
-    continuous: np.ndarray  # (nv,) bool, revolute joint without limits (Pinocchio: nq = 2)
-    axis: np.ndarray       # (nv, 3) unit joint axis in body i's frame
-    R0: np.ndarray         # (nv, 3, 3) joint i's frame in its parent body's frame, at q = 0
-    p0: np.ndarray         # (nv, 3) joint i's origin in its parent body's frame
-    mass: np.ndarray       # (nv,) merged body mass, kg
-    com: np.ndarray        # (nv, 3) merged centre of mass in the body frame, m
-    inertia: np.ndarray    # (nv, 3, 3) merged inertia about the CoM, body axes, kg m²
-    lower: np.ndarray      # (nv,) joint lower limit (-inf if none)
-    upper: np.ndarray      # (nv,) joint upper limit (+inf if none)
-    effort: np.ndarray     # (nv,) effort limit (inf if none)
-    velocity: np.ndarray   # (nv,) velocity limit (inf if none)
+    joint_names: tuple     # (nb,) joints in q order
+    body_names: tuple      # (nb,) child link of each joint (the body's frame)
+    parent: np.ndarray     # (nb,) int, parent body, -1 = fixed base; parent[i] < i
+    kind: np.ndarray       # (nb,) int, joints.REVOLUTE, PRISMATIC or FREEFLYER
+    continuous: np.ndarray  # (nb,) bool, revolute joint without limits (Pinocchio: nq = 2)
+    axis: np.ndarray       # (nb, 3) unit joint axis in body i's frame (free flyer: unused, zeros)
+    R0: np.ndarray         # (nb, 3, 3) joint i's frame in its parent body's frame, at q = 0
+    p0: np.ndarray         # (nb, 3) joint i's origin in its parent body's frame
+    mass: np.ndarray       # (nb,) merged body mass, kg
+    com: np.ndarray        # (nb, 3) merged centre of mass in the body frame, m
+    inertia: np.ndarray    # (nb, 3, 3) merged inertia about the CoM, body axes, kg m²
+    lower: np.ndarray      # (nb,) joint lower limit (-inf if none; free flyer: -inf)
+    upper: np.ndarray      # (nb,) joint upper limit (+inf if none; free flyer: +inf)
+    effort: np.ndarray     # (nb,) effort limit (inf if none)
+    velocity: np.ndarray   # (nb,) velocity limit (inf if none)
     gravity: np.ndarray    # (3,) gravity acceleration in the base frame, m/s²
-    frames: dict           # link name -> Frame, every link including merged ones
-    merged: dict           # body link name (or root link) -> tuple of links merged into it
+    frames: dict           # link name -> Frame, every link including merged ones (read-only mapping)
+    merged: dict           # body link name (or root link) -> tuple of links merged into it (read-only)
     mimic: tuple           # ((joint, mimicked joint, multiplier, offset), ...) loaded as independent
     source: str = ""       # file the model was loaded from
     notes: tuple = ()      # what the loader did that a user should know (warnings included)
@@ -100,15 +108,68 @@ class Model:
         if not (isinstance(self.gravity, np.ndarray) and self.gravity.dtype == np.float64):
             raise InputError(f"model {self.name!r}: gravity must be a float array (3,), not {self.gravity!r}")
         check_gravity(self.gravity, f"model {self.name!r}")
+        for key in ("frames", "merged", "locked"):            # constant, like every array below
+            object.__setattr__(self, key, MappingProxyType(dict(getattr(self, key))))
         for value in vars(self).values():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
+        free = [self.joint_names[i] for i in range(self.njoints) if self.kind[i] == FREEFLYER and self.parent[i] >= 0]
+        if free:
+            raise InputError(f"model {self.name!r}: a free flyer must be the root joint; {free[0]!r} is not")
+
+    @property
+    def njoints(self) -> int:
+        """nb, the number of joints (= moving bodies)."""
+        return len(self.joint_names)
+
+    @cached_property
+    def nqs(self) -> np.ndarray:
+        """(nb,) configuration size of each joint (``joints.NQ``)."""
+        return _frozen([NQ[int(k)] for k in self.kind])
+
+    @cached_property
+    def nvs(self) -> np.ndarray:
+        """(nb,) velocity size of each joint (``joints.NV``)."""
+        return _frozen([NV[int(k)] for k in self.kind])
+
+    @cached_property
+    def idx_q(self) -> np.ndarray:
+        """(nb,) index of joint i's first entry in q."""
+        return _frozen(np.concatenate([[0], np.cumsum(self.nqs)[:-1]]) if self.njoints else [])
+
+    @cached_property
+    def idx_v(self) -> np.ndarray:
+        """(nb,) index of joint i's first entry in v (and in a, τ)."""
+        return _frozen(np.concatenate([[0], np.cumsum(self.nvs)[:-1]]) if self.njoints else [])
+
+    @property
+    def nq(self) -> int:
+        return int(np.sum(self.nqs))
 
     @property
     def nv(self) -> int:
-        return len(self.joint_names)
+        return int(np.sum(self.nvs))
 
-    nq = nv
+    @cached_property
+    def q_names(self) -> tuple:
+        """(nq,) a name for every entry of q: the joint's name, or "root_joint.qx" for a free flyer's."""
+        return _dof_names(self, FREE_COORDS)
+
+    @cached_property
+    def v_names(self) -> tuple:
+        """(nv,) a name for every entry of v, a and τ: the joint's name, or "root_joint.wx" for a free
+        flyer's."""
+        return _dof_names(self, FREE_RATES)
+
+    @cached_property
+    def v_joint(self) -> np.ndarray:
+        """(nv,) the joint each entry of v belongs to."""
+        return _frozen(np.repeat(np.arange(self.njoints), self.nvs))
+
+    @property
+    def floating(self) -> bool:
+        """True when the root joint is a free flyer (nq ≠ nv)."""
+        return bool(self.njoints and self.kind[0] == FREEFLYER)
 
     def frame(self, name: str) -> Frame:
         """The frame of a link (merged links included); InputError names the unknown frame."""
@@ -133,33 +194,16 @@ class Model:
                              f"q order: {', '.join(self.joint_names[:50])}"
                              f"{' ...' if self.nv > 50 else ''}") from None
 
-    def joint_transforms(self, Q: np.ndarray):
-        """Placement of body i in its parent body for a batch Q (N, nv): (R (nv, N, 3, 3), p (nv, N, 3)).
-
-        Revolute: R = R0 Rot(axis, q), p = p0. Prismatic: R = R0, p = p0 + R0 axis d (Eqs. 8-12: p^{i-1}_i
-        evaluated at the current d_i).
-        """
-        N = Q.shape[0]
-        R, p = np.empty((self.nv, N, 3, 3)), np.empty((self.nv, N, 3))
-        for i in range(self.nv):
-            if self.kind[i] == REVOLUTE:
-                R[i] = self.R0[i] @ axis_angle(self.axis[i], Q[:, i])
-                p[i] = self.p0[i]
-            else:
-                R[i] = self.R0[i]
-                p[i] = self.p0[i] + Q[:, i, None] * (self.R0[i] @ self.axis[i])
-        return R, p
-
     def summary(self) -> str:
         """What the loader built: joints in q order, bodies, merges, massless links, mimics, notes."""
-        kinds = {REVOLUTE: "revolute", PRISMATIC: "prismatic"}
-        lines = [f"model {self.name!r} from {self.source or '<memory>'}: nq = nv = {self.nv}, "
+        sizes = f"nq = nv = {self.nv}" if self.nq == self.nv else f"nq = {self.nq}, nv = {self.nv}"
+        lines = [f"model {self.name!r} from {self.source or '<memory>'}: {sizes}, "
                  f"root link {self.root_link!r}, gravity {self.gravity.tolist()}",
                  "joints in q order:"]
         for i, j in enumerate(self.joint_names):
-            kind = "continuous" if self.continuous[i] else kinds[int(self.kind[i])]
+            kind = "continuous" if self.continuous[i] else TYPE_NAMES[int(self.kind[i])]
             par = self.body_names[self.parent[i]] if self.parent[i] >= 0 else self.root_link
-            lines.append(f"  q[{i}] {j:<28} {kind:<10} axis {np.round(self.axis[i], 4).tolist()} "
+            lines.append(f"  q[{self.idx_q[i]}] {j:<28} {kind:<10} axis {np.round(self.axis[i], 4).tolist()} "
                          f"{par} -> {self.body_names[i]}  mass {self.mass[i]:.6g} kg")
         for body, links in self.merged.items():
             if links:
@@ -179,4 +223,17 @@ class Model:
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        return f"Model({self.name!r}, nv={self.nv}, joints={list(self.joint_names)})"
+        return f"Model({self.name!r}, nq={self.nq}, nv={self.nv}, joints={list(self.joint_names)})"
+
+
+def _frozen(x) -> np.ndarray:
+    a = np.asarray(x, dtype=np.int64)
+    a.setflags(write=False)
+    return a
+
+
+def _dof_names(model, free_names) -> tuple:
+    out = []
+    for i, j in enumerate(model.joint_names):
+        out += [f"{j}.{c}" for c in free_names] if model.kind[i] == FREEFLYER else [j]
+    return tuple(out)

@@ -16,6 +16,7 @@ from ..spatial import skew
 from .lagrange import mass_matrix
 from .rnea import rnea
 from .fast import aba_kernel, aba_one, kernel_arrays
+from .core import joint_placements
 from .state import (as_batch, check_f_ext, check_output, external_wrenches, fast_shape, raise_kernel_error,
                     quiet, raise_output_error, unbatch)
 
@@ -90,7 +91,7 @@ def _aba(model, Q, V, T, f_ext, f_ext_frame, call):
     """The articulated-body algorithm on checked batches (N, nv): q̈ (N, nv), checked finite."""
     N, nv = Q.shape[0], model.nv
     check_f_ext(model, f_ext, f_ext_frame, N)                   # before the work
-    Rp, pp = model.joint_transforms(Q)
+    Rp, pp = joint_placements(model, Q)
     S, I = _motion_subspace(model), spatial_inertia(model)
     X = [_xform(Rp[i], pp[i]) for i in range(nv)]
     vel, c = np.zeros((nv, N, 6)), np.zeros((nv, N, 6))

@@ -13,12 +13,13 @@ import numpy as np
 from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
+from .core import joint_placements
 from .state import as_batch, check_output, frame_of, quiet, unbatch
 
 
 def placements(model, Q):
     """World placement of every body for a batch Q (N, nv): R (nv, N, 3, 3), p (nv, N, 3)."""
-    Rp, pp = model.joint_transforms(Q)
+    Rp, pp = joint_placements(model, Q)
     R, p = np.empty_like(Rp), np.empty_like(pp)
     for i in range(model.nv):
         j = model.parent[i]

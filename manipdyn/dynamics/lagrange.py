@@ -14,6 +14,7 @@ from ..model import REVOLUTE
 from ..spatial import cross, skew
 from .kinematics import axes_world, placements, point_jacobian, supports
 from .fast import crba_kernel, crba_one, kernel_arrays
+from .core import joint_placements
 from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
 
 
@@ -68,7 +69,7 @@ def _crba(model, Q):
     ancestor j (f_j = R f, n_j = R n + p × R f), M[i, j] = M[j, i] = that of joint j's axis.
     """
     N, nv = Q.shape[0], model.nv
-    Rp, pp = model.joint_transforms(Q)
+    Rp, pp = joint_placements(model, Q)
     m = model.mass.copy()
     h = np.broadcast_to(model.mass[:, None, None] * model.com[:, None, :], (nv, N, 3)).copy()  # m c
     Io = np.broadcast_to(model.inertia[:, None], (nv, N, 3, 3)) + \

@@ -12,6 +12,7 @@ import numpy as np
 from ..model import REVOLUTE
 from ..spatial import cross, rot, rot_t
 from .fast import kernel_arrays, rnea_kernel, rnea_one
+from .core import joint_placements
 from .state import (as_batch, check_f_ext, check_output, external_wrenches, fast_shape, raise_kernel_error,
                     quiet, unbatch)
 
@@ -87,7 +88,7 @@ def _terms(model, Q, V, A, f_ext, f_ext_frame, call):
 def _outward(model, Q, V, A):
     """Outward recursion i: 1 → n, velocities and accelerations (arrays (nv, N, 3))."""
     nv, N = model.nv, Q.shape[0]
-    Rp, pp = model.joint_transforms(Q)                     # R^{i-1}_i, p^{i-1}_i
+    Rp, pp = joint_placements(model, Q)                     # R^{i-1}_i, p^{i-1}_i
     w, dw, vel, dv, dvc = (np.empty((nv, N, 3)) for _ in range(5))
     R = np.empty((nv, N, 3, 3))                              # orientation in the base frame
     zero, base_dv = np.zeros((N, 3)), np.broadcast_to(-model.gravity, (N, 3))  # v̇'_0 = −g

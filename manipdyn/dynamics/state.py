@@ -49,24 +49,34 @@ def as_real(name, x):
 
 
 def as_batch(model, **arrays):
-    """Check named state arrays and return (batches (N, nv) in the given order, single: bool).
+    """Check named state arrays and return (batches (N, n) in the given order, single: bool).
 
-    Every array must be real, (nv,) or (N, nv) (N = 0 allowed) with the same shape as the others, finite.
-    Errors name the array and the offending shape, row or joint.
+    Arrays named q, q0, q1, q_… are configurations, (nq,) or (N, nq); every other array is a velocity,
+    acceleration or torque, (nv,) or (N, nv). All of one call share N (N = 0 allowed) and their number of
+    dimensions; each is real and finite. Errors name the array and the offending shape, row or entry.
     """
     check_model(model)
-    out, shape, first = [], None, None
+    out, lead, first = [], None, None
     for name, x in arrays.items():
         x = as_real(name, x)
-        if x.ndim not in (1, 2) or x.shape[-1] != model.nv:
-            raise InputError(f"{name} has shape {x.shape}; expected ({model.nv},) or (N, {model.nv}) "
-                             f"for model {model.name!r} (q order: {', '.join(model.joint_names)})")
-        if shape is not None and x.shape != shape:
-            raise InputError(f"{name} has shape {x.shape} but {first} has {shape}")
-        shape, first = x.shape, first or name
-        check_finite(name, x, model.joint_names)
+        config = is_config(name)
+        n = model.nq if config else model.nv
+        if x.ndim not in (1, 2) or x.shape[-1] != n:
+            order = ", ".join(model.q_names if config else model.v_names)
+            raise InputError(f"{name} has shape {x.shape}; expected ({n},) or (N, {n}) for model "
+                             f"{model.name!r} ({'nq' if config else 'nv'} = {n}; order: {order})")
+        if lead is not None and x.shape[:-1] != lead:
+            raise InputError(f"{name} has shape {x.shape} but {first[0]} has {first[1]}")
+        if lead is None:
+            lead, first = x.shape[:-1], (name, x.shape)
+        check_finite(name, x, model.q_names if config else model.v_names)
         out.append(x[None] if x.ndim == 1 else x)
-    return out, len(shape) == 1
+    return out, len(lead) == 0
+
+
+def is_config(name: str) -> bool:
+    """A state array named q, q0, q1, q_guess, ... is a configuration (nq entries); others have nv."""
+    return name == "q" or (name.startswith("q") and name[1:2] in ("0", "1", "_", ""))
 
 
 def check_finite(name, x, labels=None):
@@ -166,7 +176,7 @@ def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     wrenches = check_f_ext(model, f_ext, f_ext_frame, N)
     if wrenches is None:
         return None
-    F, Mo = np.zeros((model.nv, N, 3)), np.zeros((model.nv, N, 3))
+    F, Mo = np.zeros((model.njoints, N, 3)), np.zeros((model.njoints, N, 3))
     for fr, f, m in wrenches:
         if fr.body < 0:
             continue
@@ -184,43 +194,39 @@ _F64 = np.dtype(np.float64)
 
 
 def fast_shape(model, *arrays):
-    """1 or 2 when every array is a float64 ndarray of one shape (nv,) or (N, nv) with nv ≥ 1 — the
-    compiled kernels then take them as they are (any memory layout) and check finiteness themselves; 0
-    otherwise (take as_batch's checks and conversions)."""
+    """1 or 2 when the arrays are float64 ndarrays q (nq,) or (N, nq) and then (nv,) or (N, nv) of the
+    same N, with nv ≥ 1 — the compiled kernels then take them as they are (any memory layout) and check
+    finiteness themselves; 0 otherwise (take as_batch's checks and conversions)."""
     x0 = arrays[0]
     if type(x0) is not np.ndarray or x0.dtype is not _F64 or type(model) is not Model:
         return 0
-    shape = x0.shape
+    nd = x0.ndim
+    if not 1 <= nd <= 2 or x0.shape[-1] != model.nq or not model.njoints:
+        return 0
+    nv = model.nv
     for x in arrays[1:]:
-        if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != shape:
+        if type(x) is not np.ndarray or x.dtype is not _F64 or x.ndim != nd or x.shape[-1] != nv \
+                or x.shape[:-1] != x0.shape[:-1]:
             return 0
-    nd, nv = len(shape), len(model.joint_names)
-    return nd if 1 <= nd <= 2 and shape[-1] == nv and nv else 0
+    return nd
 
 
 def raise_kernel_error(model, code, names, batches, call="", out_name="", out=None):
-    """Turn a kernel's return code into the error the reference code would raise: ≥ 0 the flat index
-    (state·nv + joint) of a non-finite input (InputError); −2 − i a vanishing articulated inertia at joint i
-    (SingularError); ≤ −2 − nv a non-finite result at flat index −2 − nv − code of ``out`` in batch form
+    """Turn a kernel's return code into the error the checks of ``as_batch`` and ``check_output`` would
+    raise: ≥ 0 a non-finite input (InputError naming it); −2 − i a vanishing articulated inertia at joint
+    i (SingularError); ≤ −2 − nb a non-finite result at flat index −2 − nb − code of ``out`` in batch form
     (NumericalError)."""
-    nv = model.nv
-    if code <= -2 - nv:                         # a later row's bad input is the cause to report first
-        for name, x in zip(names, batches):
-            check_finite(name, x, model.joint_names)
+    nb = model.njoints
+    for name, x in zip(names, batches):          # a bad input is the cause to report first
+        check_finite(name, x, model.q_names if is_config(name) else model.v_names)
+    if code <= -2 - nb:
         res = out[None] if batches[0].ndim == 1 else out
-        idx = np.unravel_index(-2 - nv - code, res.shape)
+        idx = np.unravel_index(-2 - nb - code, res.shape)
         raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))
     if code <= -2:
-        i = -2 - code
-        raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
+        raise SingularError(f"mass matrix is singular: joint {model.joint_names[-2 - code]!r} moves a subtree "
                             f"without mass or inertia about its axis")
-    s, i = divmod(code, nv)
-    for name, x in zip(names, batches):
-        x = x[None] if x.ndim == 1 else x
-        if not np.isfinite(x[s, i]):
-            idx = [i] if x.shape[0] == 1 else [s, i]
-            raise InputError(f"{name}{idx} (joint {model.joint_names[i]!r}) is {x[s, i]}: inputs must be finite")
-    raise InputError(f"{call}: a non-finite input at state {s}, joint {model.joint_names[i]!r}")
+    raise InputError(f"{call}: a non-finite input (kernel code {code})")
 
 
 def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint", axis=1, labels=None):
@@ -232,7 +238,7 @@ def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint"
     shown = idx[1:] if single else idx                       # one state: no row to name
     where = [] if single else [f"row {row}"]
     if labels is None and model is not None:
-        labels = model.joint_names if what == "joint" else model.body_names if what == "link" else None
+        labels = model.v_names if what == "joint" else model.body_names if what == "link" else None
     if labels is not None and len(idx) > axis and idx[axis] < len(labels):
         where.append(f"{what} {labels[idx[axis]]!r}")
     big = max(((float(np.max(np.abs(v.reshape(-1, v.shape[-1]) if v.ndim == 1 else v[row]), initial=0.0)), n)

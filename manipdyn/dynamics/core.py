@@ -1,0 +1,178 @@
+"""The compiled core every algorithm shares: the model in kernel form, 3-vector helpers, and forward
+kinematics — the one pass that places the bodies in the world (and gives their velocities), which
+placements, Jacobians, J̇, energies, playback and the loop closures all read.
+
+Kernel form (``kernel_arrays``, built once per model): two arrays instead of many (each array argument
+of a compiled call costs ~80 ns of dispatch):
+  I (nb, 5) int64  = [parent, kind, idx_q, idx_v, nv_j] per joint
+  F (float64)      = [S (nv, 6), axis (nb, 3), R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3),
+                      inertia (nb, 3, 3), −g (3,)], viewed again by ``unpack`` inside the kernels.
+S holds one row per joint velocity, [linear; angular] in the body frame (``joints.motion_subspace``).
+
+Placement convention (owned here): R maps body coordinates into the parent's (or the world's), x_parent
+= R x_body + p; so the chapter's R^i_{i−1} x is Rᵀ x.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from ..joints import joint_placement, joint_velocity, motion_subspace
+
+
+def kernel_arrays(model):
+    """(I, F) of the model (see the module docstring), built once and kept on the model."""
+    arr = model.__dict__.get("_core_arrays")
+    if arr is None:
+        nb = model.njoints
+        I = np.zeros((nb, 5), np.int64)
+        if nb:
+            I[:] = np.column_stack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
+        S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
+            else np.zeros((0, 6))
+        F = np.concatenate([np.ravel(x) for x in (S, model.axis, model.R0, model.p0, model.mass, model.com,
+                                                   model.inertia, -np.asarray(model.gravity, float))])
+        arr = (I, F)
+        object.__setattr__(model, "_core_arrays", arr)   # a cache, not model data (Model is frozen)
+    return arr
+
+
+@njit(cache=True, inline="always")
+def unpack(I, F):
+    """Views of the model arrays: parent, kind, iq, iv, nvj (nb,), S (nv, 6), axis (nb, 3),
+    R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3), inertia (nb, 3, 3), mg = −g (3,)."""
+    nb = I.shape[0]
+    nv = 0
+    for i in range(nb):
+        nv += I[i, 4]
+    k = np.cumsum(np.array([0, 6 * nv, 3 * nb, 9 * nb, 3 * nb, nb, 3 * nb, 9 * nb, 3]))
+    return (I[:, 0], I[:, 1], I[:, 2], I[:, 3], I[:, 4], F[k[0]:k[1]].reshape(nv, 6),
+            F[k[1]:k[2]].reshape(nb, 3), F[k[2]:k[3]].reshape(nb, 3, 3), F[k[3]:k[4]].reshape(nb, 3),
+            F[k[4]:k[5]], F[k[5]:k[6]].reshape(nb, 3), F[k[6]:k[7]].reshape(nb, 3, 3), F[k[7]:k[8]])
+
+
+# -- 3-vector helpers (inlined into every kernel) -------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def rot3(R, x, out):
+    """out = R x (3,)."""
+    a, b, c = x[0], x[1], x[2]
+    for k in range(3):
+        out[k] = R[k, 0] * a + R[k, 1] * b + R[k, 2] * c
+
+
+@njit(cache=True, inline="always")
+def rot3t(R, x, out):
+    """out = Rᵀ x (3,)."""
+    a, b, c = x[0], x[1], x[2]
+    for k in range(3):
+        out[k] = R[0, k] * a + R[1, k] * b + R[2, k] * c
+
+
+@njit(cache=True, inline="always")
+def cross3(a, b, out):
+    """out = a × b (3,); out may alias neither a nor b's later reads (values are read first)."""
+    x = a[1] * b[2] - a[2] * b[1]
+    y = a[2] * b[0] - a[0] * b[2]
+    z = a[0] * b[1] - a[1] * b[0]
+    out[0], out[1], out[2] = x, y, z
+
+
+@njit(cache=True, inline="always")
+def sandwich3(R, X, tmp, out):
+    """out += R X Rᵀ for 3×3 blocks (tmp is scratch)."""
+    for i in range(3):
+        for j in range(3):
+            tmp[i, j] = R[i, 0] * X[0, j] + R[i, 1] * X[1, j] + R[i, 2] * X[2, j]
+    for i in range(3):
+        for j in range(3):
+            out[i, j] += tmp[i, 0] * R[j, 0] + tmp[i, 1] * R[j, 1] + tmp[i, 2] * R[j, 2]
+
+
+# -- forward kinematics: the one pass -----------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
+    """Forward kinematics of one state. Every body i:
+      (Rl, pl)[i]  its placement in its parent (joints.joint_placement),
+      (Rw, pw)[i]  in the world: Rw_i = Rw_λ Rl_i, pw_i = pw_λ + Rw_λ pl_i,
+    and, when v has entries (len(v) = nv; pass an empty v to skip), its world angular velocity ww_i and
+    the world velocity of its origin vw_i:  ω_i = ω_λ + Rw_i S_ang q̇_i,
+    v_i = v_λ + ω_λ × (pw_i − pw_λ) + Rw_i S_lin q̇_i  (Eqs. 3–4, 9–11 in world axes)."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0 = unpack(I, F)[:9]
+    vl, va = np.empty(3), np.empty(3)
+    with_v = v.shape[0] > 0
+    for i in range(I.shape[0]):
+        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+        j = parent[i]
+        if j < 0:
+            Rw[i, :, :] = Rl[i]
+            pw[i, :] = pl[i]
+        else:
+            for a in range(3):
+                for b in range(3):
+                    Rw[i, a, b] = Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
+                pw[i, a] = pw[j, a] + Rw[j, a, 0] * pl[i, 0] + Rw[j, a, 1] * pl[i, 1] + Rw[j, a, 2] * pl[i, 2]
+        if not with_v:
+            continue
+        joint_velocity(S, iv[i], nvj[i], v, vl, va)
+        for a in range(3):
+            wa = Rw[i, a, 0] * va[0] + Rw[i, a, 1] * va[1] + Rw[i, a, 2] * va[2]
+            la = Rw[i, a, 0] * vl[0] + Rw[i, a, 1] * vl[1] + Rw[i, a, 2] * vl[2]
+            ww[i, a] = wa if j < 0 else ww[j, a] + wa
+            vw[i, a] = la if j < 0 else vw[j, a] + la
+        if j >= 0:                                   # ω_λ × (pw_i − pw_λ)
+            dx, dy, dz = pw[i, 0] - pw[j, 0], pw[i, 1] - pw[j, 1], pw[i, 2] - pw[j, 2]
+            vw[i, 0] += ww[j, 1] * dz - ww[j, 2] * dy
+            vw[i, 1] += ww[j, 2] * dx - ww[j, 0] * dz
+            vw[i, 2] += ww[j, 0] * dy - ww[j, 1] * dx
+
+
+@njit(cache=True)
+def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
+    """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).
+    Returns -1, or the flat index (state·nq + entry) of the first non-finite entry of Q (V: + N·nq)."""
+    N, nb = Q.shape[0], I.shape[0]
+    Rl, pl = np.empty((nb, 3, 3)), np.empty((nb, 3))
+    for s in range(N):
+        for k in range(Q.shape[1]):
+            if not np.isfinite(Q[s, k]):
+                return s * Q.shape[1] + k
+        for k in range(V.shape[1]):
+            if not np.isfinite(V[s, k]):
+                return N * Q.shape[1] + s * V.shape[1] + k
+        fk_pass(I, F, Q[s], V[s], Rl, pl, Rw[s], pw[s], ww[s], vw[s])
+    return -1
+
+
+@njit(cache=True)
+def joint_placements_kernel(I, F, Q, R, p):
+    """Placement of every body in its parent for every state: R (N, nb, 3, 3), p (N, nb, 3)."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0 = unpack(I, F)[:9]
+    for s in range(Q.shape[0]):
+        for i in range(I.shape[0]):
+            joint_placement(kind[i], axis[i], R0[i], p0[i], Q[s], iq[i], R[s, i], p[s, i])
+
+
+# -- Python entry points --------------------------------------------------------------------------------
+
+def joint_placements(model, Q):
+    """Placement of every body in its parent for a checked batch Q (N, nq): R (nb, N, 3, 3), p (nb, N, 3)."""
+    N, nb = Q.shape[0], model.njoints
+    R, p = np.empty((N, nb, 3, 3)), np.empty((N, nb, 3))
+    if nb:
+        joint_placements_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), R, p)
+    return np.moveaxis(R, 1, 0), np.moveaxis(p, 1, 0)
+
+
+def forward_kinematics(model, Q, V=None):
+    """World placements of every body for a checked batch Q (N, nq) [and twists for V (N, nv)]:
+    R (nb, N, 3, 3), p (nb, N, 3) [, ω (nb, N, 3), v (nb, N, 3) world velocity of each origin]."""
+    N, nb = Q.shape[0], model.njoints
+    Rw, pw = np.empty((N, nb, 3, 3)), np.empty((N, nb, 3))
+    ww, vw = np.empty((N, nb, 3)), np.empty((N, nb, 3))
+    Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V, float)
+    if nb:
+        fk_kernel(*kernel_arrays(model), np.ascontiguousarray(Q, float), Vk, Rw, pw, ww, vw)
+    out = (np.moveaxis(Rw, 1, 0), np.moveaxis(pw, 1, 0))
+    return out if V is None else out + (np.moveaxis(ww, 1, 0), np.moveaxis(vw, 1, 0))

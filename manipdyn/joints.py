@@ -1,0 +1,227 @@
+"""The joint model: every joint type manipdyn knows, described once.
+
+A joint connects body i to its parent λ(i). Its placement at q = 0 is (R0, p0) (joint frame = body i's
+frame, in λ(i)'s frame); its motion X_J(q) = (R_J, p_J) is applied in that frame, so body i sits in its
+parent at
+
+    R = R0 R_J(q),   p = p0 + R0 p_J(q)                                                   (joint_placement)
+
+Its velocity is v_J = S q̇ with the motion subspace S (6 × nv_j, rows [linear; angular] as in Pinocchio),
+constant in body i's frame for every type here; so its acceleration is S q̈ (no Ṡ term).
+
+| type        | nq | nv | q                              | X_J(q)                       | S (columns)       |
+|-------------|----|----|--------------------------------|------------------------------|-------------------|
+| revolute    | 1  | 1  | angle θ (continuous: unbounded)| (Rot(z, θ), 0)               | [0; z]            |
+| prismatic   | 1  | 1  | displacement d                 | (1, d z)                     | [z; 0]            |
+| free_flyer  | 7  | 6  | [x y z, quaternion qx qy qz qw]| (R(quat), [x y z])           | 1₆ (body frame)   |
+
+z is the joint's unit axis in body i's frame. A free flyer's v = [linear; angular] velocity of the body
+in its own frame (Pinocchio's convention), so q moves by ``integrate`` (q ⊕ v = M(q) exp6(v)), never by
+q + v dt. A continuous joint is one angle (Pinocchio stores cos/sin; ``validation`` converts); its
+``difference`` is the shortest angle, as Pinocchio's. Fixed joints are not joints here: the loader merges
+the bodies they hold together. The free flyer is allowed as the root joint only (parent = fixed base).
+
+Everything below that a compiled kernel calls is written for numba (``_jit.njit``): scalar loops over
+3-vectors, no allocation per call.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import njit
+
+REVOLUTE, PRISMATIC, FREEFLYER = 0, 1, 2
+TYPE_NAMES = ("revolute", "prismatic", "free_flyer")
+NQ = (1, 1, 7)                # configuration size per type
+NV = (1, 1, 6)                # velocity size per type
+FREE_COORDS = ("x", "y", "z", "qx", "qy", "qz", "qw")   # names of a free flyer's q entries
+FREE_RATES = ("vx", "vy", "vz", "wx", "wy", "wz")        # names of its v entries
+
+
+def motion_subspace(kind: int, axis) -> np.ndarray:
+    """S (nv_j, 6): one row per joint velocity, [linear; angular] in the body's frame."""
+    if kind == REVOLUTE:
+        return np.concatenate([np.zeros(3), axis])[None]
+    if kind == PRISMATIC:
+        return np.concatenate([axis, np.zeros(3)])[None]
+    return np.eye(6)
+
+
+# -- the joint's motion X_J(q), compiled --------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def quat_to_matrix(x, y, z, w, R):
+    """R (3, 3) of the unit quaternion (x, y, z, w) (scalar last, as Pinocchio/Eigen store it)."""
+    R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True, inline="always")
+def joint_placement(kind, axis, R0, p0, q, iq, R, p):
+    """R = R0 R_J(q), p = p0 + R0 p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
+    evaluated at the current d). q is the whole configuration, iq the joint's first entry."""
+    if kind == REVOLUTE:                       # Rodrigues, written out: R_J = Rot(z, θ), p_J = 0
+        s, c = np.sin(q[iq]), np.cos(q[iq])
+        x, y, z = axis[0], axis[1], axis[2]
+        t = 1.0 - c
+        r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+        r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+        r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+        px = py = pz = 0.0
+    elif kind == PRISMATIC:                    # R_J = 1, p_J = d z
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+        d = q[iq]
+        px, py, pz = d * axis[0], d * axis[1], d * axis[2]
+    else:                                      # free flyer: R_J = R(quat), p_J = [x y z]
+        x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+        r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+        r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+        px, py, pz = q[iq], q[iq + 1], q[iq + 2]
+    for a in range(3):
+        b0, b1, b2 = R0[a, 0], R0[a, 1], R0[a, 2]
+        R[a, 0] = b0 * r00 + b1 * r10 + b2 * r20
+        R[a, 1] = b0 * r01 + b1 * r11 + b2 * r21
+        R[a, 2] = b0 * r02 + b1 * r12 + b2 * r22
+        p[a] = p0[a] + b0 * px + b1 * py + b2 * pz
+
+
+@njit(cache=True, inline="always")
+def joint_velocity(S, iv, nvj, x, vl, va):
+    """vl, va (3,) = the linear and angular parts of S x[iv:iv+nvj] (x = q̇ or q̈ of the whole model)."""
+    for k in range(3):
+        vl[k] = 0.0
+        va[k] = 0.0
+    for r in range(iv, iv + nvj):
+        xr = x[r]
+        if xr != 0.0:
+            for k in range(3):
+                vl[k] += S[r, k] * xr
+                va[k] += S[r, 3 + k] * xr
+
+
+@njit(cache=True, inline="always")
+def joint_force(S, iv, nvj, f, n, out):
+    """out[iv:iv+nvj] = Sᵀ [f; n]: the joint's generalized force from the wrench (force f, moment n about
+    the body origin, body frame) transmitted across it (Eqs. 17, 18)."""
+    for r in range(iv, iv + nvj):
+        out[r] = (S[r, 0] * f[0] + S[r, 1] * f[1] + S[r, 2] * f[2]
+                  + S[r, 3] * n[0] + S[r, 4] * n[1] + S[r, 5] * n[2])
+
+
+# -- the configuration space: integrate, difference, compiled -----------------------------------------
+
+@njit(cache=True, inline="always")
+def _exp_quat(wx, wy, wz):
+    """The unit quaternion (x, y, z, w) of the rotation vector ω = θ u: (sin(θ/2) u, cos(θ/2))."""
+    t2 = wx * wx + wy * wy + wz * wz
+    th = np.sqrt(t2)
+    if th < 1e-4:                              # Taylor: sin(θ/2)/θ = ½ − θ²/48 + θ⁴/3840
+        k = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
+        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
+    else:
+        k = np.sin(0.5 * th) / th
+        c = np.cos(0.5 * th)
+    return k * wx, k * wy, k * wz, c
+
+
+@njit(cache=True, inline="always")
+def _V_coeffs(th2):
+    """(a, b) of V(ω) = 1 + a [ω]× + b [ω]×², the left Jacobian of SO(3): a = (1 − cos θ)/θ²,
+    b = (θ − sin θ)/θ³ (exp6's translation part is V v)."""
+    if th2 < 1e-6:
+        return 0.5 - th2 / 24.0 + th2 * th2 / 720.0, 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
+    th = np.sqrt(th2)
+    return (1.0 - np.cos(th)) / th2, (th - np.sin(th)) / (th2 * th)
+
+
+@njit(cache=True, inline="always")
+def _Vinv_coeff(th2):
+    """c of V(ω)⁻¹ = 1 − ½ [ω]× + c [ω]×², c = (1 − θ sin θ / (2 (1 − cos θ))) / θ²."""
+    if th2 < 1e-6:
+        return 1.0 / 12.0 + th2 / 720.0 + th2 * th2 / 30240.0
+    th = np.sqrt(th2)
+    return (1.0 - th * np.sin(th) / (2.0 * (1.0 - np.cos(th)))) / th2
+
+
+@njit(cache=True, inline="always")
+def _wcross(a, w, out):
+    """out = ω × a = [ω]× a (the callers build V(ω) v and V(ω)⁻¹ d from it)."""
+    out[0] = w[1] * a[2] - w[2] * a[1]
+    out[1] = w[2] * a[0] - w[0] * a[2]
+    out[2] = w[0] * a[1] - w[1] * a[0]
+
+
+@njit(cache=True)
+def integrate_kernel(kind, iq, iv, Q, V, out):
+    """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a free flyer
+    M(q) exp6(v) with v = [linear; angular] in the body frame (Pinocchio's integrate)."""
+    t1, t2, w = np.empty(3), np.empty(3), np.empty(3)
+    R = np.empty((3, 3))
+    for s in range(Q.shape[0]):
+        for j in range(kind.shape[0]):
+            a, b = iq[j], iv[j]
+            if kind[j] != FREEFLYER:
+                out[s, a] = Q[s, a] + V[s, b]
+                continue
+            w[0], w[1], w[2] = V[s, b + 3], V[s, b + 4], V[s, b + 5]
+            th2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+            ca, cb = _V_coeffs(th2)            # exp6 translation: V(ω) v
+            _wcross(V[s, b:b + 3], w, t1)
+            _wcross(t1, w, t2)
+            x0, y0, z0, w0 = Q[s, a + 3], Q[s, a + 4], Q[s, a + 5], Q[s, a + 6]
+            quat_to_matrix(x0, y0, z0, w0, R)
+            for k in range(3):
+                t1[k] = V[s, b + k] + ca * t1[k] + cb * t2[k]
+            for k in range(3):                 # p ← p + R V(ω) v
+                out[s, a + k] = Q[s, a + k] + R[k, 0] * t1[0] + R[k, 1] * t1[1] + R[k, 2] * t1[2]
+            ex, ey, ez, ew = _exp_quat(w[0], w[1], w[2])     # quat ← quat ⊗ exp(ω)
+            x = w0 * ex + x0 * ew + y0 * ez - z0 * ey
+            y = w0 * ey - x0 * ez + y0 * ew + z0 * ex
+            z = w0 * ez + x0 * ey - y0 * ex + z0 * ew
+            ww = w0 * ew - x0 * ex - y0 * ey - z0 * ez
+            nrm = np.sqrt(x * x + y * y + z * z + ww * ww)
+            if x * x0 + y * y0 + z * z0 + ww * w0 < 0.0:     # the sign nearest the start (as Pinocchio)
+                nrm = -nrm
+            out[s, a + 3], out[s, a + 4], out[s, a + 5], out[s, a + 6] = x / nrm, y / nrm, z / nrm, ww / nrm
+
+
+@njit(cache=True)
+def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
+    """out (N, nv) = Q1 ⊖ Q0, the velocity that integrate turns Q0 into Q1 in unit time: q1 − q0
+    (continuous joints: the shortest angle); free flyer log6(M(q0)⁻¹ M(q1))."""
+    R = np.empty((3, 3))
+    d, w, t1, t2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    for s in range(Q0.shape[0]):
+        for j in range(kind.shape[0]):
+            a, b = iq[j], iv[j]
+            if kind[j] != FREEFLYER:
+                x = Q1[s, a] - Q0[s, a]
+                if continuous[j]:              # wrapped into [−π, π]
+                    x = np.arctan2(np.sin(x), np.cos(x))
+                out[s, b] = x
+                continue
+            x0, y0, z0, w0 = Q0[s, a + 3], Q0[s, a + 4], Q0[s, a + 5], Q0[s, a + 6]
+            x1, y1, z1, w1 = Q1[s, a + 3], Q1[s, a + 4], Q1[s, a + 5], Q1[s, a + 6]
+            n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0      # quat0⁻¹ = conj / |quat0|²
+            rx = (w0 * x1 - x0 * w1 - y0 * z1 + z0 * y1) / n0
+            ry = (w0 * y1 + x0 * z1 - y0 * w1 - z0 * x1) / n0
+            rz = (w0 * z1 - x0 * y1 + y0 * x1 - z0 * w1) / n0
+            rw = (w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1) / n0
+            if rw < 0.0:                       # the shorter of the two rotations (θ ≤ π)
+                rx, ry, rz, rw = -rx, -ry, -rz, -rw
+            sn = np.sqrt(rx * rx + ry * ry + rz * rz)
+            th = 2.0 * np.arctan2(sn, rw)      # log3: ω = θ u
+            k = th / sn if sn > 1e-300 else 2.0 / rw
+            w[0], w[1], w[2] = k * rx, k * ry, k * rz
+            quat_to_matrix(x0 / np.sqrt(n0), y0 / np.sqrt(n0), z0 / np.sqrt(n0), w0 / np.sqrt(n0), R)
+            for c in range(3):                 # d = R0ᵀ (p1 − p0)
+                d[c] = (R[0, c] * (Q1[s, a] - Q0[s, a]) + R[1, c] * (Q1[s, a + 1] - Q0[s, a + 1])
+                        + R[2, c] * (Q1[s, a + 2] - Q0[s, a + 2]))
+            cc = _Vinv_coeff(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+            _wcross(d, w, t1)
+            _wcross(t1, w, t2)
+            for c in range(3):                 # log6: linear part V(ω)⁻¹ d
+                out[s, b + c] = d[c] - 0.5 * t1[c] + cc * t2[c]
+                out[s, b + 3 + c] = w[c]
