@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from .dynamics.aba import aba, forward_dynamics
 from .dynamics.energy import kinetic_energy, potential_energy
-from .dynamics.integrate import SimResult, simulate
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
@@ -18,6 +17,7 @@ from .model import PRISMATIC, REVOLUTE, Frame, Model
 from .reduce import reduce
 from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
                           constrained_inverse_dynamics, project)
+from .simulation import SimResult, simulate
 
 __version__ = "0.1.0"
 

@@ -218,12 +218,12 @@ FAULTS = (
           "J[:3, j] = np.cross(z[j], x - pw[j])",
           "J[:3, j] = np.cross(z[j], x - pw[b])",
           (_CLOSED_FAST, _FOURBAR), "compiled closure Jacobian: lever arm from the body's origin, not joint j's"),
-    # ---------------------------------------------------------------- integrators (dynamics/integrate.py)
-    Fault("integrate-explicit-euler", "integrators", "manipdyn/dynamics/integrate.py",
+    # ---------------------------------------------------------------- integrators (simulation.py)
+    Fault("integrate-explicit-euler", "integrators", "manipdyn/simulation.py",
           "return q + h * v1, v1",
           "return q + h * v, v1",
           ("tests/unit/test_integrate.py",), "explicit Euler (q from v_k) in place of symplectic Euler (q from v_k+1)"),
-    Fault("integrate-rk4-weight", "integrators", "manipdyn/dynamics/integrate.py",
+    Fault("integrate-rk4-weight", "integrators", "manipdyn/simulation.py",
           "v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)",
           "v + h / 6 * (k1v + k2v + 2 * k3v + 2 * k4v)",
           ("tests/unit/test_integrate.py",), "RK4 velocity update with weights 1, 1, 2, 2 (still consistent, wrong order)"),

@@ -60,7 +60,7 @@ def ill_conditioned(n=6, spread=(1e-6, 1e3), seed=0, states=5, light_root=False,
     import pinocchio as pin
 
     from ..dynamics.aba import aba, forward_dynamics
-    from ..validation.compare import error
+    from ..validation.measure import error
     rng = np.random.default_rng(seed)
     masses = np.geomspace(spread[0], spread[1], n) if light_root else np.geomspace(spread[1], spread[0], n)
     lengths = rng.uniform(lengths[0], lengths[1], n)

@@ -11,7 +11,8 @@ from ..dynamics.aba import aba
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.rnea import rnea
 from ..io.urdf import load_urdf
-from ..validation.compare import error, random_states
+from ..validation.compare import random_states
+from ..validation.measure import error
 from ..validation.reference import Reference, pin
 from .timing import per_call, random_chain
 
@@ -172,7 +173,7 @@ def work_precision(aau_path, quick=False):
     """d. AAU arm, 5 s from a fixed state, without and with gravity: each integrator × step size →
     (wall time, final-state error against the adaptive reference at rtol 1e-13), with our aba and with
     Pinocchio's aba inside the same integrator loop."""
-    from ..dynamics.integrate import _step, simulate
+    from ..simulation import _step, simulate
     P = pin()
     horizon = 1.0 if quick else 5.0
     rows = []
@@ -215,7 +216,7 @@ def cost_at_error(rows, target=1e-8):
 def spm_drift(spm_path, quick=False):
     """e. SPM held by a PD law around the Fig. 7 start: cost per step and max |Φ| over the run."""
     from ..constraints import closure_terms, complete_state
-    from ..dynamics.integrate import simulate
+    from ..simulation import simulate
     from ..examples import spm_params as SP
     from ..examples.spm_urdf import tree_guess
     model = _load(spm_path)

@@ -49,13 +49,13 @@ def rank_report(model, J, rtol=None) -> RankReport:
                       float(sv[0] / sv[-1]))
 
 
-def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None, f_ext_frame="local",
-                                 info=False):
-    """(q̈, λ) of the KKT system of Eq. 27 on the independent closure rows; ``info=True`` adds RankReports.
+def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None, f_ext_frame="local"):
+    """(q̈, λ) of the KKT system of Eq. 27 on the independent closure rows.
 
     Parameters: q, v, tau (nv,) or (N, nv) — tau is the full generalized force of the spanning tree
     (zero on passive joints); baumgarte=(alpha, beta) stabilises drift; f_ext as in ``rnea``.
-    Returns q̈ (nv,)/(N, nv), λ (m,)/(N, m) in the rows of ``row_labels(model)``.
+    Returns q̈ (nv,)/(N, nv), λ (m,)/(N, m) in the rows of ``row_labels(model)``. The rank of one
+    state's closure rows: ``rank_report(model, closure_terms(model, q)[1])`` for q (nv,).
     Without f_ext this runs the compiled kernel (constraints/fast.py), held by the tests to
     ``constrained_forward_dynamics_reference``, the readable solve below.
     """
@@ -63,7 +63,7 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     baumgarte = _baumgarte(baumgarte)
     if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None or not model.nv:
         return constrained_forward_dynamics_reference(model, q, v, tau, baumgarte=baumgarte, f_ext=f_ext,
-                                                      f_ext_frame=f_ext_frame, info=info)
+                                                      f_ext_frame=f_ext_frame)
     from .fast import constrained_fd_fast
     code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
     if code == -2:
@@ -71,15 +71,11 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     if code >= 0:                       # as_batch checked finiteness already: this cannot happen silently
         raise InputError(f"non-finite input at state {code // model.nv}, joint {model.joint_names[code % model.nv]!r}")
     _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
-    out = (unbatch(qdd, single), unbatch(lam, single))
-    if not info:
-        return out
-    reports = [rank_report(model, J) for J in closure_terms(model, Q)[1]]
-    return out + ((reports[0] if single else reports),)
+    return unbatch(qdd, single), unbatch(lam, single)
 
 
 def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, f_ext=None,
-                                           f_ext_frame="local", info=False):
+                                           f_ext_frame="local"):
     """The readable KKT solve of Eq. 27 (same contract as constrained_forward_dynamics)."""
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
     baumgarte = _baumgarte(baumgarte)
@@ -91,15 +87,12 @@ def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, 
         c = c - 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi
     rhs = T - rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)   # τ − h
     M = mass_matrix(model, Q)
-    qdd, lam, reports = np.empty_like(Q), np.zeros_like(Phi), []
+    qdd, lam = np.empty_like(Q), np.zeros_like(Phi)
     for s in range(Q.shape[0]):
         keep = independent_rows(Jc[s], phi=Phi[s])
         qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
-        if info:
-            reports.append(rank_report(model, Jc[s]))
     _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
-    out = (unbatch(qdd, single), unbatch(lam, single))
-    return out + ((reports[0] if single else reports),) if info else out
+    return unbatch(qdd, single), unbatch(lam, single)
 
 
 def _baumgarte(baumgarte):
@@ -147,14 +140,13 @@ def actuation(model, actuated=None):
     return idx
 
 
-def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local",
-                                 info=False):
+def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local"):
     """(τ_a, λ): actuator forces for a prescribed motion of a closed chain, τ_tree = Sᵀ τ_a − Φ_qᵀ λ.
 
     Solves [Sᵀ, −Φ_qᵀ] [τ_a; λ] = rnea(q, q̇, q̈) in the least-squares, minimum-norm sense (rank-revealing)
     and raises ConstraintError when (q, q̇, q̈) violates a closure (|Φ|, |Φ_q q̇| or |Φ_q q̈ + Φ̇_q q̇| above
     tol) or when the actuators cannot produce the motion (under-actuated: residual above tol).
-    ``info=True`` adds whether the chain is "fully", "under" or "over" actuated at (the first) q.
+    Whether the chain is "fully", "under" or "over" actuated at q: ``actuation_status(model, q, actuated)``.
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
     idx = actuation(model, actuated)
@@ -179,8 +171,7 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
                  labels=[model.joint_names[i] for i in idx])
     check_output("constrained_inverse_dynamics", "λ", lam, model, dict(q=Q, v=V, a=A), what="closure row",
                  labels=row_labels(model))
-    out = (unbatch(ta, single), unbatch(lam, single))
-    return out + (actuation_status(model, unbatch(Q, single), actuated),) if info else out
+    return unbatch(ta, single), unbatch(lam, single)
 
 
 def _check_consistent(model, Phi, Jc, bias, V, A, tol):

@@ -14,6 +14,7 @@ import numpy as np
 from ..constraints import closure_terms, constrained_forward_dynamics, project, rank_report
 from ..dynamics.lagrange import mass_matrix
 from ..errors import ConstraintError
+from .measure import error
 from .reference import pin
 
 PROXIMAL = dict(accuracy=1e-12, mu=1e-8, max_iter=50)   # mu = 1e-12 stalls at 1e-9 on the SPM (measured)
@@ -93,7 +94,8 @@ def closed_chain_terms(model, ref, Q, rng, progress=None):
         _update(worst["phi"], _point_rows(model, Phi[0]), cref.point_gaps(Q[s]))
         tau = np.zeros(model.nv)
         tau[act] = rng.normal(0.0, 1.0, len(act))
-        qdd, _, rep = constrained_forward_dynamics(model, Qm[s], Vm[s], tau, info=True)
+        qdd, _ = constrained_forward_dynamics(model, Qm[s], Vm[s], tau)
+        rep = rank_report(model, closure_terms(model, Qm[s])[1])
         kappa = np.linalg.cond(mass_matrix(model, Qm[s])) * rep.cond ** 2   # conditioning of the solve
         _update(worst["qdd_closed"], qdd, cref.qdd(Qm[s], Vm[s], tau), kappa)
         if progress is not None:
@@ -113,7 +115,6 @@ def _point_rows(model, phi):
 
 
 def _update(w, x, y, scale=1.0):
-    from .compare import error
     w[0] = max(w[0], float(np.max(np.abs(np.asarray(x) - y), initial=0.0)))
     w[1] = max(w[1], error(x, y) / scale)
 

@@ -1,10 +1,10 @@
 """Term-by-term comparison of our Newton–Euler terms with Pinocchio's, and the report it produces.
 
-Error measure (DESIGN.md §3), used by the tests and the bench too: for a term x against reference y,
-err = max|x − y| / max(max|y|, 1), over the whole term (every link, every component) of one state;
-a run reports the worst state. Accelerations from a solve are reported as err/κ: κ = cond(M) for a tree,
-κ = cond(M)·cond(Φ_q)² (independent rows) for a closed chain, the conditioning of the solve. Random states: q uniform in [−π, π] (revolute) or within the limits
-(prismatic; [−0.5, 0.5] m when unbounded), q̇ ~ N(0, 2²), q̈ ~ N(0, 5²), seeded.
+Each term is scored by the error measure of validation/measure.py (DESIGN.md §3) over the whole term
+(every link, every component) of one state; a run reports the worst state. Accelerations from a solve are
+reported as err/κ: κ = cond(M) for a tree, κ = cond(M)·cond(Φ_q)² (independent rows) for a closed chain, the
+conditioning of the solve. Random states: q uniform in [−π, π] (revolute) or within the limits (prismatic;
+[−0.5, 0.5] m when unbounded), q̇ ~ N(0, 2²), q̈ ~ N(0, 5²), seeded.
 """
 from __future__ import annotations
 
@@ -17,8 +17,9 @@ from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.rnea import rnea, rnea_terms
-from ..errors import ManipdynError
 from ..model import PRISMATIC
+from .closed import PROXIMAL, closed_chain_terms
+from .measure import error
 from .reference import Reference
 
 # term key -> (label, kind); kinematics and inertial terms are a link's own, transmitted ones are not
@@ -42,14 +43,6 @@ DYN_TERMS = {
 }
 CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
                 "qdd_closed": "closed q̈ vs constraintDynamics, err/κ"}   # κ = cond(M) cond(Φ_q)²
-
-
-def error(x, y) -> float:
-    """DESIGN.md's measure: max|x − y| / max(max|y|, 1)."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if x.shape != y.shape:     # never let broadcasting compare the wrong entries
-        raise ManipdynError(f"validation compares arrays of shapes {x.shape} and {y.shape}")
-    return float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1.0)) if y.size else 0.0
 
 
 @dataclass
@@ -142,7 +135,6 @@ def validate(model, urdf_path, *, n_states=1000, seed=0, tol=1e-12, progress=Non
         dyn = _lagrange_terms(model, ref, Q, V, A, rng.normal(0.0, 5.0, Q.shape), progress)
         rep.terms += [TermResult(k, DYN_TERMS[k], dyn[k][0], dyn[k][1], tol) for k in DYN_TERMS]
     if model.constraints:
-        from .closed import PROXIMAL, closed_chain_terms
         cl, rank = closed_chain_terms(model, ref, Q, rng, progress)
         rep.notes.append(f"closures: {rank}; Pinocchio constraintDynamics with ProximalSettings{PROXIMAL}")
         rep.terms += [TermResult(k, CLOSED_TERMS[k], cl[k][0], cl[k][1], tol) for k in CLOSED_TERMS]

@@ -20,7 +20,7 @@ from ..examples.spm_urdf import tree_guess
 from ..io.urdf import load_urdf
 from ..paths import bundled_dir
 from .closed import PROXIMAL, ClosedReference, actuator_torques_by_inversion
-from .compare import error
+from .measure import error
 from .reference import Reference
 
 SPM_URDF = bundled_dir() / "spm.urdf"

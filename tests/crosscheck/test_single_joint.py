@@ -10,7 +10,7 @@ from conftest import inertial_xml, urdf
 from manipdyn import load_urdf_string
 from manipdyn.errors import ManipdynError
 from manipdyn.validation import validate
-from manipdyn.validation.compare import error
+from manipdyn.validation.measure import error
 
 BODY = inertial_xml(1.3, (0.1, -0.05, 0.2), (0.1, 0.12, 0.08, 0.01, -0.02, 0.005))
 

@@ -5,7 +5,7 @@ from conftest import AAU, assert_close, inertial_xml, urdf, zoo_paths
 
 import manipdyn as md
 from manipdyn.dynamics.energy import kinetic_energy, potential_energy
-from manipdyn.dynamics.integrate import simulate
+from manipdyn.simulation import simulate
 from manipdyn.validation import random_states
 
 MODEL = md.load_urdf(AAU)

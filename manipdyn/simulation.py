@@ -3,6 +3,8 @@
 State x = (q, q̇); q̈ = f(t, q, q̇) from forward dynamics (ABA or the Cholesky route for trees; Lagrange's
 equations of the 1st kind for closed chains, optionally Baumgarte-stabilised or projected back onto the
 closures after every step). Fixed-step methods integrate a batch (N, nv) at once.
+
+This module sits above dynamics/ and constraints/ (it calls both), so neither of them imports it.
 """
 from __future__ import annotations
 
@@ -11,9 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DivergenceError, InputError, NumericalError
-from .aba import forward_dynamics
-from .state import as_batch, as_real, check_finite, check_scalar
+from .constraints import constrained_forward_dynamics, project
+from .dynamics.aba import forward_dynamics
+from .dynamics.state import as_batch, as_real, check_finite, check_scalar
+from .errors import DivergenceError, InputError, NumericalError
 
 
 @dataclass(frozen=True)
@@ -71,7 +74,6 @@ def _torque(tau, shape, single, names):
 def accelerations(model, forward="aba", stabilization="none", baumgarte=(10.0, 10.0)):
     """q̈ = f(t, q, q̇, τ) for this model: tree forward dynamics, or the closed-chain KKT solve."""
     if model.constraints:
-        from ..constraints import constrained_forward_dynamics
         bg = baumgarte if stabilization == "baumgarte" else None
         return lambda q, v, tau: constrained_forward_dynamics(model, q, v, tau, baumgarte=bg)[0]
     return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=forward)
@@ -222,7 +224,6 @@ class _Watch:
 
 
 def _projector(model):
-    from ..constraints import project
     return lambda Q, V: project(model, Q, V)
 
 

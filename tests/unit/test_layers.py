@@ -1,0 +1,164 @@
+"""Imports go one way (DESIGN.md §2): every import statement in manipdyn/, read from the source with ast —
+imports inside functions too, which an import-only test never sees — points to the same layer or one below,
+and no chain of imports between manipdyn's modules comes back to where it started.
+
+Layers, bottom up: errors/_jit/paths → spatial → model (model, joints, reduce) → io → dynamics →
+constraints → simulation → the package's public API (manipdyn/__init__.py) → examples → validation →
+bench → viz → cli. Closed chains (constraints/) sit on top of tree dynamics (dynamics/); simulation uses
+both. A module that is in no layer fails the test until it is placed.
+"""
+from __future__ import annotations
+
+import ast
+
+import pytest
+from conftest import ROOT
+
+PKG = ROOT / "manipdyn"
+LAYERS = (("base", ("manipdyn.errors", "manipdyn._jit", "manipdyn.paths")),
+          ("spatial", ("manipdyn.spatial",)),
+          ("model", ("manipdyn.model", "manipdyn.joints", "manipdyn.reduce")),
+          ("io", ("manipdyn.io",)),
+          ("dynamics", ("manipdyn.dynamics",)),
+          ("constraints", ("manipdyn.constraints",)),
+          ("simulation", ("manipdyn.simulation",)),
+          ("api", ("manipdyn",)),
+          ("examples", ("manipdyn.examples",)),
+          ("validation", ("manipdyn.validation",)),
+          ("bench", ("manipdyn.bench",)),
+          ("viz", ("manipdyn.viz",)),
+          ("cli", ("manipdyn.cli",)))
+
+
+def modules(pkg=PKG):
+    """{dotted module name: path} of every .py file under manipdyn/ (a package is its __init__.py)."""
+    out = {}
+    for path in sorted(pkg.rglob("*.py")):
+        parts = path.relative_to(pkg.parent).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return out
+
+
+def imports(name, path, known):
+    """[(line, imported manipdyn module)] of every import statement in the module, at any depth.
+
+    ``from X import a`` names module X.a when that is a module, else X (a, an attribute of X)."""
+    is_pkg = path.name == "__init__.py"
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] == "manipdyn"]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = name.split(".")[:len(name.split(".")) - node.level + is_pkg]
+                src = ".".join(base + ([node.module] if node.module else []))
+            else:
+                src = node.module or ""
+            if src.split(".")[0] != "manipdyn":
+                continue
+            out += [(node.lineno, f"{src}.{a.name}" if f"{src}.{a.name}" in known else src) for a in node.names]
+    return out
+
+
+def layer(module):
+    """Index of the module's layer (longest matching prefix), or None."""
+    best = None
+    for i, (_, prefixes) in enumerate(LAYERS):
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and (best is None or len(p) > best[1]):
+                best = (i, len(p))
+    return None if best is None else best[0]
+
+
+def graph(pkg=PKG):
+    """{module: [(line, imported module)]} over manipdyn's own modules."""
+    known = modules(pkg)
+    return {m: imports(m, p, known) for m, p in known.items()}, known
+
+
+def layer_violations(g):
+    """'module:line (layer) imports target (higher layer)' for every import that points upward."""
+    bad = []
+    for m, edges in g.items():
+        for line, target in edges:
+            lm, lt = layer(m), layer(target)
+            if lt is not None and lm is not None and lt > lm:
+                bad.append(f"{m}:{line} ({LAYERS[lm][0]}) imports {target} ({LAYERS[lt][0]}, a higher layer)")
+    return bad
+
+
+def cycle(g):
+    """One import cycle [m0, m1, ..., m0] among the modules, or None (depth-first search, iterative)."""
+    succ = {m: sorted({t for _, t in e if t in g and t != m}) for m, e in g.items()}
+    state = dict.fromkeys(g, 0)                 # 0 unseen, 1 on the current path, 2 done
+    for root in sorted(g):
+        if state[root]:
+            continue
+        path, stack = [root], [iter(succ[root])]
+        state[root] = 1
+        while stack:
+            nxt = next(stack[-1], None)
+            if nxt is None:
+                state[path.pop()] = 2
+                stack.pop()
+            elif state[nxt] == 1:
+                return path[path.index(nxt):] + [nxt]
+            elif state[nxt] == 0:
+                state[nxt] = 1
+                path.append(nxt)
+                stack.append(iter(succ[nxt]))
+    return None
+
+
+def test_every_module_is_in_a_layer():
+    _, known = graph()
+    assert len(known) > 40 and "manipdyn.simulation" in known
+    assert [m for m in known if layer(m) is None] == []
+
+
+def test_imports_point_down_the_layers():
+    g, _ = graph()
+    assert sum(map(len, g.values())) > 100          # the scan sees the imports (function-level ones too)
+    assert any(t == "manipdyn.validation.zoo" for _, t in g["manipdyn.viz.geometry"])   # one inside a function
+    assert layer_violations(g) == []
+
+
+@pytest.mark.parametrize("low, high", [
+    ("dynamics", ("constraints", "simulation", "examples", "validation", "bench", "viz", "cli")),
+    ("constraints", ("simulation", "examples", "validation", "bench", "viz", "cli")),
+    ("model", ("io", "dynamics", "constraints")), ("spatial", ("dynamics", "constraints")),
+    ("io", ("dynamics", "constraints"))])
+def test_named_layers_stay_below(low, high):
+    # the rules of DESIGN.md §2 spelled out, so that a change of LAYERS cannot quietly drop one
+    names = [n for n, _ in LAYERS]
+    assert all(names.index(low) < names.index(h) for h in high)
+    g, _ = graph()
+    bad = [(m, line, t) for m, e in g.items() if layer(m) == names.index(low)
+           for line, t in e if layer(t) in {names.index(h) for h in high}]
+    assert bad == []
+
+
+def test_no_import_cycle():
+    # validation/compare ↔ validation/closed once imported each other inside functions; the shared error
+    # measure now lives in validation/measure.py, which both import at module level
+    found = cycle(graph()[0])
+    assert found is None, "import cycle: " + " → ".join(found)
+
+
+def test_the_checks_catch_an_upward_import_and_a_cycle(tmp_path):
+    # a scratch package: a function-level import from dynamics/ up into constraints/, and a ↔ b in validation/
+    files = {"manipdyn/__init__.py": "", "manipdyn/dynamics/__init__.py": "", "manipdyn/constraints/__init__.py": "",
+             "manipdyn/validation/__init__.py": "",
+             "manipdyn/dynamics/integrate.py": "def f():\n    from ..constraints import project\n",
+             "manipdyn/constraints/dynamics.py": "from ..dynamics.integrate import f\n",
+             "manipdyn/validation/a.py": "from .b import x\n",
+             "manipdyn/validation/b.py": "def x():\n    from . import a\n"}
+    for rel, text in files.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    g, _ = graph(tmp_path / "manipdyn")
+    assert g["manipdyn.dynamics.integrate"] == [(2, "manipdyn.constraints")]
+    assert layer_violations(g) == ["manipdyn.dynamics.integrate:2 (dynamics) imports manipdyn.constraints "
+                                   "(constraints, a higher layer)"]
+    assert cycle(g) in (["manipdyn.validation.a", "manipdyn.validation.b", "manipdyn.validation.a"],
+                        ["manipdyn.validation.b", "manipdyn.validation.a", "manipdyn.validation.b"])
