@@ -38,6 +38,7 @@ AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "inte
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
+_CRBA = "tests/crosscheck/test_crba.py"
 _ANALYTIC = "tests/unit/test_analytic.py"
 _PROPS = "tests/unit/test_lagrange_properties.py"
 _FOURBAR = "tests/unit/test_fourbar.py"
@@ -52,7 +53,8 @@ AREA_TESTS = {
                "tests/properties/test_random_trees.py"),
     "kinematics": ("tests/unit/test_analytic_spatial.py",),
     "rnea": ("tests/batch/test_kernels_vs_readable.py", "tests/unit/test_analytic_spatial.py"),
-    "lagrange": ("tests/unit/test_analytic_spatial.py", "tests/batch/test_kernels_vs_readable.py"),
+    "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py",
+                 "tests/batch/test_kernels_vs_readable.py"),
     "aba": ("tests/batch/test_kernels_vs_readable.py",),
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
     "integrators": ("tests/unit/test_symplectic_euler.py",),
@@ -146,7 +148,7 @@ FAULTS = (
           "                dvy += qd * (wiz * zx - wix * zz) + qdd * zy\n"
           "                dvz += qd * (wix * zy - wiy * zx) + qdd * zz\n",
           (_ANALYTIC, _FAST), "compiled Eq. 12 with ω × ḋ z instead of 2 ω × ḋ z (prismatic Coriolis)"),
-    # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, fast.py)
+    # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, crba.py)
     Fault("lagrange-christoffel-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
           '- np.einsum("nijk,nk->nij", dM, V))',
           '+ np.einsum("nijk,nk->nij", dM, V))',
@@ -159,10 +161,15 @@ FAULTS = (
           'g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)',
           'g = np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)',
           (_PROPS, "tests/unit/test_integrate.py"), "g(q) = +Σ m Jᵀ g (sign of ∂V/∂q)"),
-    Fault("fast-crba-shift-factor", "lagrange", "manipdyn/dynamics/fast.py",
-          "+ (2.0 * ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]",
-          "+ (ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]",
-          (_FAST, _PROPS), "compiled CRBA: composite inertia shifted with (p·h) 1 instead of 2 (p·h) 1"),
+    Fault("fast-crba-shift-factor", "lagrange", "manipdyn/dynamics/crba.py",
+          "W[i, 0], W[i, 1], W[i, 2] = m1 / m, m2 / m, m1 * m2 / m",
+          "W[i, 0], W[i, 1], W[i, 2] = m1 / m, m2 / m, m1",
+          (_CRBA, _PROPS), "CRBA: composites merged with the parallel-axis term m₁(|d|²1 − ddᵀ) instead of "
+                           "m₁m₂/(m₁ + m₂)(|d|²1 − ddᵀ)"),
+    Fault("crba-unit-motion-linear-part", "lagrange", "manipdyn/dynamics/crba.py",
+          "fx = m * (lx + ay * c[2] - az * c[1])",
+          "fx = m * (ay * c[2] - az * c[1])",
+          (_CRBA,), "CRBA: F = I^c s drops the x component of s's linear part (prismatic joints, free flyer)"),
     # ---------------------------------------------------------------- ABA (dynamics/aba.py, fast.py)
     Fault("aba-bias-force-sign", "aba", "manipdyn/dynamics/aba.py",
           'pA[i] = -np.einsum("nba,nb->na", _crm(vel[i]), Iv)',

@@ -9,7 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays, rnea_kernel
+from ..dynamics import core
+from ..dynamics.crba import crba_kernel
+from ..dynamics.fast import _joint_rotation, _unpack, kernel_arrays, rnea_kernel
 from ..dynamics.kinematics import supports
 from ..errors import NumericalError, SingularError
 from .closures import RANK_RTOL, _pairs
@@ -124,8 +126,9 @@ def closure_kernel(I, F, CI, CF, S, q, v, Phi, Jc, bias):
 
 
 @njit(cache=True)
-def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
-    """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
+def constrained_fd_kernel(I, F, Ic, Fc, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
+    """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows;
+    (Ic, Fc) is the model in core form (dynamics/core.kernel_arrays) for crba_kernel.
     Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
     N, nv = Q.shape
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
@@ -136,7 +139,7 @@ def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, L
             if not (np.isfinite(Q[s, i]) and np.isfinite(V[s, i]) and np.isfinite(T[s, i])):
                 return s * nv + i
         closure_kernel(I, F, CI, CF, S, Q[s], V[s], Phi, Jc, bias)
-        crba_kernel(I, F, Q[s:s + 1], M)
+        crba_kernel(Ic, Fc, Q[s:s + 1], M)
         rnea_kernel(I, F, Q[s:s + 1], V[s:s + 1], np.zeros((1, nv)), h)     # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
@@ -185,7 +188,8 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
     try:
-        code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+        code = constrained_fd_kernel(I, F, *core.kernel_arrays(model), CI, CF, S, m, Q, V, T, alpha, beta,
+                                     RANK_RTOL, QDD, LAM, RANK)
     except np.linalg.LinAlgError:
         _overflowed(model, Q, V)
         raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "

@@ -1,4 +1,4 @@
-"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py, aba.py and lagrange.py
+"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py and aba.py
 (the readable references, which the tests hold these kernels to), written with scalar 3-vectors so that one
 state costs no numpy dispatch and a batch runs in one compiled loop.
 
@@ -368,82 +368,6 @@ def aba_kernel(I, F, Q, V, T, out):
 
 
 @njit(cache=True)
-def crba_kernel(I, F, Q, M):
-    """M(q) (N, nv, nv) by the composite-rigid-body algorithm, as lagrange._crba: composites (m, h = m c,
-    I_O about the frame origin) carried to the parent, then columns by force transmission. Returns -1,
-    the flat index of the first non-finite q, or -2 - nv - (flat index) of the first non-finite entry of M."""
-    parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
-    N, nv = Q.shape
-    R = np.empty((nv, 3, 3))
-    p = np.empty((nv, 3))
-    mc = np.empty(nv)
-    h = np.empty((nv, 3))
-    Io = np.empty((nv, 3, 3))
-    tmp = np.empty((3, 3))
-    hr, f, n, t = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    for s in range(N):
-        for i in range(nv):
-            q = Q[s, i]
-            if not np.isfinite(q):
-                return s * nv + i
-            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
-            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
-            c = com[i]
-            mc[i] = mass[i]
-            cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
-            for a in range(3):
-                h[i, a] = mass[i] * c[a]
-                for b in range(3):
-                    Io[i, a, b] = inertia[i, a, b] + mass[i] * ((cc if a == b else 0.0) - c[a] * c[b])
-        for i in range(nv - 1, -1, -1):          # pass 1: composite bodies
-            j = parent[i]
-            if j < 0:
-                continue
-            _rot3(R[i], h[i], hr)
-            _sandwich(R[i], Io[i], tmp, Io[j])
-            pp = p[i]
-            ph = pp[0] * hr[0] + pp[1] * hr[1] + pp[2] * hr[2]
-            p2 = pp[0] * pp[0] + pp[1] * pp[1] + pp[2] * pp[2]
-            for a in range(3):                   # shift: m(|p|²1 − p pᵀ) + 2(p·h)1 − p hᵀ − h pᵀ
-                for b in range(3):
-                    Io[j, a, b] += mc[i] * ((p2 if a == b else 0.0) - pp[a] * pp[b]) \
-                        + (2.0 * ph if a == b else 0.0) - pp[a] * hr[b] - hr[a] * pp[b]
-            for a in range(3):
-                h[j, a] += hr[a] + mc[i] * pp[a]
-            mc[j] += mc[i]
-        M[s, :, :] = 0.0                          # bodies on different branches do not couple
-        for i in range(nv):                      # pass 2: column i
-            z = axis[i]
-            if rev[i]:
-                _cross(z, h[i], f)
-                _rot3(Io[i], z, n)
-                M[s, i, i] = n[0] * z[0] + n[1] * z[1] + n[2] * z[2]
-            else:
-                for a in range(3):
-                    f[a] = mc[i] * z[a]
-                _cross(h[i], z, n)
-                M[s, i, i] = f[0] * z[0] + f[1] * z[1] + f[2] * z[2]
-            k = i
-            while parent[k] >= 0:
-                _rot3(R[k], f, t)
-                _rot3(R[k], n, hr)
-                _cross(p[k], t, n)
-                for a in range(3):
-                    f[a] = t[a]
-                    n[a] += hr[a]
-                k = parent[k]
-                zk = axis[k]
-                x = (n[0] * zk[0] + n[1] * zk[1] + n[2] * zk[2]) if rev[k] else (f[0] * zk[0] + f[1] * zk[1] + f[2] * zk[2])
-                M[s, i, k] = x
-                M[s, k, i] = x
-        for i in range(nv):                      # the result is finite (else an intermediate overflowed)
-            for k in range(nv):
-                if not np.isfinite(M[s, i, k]):
-                    return -2 - nv - ((s * nv + i) * nv + k)
-    return -1
-
-
-@njit(cache=True)
 def rnea_one(I, F, q, v, a, tau):
     """One state (nv,) through rnea_kernel, without Python-side reshapes."""
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], tau[np.newaxis, :])
@@ -454,8 +378,3 @@ def aba_one(I, F, q, v, t, out):
     """One state (nv,) through aba_kernel."""
     return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], t[np.newaxis, :], out[np.newaxis, :])
 
-
-@njit(cache=True)
-def crba_one(I, F, q, M):
-    """One state (nv,) through crba_kernel."""
-    return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])

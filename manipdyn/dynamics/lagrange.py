@@ -13,9 +13,8 @@ from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
 from .kinematics import axes_world, placements, point_jacobian, supports
-from .fast import crba_kernel, crba_one, kernel_arrays
-from .core import joint_placements
-from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
+from .crba import crba
+from .state import as_batch, check_output, quiet, unbatch
 
 
 def _com_jacobians(model, R, p):
@@ -29,88 +28,23 @@ def _com_jacobians(model, R, p):
 
 
 def mass_matrix(model, q, method="crba"):
-    """M(q) (nv, nv) or (N, nv, nv), the joint-space inertia matrix of T = ½ q̇ᵀ M q̇ (Eq. 23).
+    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
+    T = ½ q̇ᵀ M q̇ (Eq. 23).
 
-    method="crba" (default, O(n²)): composite-rigid-body algorithm (compiled kernel; "crba_reference" is
-    the readable version it is tested against). method="lagrange": the closed form
-    M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links (costly, as the chapter warns).
+    method="crba" (default, O(n²)): the composite-rigid-body algorithm (dynamics/crba.py, compiled).
+    method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
+    (costly, as the chapter warns).
     """
-    nd = fast_shape(model, q) if method == "crba" else 0
-    if nd == 0:                                         # checked and converted first
-        (Q,), single = as_batch(model, q=q)
-        if method == "crba" and model.nv:
-            q, nd = unbatch(Q, single), 1 if single else 2
-    if nd:                                              # compiled; held by the tests to crba_reference
-        M = np.empty(q.shape + (model.nv,))
-        code = (crba_one if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
-        if code != -1:
-            raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
-        return M
-    if method == "crba":                                # nv = 0
-        M = np.zeros((Q.shape[0], 0, 0))
-    elif method == "crba_reference":
-        M = _crba(model, Q)
-    elif method == "lagrange":
+    if method == "crba":
+        return crba(model, q)
+    (Q,), single = as_batch(model, q=q)
+    if method == "lagrange":
         _, J, Iw, _ = _com_jacobians(model, *placements(model, Q))
         Jv, Jw = J[:, :, :3], J[:, :, 3:]
         M = np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
     else:
-        raise InputError(f"mass_matrix method must be 'crba', 'crba_reference' or 'lagrange', not {method!r}")
+        raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
     return unbatch(check_output("mass_matrix", "M", M, model, dict(q=Q)), single)
-
-
-def _crba(model, Q):
-    """Composite-rigid-body algorithm in link frames (RBDA §6.2, written with 3-vectors).
-
-    Pass 1 (leaves → root): body i's composite = body i merged with its children's composites, each
-    carried into frame i: mass m, CoM c, inertia I_c about c. Pass 2: for joint i, the force/moment
-    (f, n about frame i's origin) needed to give the composite a unit joint acceleration (a pure rotation
-    about the axis or a translation along it); M[i, i] = its axis component, and carried to each
-    ancestor j (f_j = R f, n_j = R n + p × R f), M[i, j] = M[j, i] = that of joint j's axis.
-    """
-    N, nv = Q.shape[0], model.nv
-    Rp, pp = joint_placements(model, Q)
-    m = model.mass.copy()
-    h = np.broadcast_to(model.mass[:, None, None] * model.com[:, None, :], (nv, N, 3)).copy()  # m c
-    Io = np.broadcast_to(model.inertia[:, None], (nv, N, 3, 3)) + \
-        model.mass[:, None, None, None] * _point(model.com)[:, None]                   # about origin
-    for i in reversed(range(nv)):                           # pass 1: composites about each frame origin
-        j = model.parent[i]
-        if j >= 0:
-            R, p = Rp[i], pp[i]
-            m[j] += m[i]
-            h_rot = np.einsum("nab,nb->na", R, h[i])
-            Io[j] += R @ Io[i] @ np.swapaxes(R, 1, 2) + _shift(m[i], h_rot, p)
-            h[j] += h_rot + m[i] * p
-    M = np.zeros((N, nv, nv))
-    for i in range(nv):                                     # pass 2: columns
-        z = model.axis[i]
-        if model.kind[i] == REVOLUTE:                       # unit rotation about z through the origin
-            f, n = cross(np.broadcast_to(z, (N, 3)), h[i]), np.einsum("nab,b->na", Io[i], z)
-        else:                                               # unit translation along z
-            f, n = m[i] * np.broadcast_to(z, (N, 3)), cross(h[i], np.broadcast_to(z, (N, 3)))
-        M[:, i, i] = (n if model.kind[i] == REVOLUTE else f) @ z
-        k = i
-        while model.parent[k] >= 0:
-            f, n = np.einsum("nab,nb->na", Rp[k], f), np.einsum("nab,nb->na", Rp[k], n)
-            n = n + cross(pp[k], f)
-            k = model.parent[k]
-            M[:, i, k] = M[:, k, i] = (n if model.kind[k] == REVOLUTE else f) @ model.axis[k]
-    return M
-
-
-def _point(c):
-    """Inertia of a unit point mass at c about the origin: |c|² 1 − c cᵀ; c (..., 3) -> (..., 3, 3)."""
-    return np.einsum("...k,...k->...", c, c)[..., None, None] * np.eye(3) - c[..., :, None] * c[..., None, :]
-
-
-def _shift(mass, h_rot, p):
-    """Change of the inertia about the origin when a body of mass m, first moment h, moves by p.
-
-    I_O(new) = I_O(old, rotated) + m(|p|²1 − p pᵀ) + (2 (p·h) 1 − p hᵀ − h pᵀ)  (parallel axis with offset).
-    """
-    ph = np.einsum("nk,nk->n", p, h_rot)[:, None, None]
-    return mass * _point(p) + 2 * ph * np.eye(3) - p[:, :, None] * h_rot[:, None, :] - h_rot[:, :, None] * p[:, None, :]
 
 
 @quiet

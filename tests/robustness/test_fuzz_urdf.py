@@ -185,11 +185,11 @@ def test_sources_agree_unmutated():
     assert STATS["compared"] >= len(SOURCES)
 
 
-# Found by this fuzz (a TwoDofs link's CoM moved to z = -1e6 m, along its joint axis): rnea agrees with
-# Pinocchio to 0, but the CRBA misses M by 1.3e-5. It accumulates composite inertias about each frame
-# origin (I_c + m(|c|² 1 − c cᵀ), entries ~m|c|² = 5.5e11), so the small moment about the axis
-# (m (x² + y²) = 4e-3) is lost to round-off ~1e-16 × 5.5e11. Pinocchio keeps (m, c, I_c) and forms
-# n = I_c z + m c × (z × c), exact here; so do our rnea and mass_matrix(method="lagrange").
+# Found by this fuzz (a TwoDofs link's CoM moved to z = -1e6 m, along its joint axis): rnea agreed with
+# Pinocchio to 0, but a CRBA that accumulated composite inertias about each frame origin
+# (I_c + m(|c|² 1 − c cᵀ), entries ~m|c|² = 5.5e11) missed M by 1.3e-5: the small moment about the axis
+# (m (x² + y²) = 4e-3) was lost to round-off ~1e-16 × 5.5e11. Pinocchio keeps (m, c, I_c) and forms
+# n = I_c z + m c × (z × c), exact here; so do our rnea, the CRBA and mass_matrix(method="lagrange").
 FAR_COM = '''<robot name="far"><link name="a"/><link name="b"><inertial><origin xyz="0 0.085 -1e6"/>
 <mass value="0.55"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
 <joint name="j" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint></robot>'''
@@ -203,9 +203,27 @@ def test_far_com_along_the_axis_rnea_and_lagrange_are_exact():
     assert err(md.mass_matrix(model, q, method="lagrange"), [[exact]]) <= 1e-17   # measured 8.7e-19
 
 
-@pytest.mark.xfail(strict=True, reason="CRBA composites about frame origins lose m(x²+y²) next to m|c|²")
-@pytest.mark.parametrize("method", ["crba", "crba_reference"])
-def test_far_com_along_the_axis_crba(method):
+def test_far_com_along_the_axis_crba():
     model, q = md.load_urdf_string(FAR_COM), np.array([0.3])
     exact = 0.001 + 0.55 * 0.085 ** 2
-    assert err(md.mass_matrix(model, q, method=method), [[exact]]) <= 1e-15   # measured 1.3e-5
+    assert err(md.mass_matrix(model, q), [[exact]]) <= 1e-17         # measured 0 (1.3e-5 about frame origins)
+
+
+# The same far centre of mass on a child body: the composite of both bodies (centre of mass ~ -3.5e5 m
+# along the common axis) must keep the moments about the axis, m (x² + y²) ~ 1e-3, of each body.
+FAR_COM_CHAIN = '''<robot name="far2"><link name="a"/><link name="b"><inertial><origin xyz="0.05 0 0"/>
+<mass value="1.0"/><inertia ixx="0.002" ixy="0" ixz="0" iyy="0.002" iyz="0" izz="0.002"/></inertial></link>
+<link name="c"><inertial><origin xyz="0 0.085 -1e6"/><mass value="0.55"/><inertia ixx="0.001" ixy="0"
+ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+<joint name="j1" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+<joint name="j2" type="continuous"><parent link="b"/><child link="c"/><origin xyz="0.1 0 0"/>
+<axis xyz="0 0 1"/></joint></robot>'''
+
+
+def test_far_com_along_the_axis_crba_composite():
+    model, q = md.load_urdf_string(FAR_COM_CHAIN), np.array([0.3, -1.1])
+    x, y = 0.1 - 0.085 * np.sin(q[1]), 0.085 * np.cos(q[1])        # body c's CoM in b's frame (x, y)
+    m22 = 0.001 + 0.55 * 0.085 ** 2                                  # about j2's axis
+    m12 = 0.001 + 0.55 * (x * (x - 0.1) + y * y)                     # ż of c's CoM: z × r and z × (r − p)
+    m11 = 0.002 + 1.0 * 0.05 ** 2 + 0.001 + 0.55 * (x * x + y * y)
+    assert err(md.mass_matrix(model, q), [[m11, m12], [m12, m22]]) <= 1e-16   # measured 3.5e-18 (1.3e-5 about origins)

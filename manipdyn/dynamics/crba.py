@@ -1,0 +1,200 @@
+"""The composite-rigid-body algorithm: M(q), the joint-space inertia matrix of T = ½ q̇ᵀ M q̇ (chapter
+Eq. 23), RBDA §6.2 — one compiled source for every joint type of ``manipdyn.joints``.
+
+Pass 1 (leaves → root): the composite C_i = body i with everything it carries, kept as (m, c, I_c) —
+mass, centre of mass in body i's frame, inertia about that centre of mass — never as an inertia about the
+frame origin: a centre of mass far along a joint axis (m|c|² ≫ m(x² + y²)) would lose the moment about
+the axis to round-off. C_λ(i) ← C_λ(i) ∪ (C_i carried into λ(i)'s frame), combined about the common
+centre of mass as Pinocchio's Inertia does:
+    m = m₁ + m₂,  c = (m₁ c₁ + m₂ c₂)/m,  I = I₁ + I₂ + (m₁ m₂/m)(|d|² 1 − d dᵀ),  d = c₁ − c₂.
+Pass 2: for every column r of joint i's motion subspace, s_r = [s_l; s_a] (S row r, body frame), the
+wrench F = I^c_i s_r that gives C_i the unit motion s_r: the centre of mass moves at s_l + s_a × c, so
+    f = m (s_l + s_a × c),   n = I_c s_a + c × f   (about body i's origin).
+M[rows of i, r] = S_iᵀ F; carried to each ancestor (f ← R f, n ← R n + p × R f, the force transform of
+Eqs. 15–16), M[rows of k, r] = S_kᵀ F; M is symmetric and bodies on different branches do not couple.
+A free-flyer root has S = 1₆: its six columns are the composite's momenta of a unit body twist.
+
+Kernel convention (dynamics/state.py): Q (N, nq), M (N, nv, nv); return −1, the flat index of the first
+non-finite q, or −2 − nb − k for the first non-finite entry k (flat) of M (an intermediate overflowed).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from ..joints import joint_placement
+from .core import kernel_arrays, rot3, unpack
+from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+
+
+@njit(cache=True, inline="always")
+def merge_weights(parent, mass, mC, W):
+    """The composite masses mC (nb,) = m_i + the masses body i carries, and the weights of each merge
+    C_λ(i) ← C_λ(i) ∪ C_i (pass 1 order): W[i] = (m₁/m, m₂/m, m₁ m₂/m), m₁ = mC_i, m₂ = λ(i)'s mass merged
+    so far, m = m₁ + m₂ (zeros for a massless union). Masses do not depend on q: computed once per call,
+    the composite pass divides by nothing."""
+    mC[:] = mass
+    for i in range(parent.shape[0] - 1, -1, -1):
+        j = parent[i]
+        if j < 0:
+            continue
+        m1, m2 = mC[i], mC[j]
+        m = m1 + m2
+        W[i, 0] = W[i, 1] = W[i, 2] = 0.0      # a massless union: its centre of mass is immaterial
+        if m > 0.0:
+            W[i, 0], W[i, 1], W[i, 2] = m1 / m, m2 / m, m1 * m2 / m
+        mC[j] = m
+
+
+@njit(cache=True, inline="always")
+def combine(w, c1, c2, I2):
+    """(c2, I2) ← the union of a body (c1; its inertia already in I2) and the composite (c2, I2), one
+    frame, about their common centre of mass: I2 += (m₁m₂/m)(|d|² 1 − d dᵀ), d = c1 − c2;
+    c2 ← (m₁ c1 + m₂ c2)/m; w = (m₁/m, m₂/m, m₁m₂/m). The diagonal is formed from sums of the other two
+    squares (spatial.parallel_axis): a large offset along one axis keeps the small moment about it."""
+    k = w[2]
+    dx, dy, dz = c1[0] - c2[0], c1[1] - c2[1], c1[2] - c2[2]
+    I2[0, 0] += k * (dy * dy + dz * dz)
+    I2[1, 1] += k * (dx * dx + dz * dz)
+    I2[2, 2] += k * (dx * dx + dy * dy)
+    I2[0, 1] -= k * dx * dy
+    I2[1, 0] -= k * dx * dy
+    I2[0, 2] -= k * dx * dz
+    I2[2, 0] -= k * dx * dz
+    I2[1, 2] -= k * dy * dz
+    I2[2, 1] -= k * dy * dz
+    for a in range(3):
+        c2[a] = w[0] * c1[a] + w[1] * c2[a]
+
+
+@njit(cache=True, inline="always")
+def rotate_inertia(R, X, tmp, out):
+    """out += R X Rᵀ for a symmetric 3×3 X: the upper triangle, mirrored (tmp is scratch)."""
+    for a in range(3):
+        for b in range(3):
+            tmp[a, b] = R[a, 0] * X[0, b] + R[a, 1] * X[1, b] + R[a, 2] * X[2, b]
+    for a in range(3):
+        for b in range(a, 3):
+            x = tmp[a, 0] * R[b, 0] + tmp[a, 1] * R[b, 1] + tmp[a, 2] * R[b, 2]
+            out[a, b] += x
+            if b != a:
+                out[b, a] += x
+
+
+@njit(cache=True, inline="always")
+def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
+    """Pass 1: placements (R, p)[i] of every body in its parent (joints.joint_placement), then the
+    composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
+    carried as centre of mass and inertia about it). arrays = core.unpack(I, F); W from merge_weights."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = arrays[:12]
+    for i in range(parent.shape[0]):
+        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], R[i], p[i])
+    cC[:, :] = com
+    IC[:, :, :] = inertia
+    for i in range(parent.shape[0] - 1, -1, -1):
+        j = parent[i]
+        if j < 0:
+            continue
+        rot3(R[i], cC[i], d)                   # c_i in λ's frame: R c_i + p
+        for a in range(3):
+            d[a] += p[i, a]
+        rotate_inertia(R[i], IC[i], tmp, IC[j])     # R I_c,i Rᵀ: about its own centre of mass
+        combine(W[i], d, cC[j], IC[j])
+
+
+@njit(cache=True, inline="always")
+def unit_motion_force(S, r, m, c, Ic):
+    """F = I^c s_r = (f, n): the wrench about body i's origin that gives the composite (m, c, I_c) the
+    unit motion s_r = [s_l; s_a] (row r of S): f = m (s_l + s_a × c), its CoM's momentum;
+    n = I_c s_a + c × f."""
+    lx, ly, lz, ax, ay, az = S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]
+    fx = m * (lx + ay * c[2] - az * c[1])
+    fy = m * (ly + az * c[0] - ax * c[2])
+    fz = m * (lz + ax * c[1] - ay * c[0])
+    nx = Ic[0, 0] * ax + Ic[0, 1] * ay + Ic[0, 2] * az + c[1] * fz - c[2] * fy
+    ny = Ic[1, 0] * ax + Ic[1, 1] * ay + Ic[1, 2] * az + c[2] * fx - c[0] * fz
+    nz = Ic[2, 0] * ax + Ic[2, 1] * ay + Ic[2, 2] * az + c[0] * fy - c[1] * fx
+    return fx, fy, fz, nx, ny, nz
+
+
+@njit(cache=True, inline="always")
+def to_parent(R, p, fx, fy, fz, nx, ny, nz):
+    """The wrench (f, n) about body k's origin, in λ(k)'s frame about its origin: f ← R f,
+    n ← R n + p × R f (Eqs. 15, 16)."""
+    gx = R[0, 0] * fx + R[0, 1] * fy + R[0, 2] * fz
+    gy = R[1, 0] * fx + R[1, 1] * fy + R[1, 2] * fz
+    gz = R[2, 0] * fx + R[2, 1] * fy + R[2, 2] * fz
+    mx = R[0, 0] * nx + R[0, 1] * ny + R[0, 2] * nz + p[1] * gz - p[2] * gy
+    my = R[1, 0] * nx + R[1, 1] * ny + R[1, 2] * nz + p[2] * gx - p[0] * gz
+    mz = R[2, 0] * nx + R[2, 1] * ny + R[2, 2] * nz + p[0] * gy - p[1] * gx
+    return gx, gy, gz, mx, my, mz
+
+
+@njit(cache=True, inline="always")
+def column_pass(arrays, R, p, mC, cC, IC, M):
+    """Pass 2: M (nv, nv) column by column: for every row r of joint i's S, F = I^c_i s_r and
+    M_kr = S_kᵀ F for joint i and, F carried up, for every ancestor k (RBDA §6.2; joints.joint_force
+    written with scalars); the upper triangle mirrors the lower."""
+    parent, kind, iq, iv, nvj, S = arrays[:6]
+    M[:, :] = 0.0                              # bodies on different branches do not couple
+    for i in range(parent.shape[0]):
+        for r in range(iv[i], iv[i] + nvj[i]):
+            fx, fy, fz, nx, ny, nz = unit_motion_force(S, r, mC[i], cC[i], IC[i])
+            k = i
+            while True:
+                for x in range(iv[k], iv[k] + nvj[k]):     # M[r, rows of k] = S_kᵀ F
+                    M[r, x] = (S[x, 0] * fx + S[x, 1] * fy + S[x, 2] * fz
+                               + S[x, 3] * nx + S[x, 4] * ny + S[x, 5] * nz)
+                if parent[k] < 0:
+                    break
+                fx, fy, fz, nx, ny, nz = to_parent(R[k], p[k], fx, fy, fz, nx, ny, nz)
+                k = parent[k]
+    for r in range(M.shape[0]):
+        for a in range(r):
+            M[a, r] = M[r, a]
+
+
+@njit(cache=True)
+def crba_kernel(I, F, Q, M):
+    """M(q) (N, nv, nv) for every state of Q (N, nq) by the composite-rigid-body algorithm (RBDA §6.2).
+    Returns −1, the flat index of the first non-finite q, or −2 − nb − (flat index) of a non-finite M."""
+    arrays = unpack(I, F)
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
+    R, p = np.empty((nb, 3, 3)), np.empty((nb, 3))
+    mC, W, cC, IC = np.empty(nb), np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
+    d, tmp = np.empty(3), np.empty((3, 3))
+    merge_weights(arrays[0], arrays[9], mC, W)
+    for s in range(N):
+        for k in range(nq):
+            if not np.isfinite(Q[s, k]):
+                return s * nq + k
+        composite_pass(arrays, Q[s], W, R, p, cC, IC, d, tmp)
+        column_pass(arrays, R, p, mC, cC, IC, M[s])
+        for a in range(nv):                    # the result is finite (else an intermediate overflowed)
+            for b in range(nv):
+                if not np.isfinite(M[s, a, b]):
+                    return -2 - nb - ((s * nv + a) * nv + b)
+    return -1
+
+
+@njit(cache=True)
+def crba_one(I, F, q, M):
+    """One state: q (nq,), M (nv, nv), through crba_kernel."""
+    return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
+
+
+def crba(model, q):
+    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above).
+    Float64 arrays go straight to the kernel; anything else is checked and converted first."""
+    nd = fast_shape(model, q)
+    if nd == 0:
+        (Q,), single = as_batch(model, q=q)
+        if not model.njoints:
+            return unbatch(np.zeros((Q.shape[0], 0, 0)), single)
+        q, nd = unbatch(Q, single), 1 if single else 2
+    nv = model.nv
+    M = np.empty(q.shape[:-1] + (nv, nv))
+    code = (crba_one if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
+    if code != -1:
+        raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
+    return M
