@@ -54,7 +54,7 @@ def check_quaternions(model, Q, name="q"):
             r = int(bad[0])
             row = f"[{r}]" if Q.shape[0] > 1 else ""
             raise InputError(f"{name}{row}: the quaternion {model.q_names[k][:-3]}.(qx qy qz qw) = "
-                             f"{Q[r, k:k + 4].tolist()} has norm {n[r]:.17g}, not 1 (within {QUAT_TOL:g}); "
+                             f"{Q[r, k:k + 4].tolist()} has norm {n[r]:.12g}, not 1 (within {QUAT_TOL:g}); "
                              f"normalize it first (manipdyn.normalize)")
 
 
