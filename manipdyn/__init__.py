@@ -1,19 +1,22 @@
 """manipdyn: manipulator dynamics you can read and trust.
 
 Public API (names follow Pinocchio's where the meaning is the same). Every dynamics function takes one
-state (nv,) or a batch (N, nv) and returns the matching shape. Pinocchio is never imported here.
+state — q (nq,), q̇, q̈, τ (nv,) — or a batch (N, nq), (N, nv), and returns the matching shape; nq = nv but
+for a free-flyer root (``load_urdf(path, root_joint="free_flyer")``), whose q moves by ``integrate``.
+Pinocchio is never imported here.
 """
 from __future__ import annotations
 
+from .configuration import difference, integrate, neutral, normalize, random_configuration
 from .dynamics.aba import aba, forward_dynamics
 from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
-from .errors import (ConstraintError, DivergenceError, InertiaWarning, InputError, ManipdynError, ModelError,
-                     NumericalError, SingularError, URDFError)
+from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
+                     ManipdynError, ModelError, NumericalError, SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
-from .model import PRISMATIC, REVOLUTE, Frame, Model
+from .model import FREEFLYER, PRISMATIC, REVOLUTE, Frame, Model
 from .reduce import reduce
 from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
                           constrained_inverse_dynamics, project)
@@ -32,4 +35,6 @@ __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "proj
            "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
-           "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning"]
+           "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning",
+           "FloatingBaseWarning", "FREEFLYER", "neutral", "integrate", "difference", "random_configuration",
+           "normalize"]

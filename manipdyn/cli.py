@@ -68,12 +68,13 @@ def _validate(args) -> int:
     return 1 if failed else 0
 
 
-def _validate_paths(args) -> list[Path]:
-    """The URDF files validate runs on: those given (or the bundled ones), then the zoo's."""
-    from .validation import arm_paths
-    paths = [Path(p) for p in args.urdf] or bundled_models()
+def _validate_paths(args) -> list[tuple]:
+    """(URDF file, root_joint) for every model validate runs on: those given (or the bundled ones) with
+    --root-joint, then the zoo's arms (fixed base) and floating robots (free flyer)."""
+    from .validation import arm_paths, floating_paths
+    paths = [(Path(p), args.root_joint) for p in args.urdf] or [(p, args.root_joint) for p in bundled_models()]
     if args.zoo:
-        paths += arm_paths()
+        paths += [(p, None) for p in arm_paths()] + [(p, "free_flyer") for p in floating_paths()]
     if not paths:
         raise ManipdynError(f"no URDF given and no bundled model found in {BUNDLED}")
     return paths
@@ -89,11 +90,11 @@ def _validation_runs(args) -> list:
             warnings.simplefilter("ignore")
             load_urdf(args.reference)
     runs = []
-    for path in _validate_paths(args):
+    for path, root_joint in _validate_paths(args):
         _check_input_file(path, "URDF")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            model = load_urdf(path, **reduction(args))
+            model = load_urdf(path, root_joint=root_joint, **reduction(args))
         ref = Path(args.reference) if args.reference else path
         try:
             Reference(model, ref)
@@ -104,6 +105,14 @@ def _validation_runs(args) -> list:
                              f"{_one_line(str(exc))}") from exc
         runs.append((model, ref, [str(w.message) for w in caught]))
     return runs
+
+
+def add_root_joint_option(p):
+    """--root-joint free_flyer: the root link is a free body (load_urdf's root_joint)."""
+    p.add_argument("--root-joint", choices=["free_flyer"], default=None,
+                   help="free_flyer: the root link is a free body (legged robots, humanoids, drones), joint 0 "
+                        "'root_joint' with q = [x y z qx qy qz qw], as Pinocchio's JointModelFreeFlyer; "
+                        "default: the root link is the fixed base")
 
 
 def add_reduction_options(p):
@@ -137,7 +146,7 @@ def _inspect(args) -> int:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = load_urdf(args.urdf, **reduction(args))
+        model = load_urdf(args.urdf, root_joint=args.root_joint, **reduction(args))
     print(model.summary())
     for w in caught:
         print(f"warning: {w.message}")
@@ -212,7 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.commands = sub.choices              # name -> subcommand parser (for errors in its own name)
     v = sub.add_parser("validate", help="compare every Newton-Euler term with Pinocchio")
     v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/)")
-    v.add_argument("--zoo", action="store_true", help="also validate example-robot-data's arms")
+    v.add_argument("--zoo", action="store_true",
+                   help="also validate example-robot-data's arms (fixed base) and its legged robots, humanoids "
+                        "and drones (free-flyer root, whatever --root-joint says)")
     v.add_argument("--states", type=_int_in(1, MAX_STATES), default=1000,
                    help=f"random states per model, 1..{MAX_STATES} (default 1000)")
     v.add_argument("--seed", type=_int_in(0, MAX_SEED), default=0, help=f"0..{MAX_SEED} (default 0)")
@@ -221,10 +232,12 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_root_joint_option(v)
     add_reduction_options(v)
     v.set_defaults(func=_validate)
     i = sub.add_parser("inspect", help="show what the loader built from a URDF")
     i.add_argument("urdf")
+    add_root_joint_option(i)
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
     pl = sub.add_parser("play", help="3-D playback in the browser (meshcat): live, or one HTML file")

@@ -41,3 +41,8 @@ class InertiaWarning(UserWarning):
 
 class GeometryWarning(UserWarning):
     """A visual element is skipped (bad numbers, unknown format, or a mesh file outside the allowed roots)."""
+
+
+class FloatingBaseWarning(UserWarning):
+    """A URDF loaded with a fixed base has a root body that carries mass: if the robot is a free body
+    (legged robot, humanoid, drone), load it with root_joint="free_flyer"."""

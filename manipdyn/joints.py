@@ -133,16 +133,18 @@ def _V_coeffs(th2):
     if th2 < 1e-6:
         return 0.5 - th2 / 24.0 + th2 * th2 / 720.0, 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
     th = np.sqrt(th2)
-    return (1.0 - np.cos(th)) / th2, (th - np.sin(th)) / (th2 * th)
+    s = np.sin(0.5 * th)                       # 1 − cos θ = 2 sin²(θ/2): no cancellation at small θ
+    return 2.0 * s * s / th2, (th - np.sin(th)) / (th2 * th)
 
 
 @njit(cache=True, inline="always")
 def _Vinv_coeff(th2):
-    """c of V(ω)⁻¹ = 1 − ½ [ω]× + c [ω]×², c = (1 − θ sin θ / (2 (1 − cos θ))) / θ²."""
+    """c of V(ω)⁻¹ = 1 − ½ [ω]× + c [ω]×², c = (1 − θ sin θ / (2 (1 − cos θ))) / θ² = (1 − (θ/2) cot(θ/2)) / θ²
+    (the second form: 1 − cos θ, computed as written, loses all digits of c below θ ≈ 1e-3)."""
     if th2 < 1e-6:
         return 1.0 / 12.0 + th2 / 720.0 + th2 * th2 / 30240.0
     th = np.sqrt(th2)
-    return (1.0 - th * np.sin(th) / (2.0 * (1.0 - np.cos(th)))) / th2
+    return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2
 
 
 @njit(cache=True, inline="always")

@@ -203,7 +203,10 @@ class Model:
         for i, j in enumerate(self.joint_names):
             kind = "continuous" if self.continuous[i] else TYPE_NAMES[int(self.kind[i])]
             par = self.body_names[self.parent[i]] if self.parent[i] >= 0 else self.root_link
-            lines.append(f"  q[{self.idx_q[i]}] {j:<28} {kind:<10} axis {np.round(self.axis[i], 4).tolist()} "
+            how = f"axis {np.round(self.axis[i], 4).tolist()}"
+            if self.kind[i] == FREEFLYER:      # the root body moves freely: q = [x y z qx qy qz qw]
+                par, how = "world", "q = [x y z qx qy qz qw], v = [linear; angular] (body frame)"
+            lines.append(f"  q[{self.idx_q[i]}] {j:<28} {kind:<10} {how} "
                          f"{par} -> {self.body_names[i]}  mass {self.mass[i]:.6g} kg")
         for body, links in self.merged.items():
             if links:

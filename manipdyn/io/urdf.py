@@ -19,6 +19,18 @@ What the loader refuses (URDFError naming the file, the link or joint, the attri
   lower/upper is 0, as the URDF specification and urdfdom say), limits with lower > upper;
 - mimic joints naming a joint that does not exist, or themselves;
 - files larger than ``max_bytes`` (default ``MAX_BYTES``).
+
+The root link (DESIGN.md §3): by default it is the fixed base, body −1; its mass and inertia (with the links
+fixed to it) move with no joint, so they have no effect on the dynamics — Pinocchio's buildModelFromUrdf
+attaches them to the universe (``model.inertias[0]``), likewise without effect. A URDF describes no base
+joint, so whether a robot is bolted down is the caller's choice: ``root_joint="free_flyer"`` (Pinocchio's
+``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``) adds joint 0, a FREEFLYER named "root_joint", whose
+body is the root link with its merged fixed children (mass, CoM, inertia), at R0 = 1, p0 = 0 with parent −1;
+every URDF joint then comes one index later. Its limits in the Model (one entry per joint, as for every
+joint) are lower = −inf, upper = +inf, effort = velocity = inf (Pinocchio stores ±max float per q entry).
+Without it, a root body that carries mass gets a note and a FloatingBaseWarning (a legged robot or humanoid
+loaded as if bolted down) — unless the root link is named "world", the URDF convention for a robot fixed to
+the world (UR, xArm, Z1 in example-robot-data).
 """
 from __future__ import annotations
 
@@ -34,12 +46,15 @@ import numpy as np
 import yourdfpy
 from lxml import etree
 
-from ..errors import InertiaWarning, ModelError, URDFError
-from ..model import PRISMATIC, REVOLUTE, Constraint, Frame, Model, check_gravity
+from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, URDFError
+from ..model import FREEFLYER, PRISMATIC, REVOLUTE, Constraint, Frame, Model, check_gravity
 from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
 SUPPORTED = set(MOVING) | {"fixed"}
+ROOT_JOINTS = (None, "free_flyer")   # accepted values of root_joint
+ROOT_JOINT_NAME = "root_joint"       # the free flyer's name (Pinocchio's)
+_KIND = {**MOVING, "free_flyer": FREEFLYER}
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 # The URDF number grammar: optional sign, digits with an optional fraction (or a fraction alone), an
@@ -58,30 +73,39 @@ MAX_LENGTH = 1e6       # m, per coordinate of an origin (joint, inertial, constr
 MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data's largest is 0.21 MB
 
 
-def load_urdf(path, *, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None, root=None, tips=None,
-              prune=False, max_bytes: int = MAX_BYTES) -> Model:
-    """Read a URDF file into a Model (fixed base; revolute, continuous, prismatic and fixed joints).
+def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
+              root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES) -> Model:
+    """Read a URDF file into a Model (revolute, continuous, prismatic and fixed joints).
 
-    Parameters: path to the .urdf file; gravity (3,) in the base frame; strict=True refuses inertias that
-    violate the triangle inequality instead of warning; locked / root / tips / prune as in
-    ``manipdyn.reduce`` (model only what the scene needs); max_bytes: larger files are refused unread.
-    Raises URDFError naming the file and element at fault, ModelError for a non-physical body.
+    Parameters: path to the .urdf file; root_joint None (fixed base) or "free_flyer" (the root link is a
+    free body, as Pinocchio's ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``; see the module
+    docstring); gravity (3,) in the base frame; strict=True refuses inertias that violate the triangle
+    inequality instead of warning; locked / root / tips / prune as in ``manipdyn.reduce`` (model only what
+    the scene needs); max_bytes: larger files are refused unread.
+    Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
+    for a root_joint other than None or "free_flyer".
     """
     path = os.fspath(path)
+    _check_root_joint(root_joint, path)
+    if root_joint is not None and (locked or root or tips or prune):   # reduce() takes 1-dof joints only
+        raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with root_joint="
+                         f"{root_joint!r} (reducing a floating-base model is not supported)")
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:
         data = fh.read(max_bytes + 1)        # never more than the limit, whatever the file claims
-    model = load_urdf_string(data, source=path, gravity=gravity, strict=strict, max_bytes=max_bytes)
+    model = load_urdf_string(data, source=path, root_joint=root_joint, gravity=gravity, strict=strict,
+                             max_bytes=max_bytes)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
     return model
 
 
-def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), strict=False,
+def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 0.0, -9.81), strict=False,
                      max_bytes: int = MAX_BYTES) -> Model:
     """Same as load_urdf for URDF text (str or bytes); ``source`` names it in messages."""
+    _check_root_joint(root_joint, source)
     data = text.encode() if isinstance(text, str) else bytes(text)
     if len(data) > max_bytes:
         raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
@@ -89,13 +113,22 @@ def load_urdf_string(text, *, source="<string>", gravity=(0.0, 0.0, -9.81), stri
     g = check_gravity(gravity, source)
     root = _parse_xml(data, source)
     _check_xml(root, source)
-    model = _build(_read_elements(root, source), source, g, strict)
+    model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer")
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
     for note in model.notes:
         if "triangle inequality" in note:
             warnings.warn(f"{source}: {note}", InertiaWarning, stacklevel=3)
+        if "no joint moves" in note:
+            warnings.warn(f"{source}: {note}", FloatingBaseWarning, stacklevel=3)
     return model
+
+
+def _check_root_joint(root_joint, source):
+    """root_joint is None (fixed base) or "free_flyer"; InputError naming the accepted values otherwise."""
+    if not (root_joint is None or (isinstance(root_joint, str) and root_joint in ROOT_JOINTS)):
+        raise InputError(f"{source}: root_joint={root_joint!r}; accepted values: None (fixed base) or "
+                         f"'free_flyer' (the root link is a free body, Pinocchio's JointModelFreeFlyer)")
 
 
 def _parse_xml(data: bytes, source: str):
@@ -331,13 +364,21 @@ def _walk(children, root):
         stack.extend((c, c.child) for c in reversed(children[link]))
 
 
-def _build(robot, source, gravity, strict) -> Model:
-    """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links."""
+def _build(robot, source, gravity, strict, free=False) -> Model:
+    """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links.
+
+    free: the root link is body 0, carried by a free flyer (joint 0, parent −1); else the fixed base −1."""
     links, children, root = _tree(robot, source)
     joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
+    if free:
+        if any(j.name == ROOT_JOINT_NAME and j.type in MOVING for j in robot.joints):
+            raise URDFError(f"{source}: joint {ROOT_JOINT_NAME!r} exists already; the free flyer needs the name")
+        joints.append((yourdfpy.Joint(name=ROOT_JOINT_NAME, type="free_flyer", parent=None, child=root),
+                       -1, np.eye(3), np.zeros(3)))
+        parts[0] = []
     for j, link in _walk(children, root):
-        if j is None:                      # the root: the fixed base, body -1
-            body, R, p = -1, np.eye(3), np.zeros(3)
+        if j is None:                      # the root: the fixed base -1, or the free flyer's body 0
+            body, R, p = (0 if free else -1), np.eye(3), np.zeros(3)
         else:                              # (R, p): pose of `link` in the frame of `body`
             fp = frames[j.parent]
             Ro, po = (np.eye(3), np.zeros(3)) if j.origin is None else (j.origin[:3, :3], j.origin[:3, 3])
@@ -356,7 +397,20 @@ def _build(robot, source, gravity, strict) -> Model:
                         f"{root!r}: their joints form a cycle")
     link_I = [parts[f.body][k][2] for f, k in _part_index(frames, parts)]
     notes.extend(_triangle(link_I, list(frames), source, strict))
+    if not free:
+        notes.extend(_fixed_base_note(root, merged[root], parts[-1]))
     return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes)
+
+
+def _fixed_base_note(root, merged, parts):
+    """A note when the fixed base carries mass (rule: root body mass > 0, root link not named "world")."""
+    m = sum(mk for mk, _, _ in parts)
+    if m <= 0.0 or root == "world":
+        return []
+    fixed = f" with the links fixed to it ({', '.join(merged)})" if merged else ""
+    return [f"root link {root!r}{fixed} carries {m:.6g} kg that no joint moves: as the fixed base its mass "
+            f"and inertia have no effect on the dynamics (Pinocchio attaches them to the universe likewise); "
+            f"if it is a free body, load with root_joint=\"free_flyer\""]
 
 
 def _part_index(frames, parts):
@@ -369,15 +423,16 @@ def _part_index(frames, parts):
 
 def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes) -> Model:
     """The Model's arrays from the walk's joints (joint, parent body, R0, p0) and merged body parts."""
-    nv = len(joints)
+    nb = len(joints)                       # joints = bodies (a free flyer included)
     axes = [_unit_axis(j, source, notes) for j, *_ in joints]
-    inertias = [combine_inertias(parts[i]) for i in range(nv)]
+    inertias = [combine_inertias(parts[i]) for i in range(nb)]
     what = [f"fixed base {root!r} (with merged links {', '.join(merged[root]) or 'none'})"]
     for j, *_ in joints:
         extra = f" (with merged links {', '.join(merged[j.child])})" if merged[j.child] else ""
         what.append(f"body {j.child!r}{extra}")
-    _check_psd([combine_inertias(parts[-1])[2]] + [I for _, _, I in inertias], what, source)
-    lim = np.array([_limits(j) for j, *_ in joints], float).reshape(nv, 4)
+    base = [combine_inertias(parts[-1])[2]] if parts[-1] else [np.zeros((3, 3))]   # free: no fixed base
+    _check_psd(base + [I for _, _, I in inertias], what, source)
+    lim = np.array([_limits(j) for j, *_ in joints], float).reshape(nb, 4)
     mimic = tuple((j.name, j.mimic.joint, float(j.mimic.multiplier), float(j.mimic.offset or 0.0))
                   for j, *_ in joints if j.mimic is not None)
     if mimic:
@@ -386,15 +441,15 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
     return Model(
         name=robot.name or os.path.basename(source), root_link=root,
         joint_names=tuple(j.name for j, *_ in joints), body_names=tuple(j.child for j, *_ in joints),
-        parent=np.array([b for _, b, _, _ in joints], int).reshape(nv),
-        kind=np.array([MOVING[j.type] for j, *_ in joints], int).reshape(nv),
-        continuous=np.array([j.type == "continuous" for j, *_ in joints], bool).reshape(nv),
-        axis=np.array(axes, float).reshape(nv, 3),
-        R0=np.array([R for *_, R, _ in joints], float).reshape(nv, 3, 3),
-        p0=np.array([p for *_, p in joints], float).reshape(nv, 3),
-        mass=np.array([m for m, _, _ in inertias], float).reshape(nv),
-        com=np.array([c for _, c, _ in inertias], float).reshape(nv, 3),
-        inertia=np.array([I for _, _, I in inertias], float).reshape(nv, 3, 3),
+        parent=np.array([b for _, b, _, _ in joints], int).reshape(nb),
+        kind=np.array([_KIND[j.type] for j, *_ in joints], int).reshape(nb),
+        continuous=np.array([j.type == "continuous" for j, *_ in joints], bool).reshape(nb),
+        axis=np.array(axes, float).reshape(nb, 3),
+        R0=np.array([R for *_, R, _ in joints], float).reshape(nb, 3, 3),
+        p0=np.array([p for *_, p in joints], float).reshape(nb, 3),
+        mass=np.array([m for m, _, _ in inertias], float).reshape(nb),
+        com=np.array([c for _, c, _ in inertias], float).reshape(nb, 3),
+        inertia=np.array([I for _, _, I in inertias], float).reshape(nb, 3, 3),
         lower=lim[:, 0], upper=lim[:, 1], effort=lim[:, 2], velocity=lim[:, 3],
         gravity=np.array(gravity, float).reshape(3), frames=frames,
         merged={k: tuple(v) for k, v in merged.items()}, mimic=mimic, source=source, notes=tuple(notes))
@@ -402,7 +457,10 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
 
 def _unit_axis(j, source, notes):
     """The joint's unit axis (3,); scaled by its largest component first, so 1e200 or 1e-200 cannot
-    overflow or underflow the norm. A zero axis is refused (checked on the XML already)."""
+    overflow or underflow the norm. A zero axis is refused (checked on the XML already). A free flyer has
+    none (zeros)."""
+    if j.type == "free_flyer":
+        return np.zeros(3)
     a = np.asarray(j.axis if j.axis is not None else (1.0, 0.0, 0.0), float)
     scale = np.max(np.abs(a)) if a.shape == (3,) else 0.0
     if not (np.isfinite(scale) and scale > 0):
@@ -416,7 +474,10 @@ def _unit_axis(j, source, notes):
 
 def _limits(j):
     """(lower, upper, effort, velocity): continuous joints are unbounded, a missing lower/upper is 0 (the
-    URDF default, as urdfdom reads it), a continuous joint without <limit> has unbounded effort/velocity."""
+    URDF default, as urdfdom reads it), a continuous joint without <limit> has unbounded effort/velocity, a
+    free flyer is unbounded."""
+    if j.type == "free_flyer":
+        return -np.inf, np.inf, np.inf, np.inf
     L = j.limit
     get = lambda v, d: d if (L is None or v is None) else float(v)  # noqa: E731
     lo, hi = (-np.inf, np.inf) if j.type == "continuous" else (get(L and L.lower, 0.0), get(L and L.upper, 0.0))

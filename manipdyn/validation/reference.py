@@ -1,7 +1,10 @@
 """Pinocchio as the referee: building its model, and converting our conventions to its conventions.
 
 This is the one place where manipdyn's conventions meet Pinocchio's:
-- q: Pinocchio stores a continuous joint as (cos q, sin q) (nq = 2); ``to_pin_q`` maps our angle.
+- q: Pinocchio stores a continuous joint as (cos q, sin q) (nq = 2); ``to_pin_q`` maps our angle
+  (``from_pin_q`` back: atan2). A free-flyer root is the same in both, [x y z qx qy qz qw], v = [linear;
+  angular] in the body frame: its block is copied. A floating model's reference is
+  ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``, whose joint 1 is "root_joint" as ours.
 - spatial vectors: Pinocchio's are [linear; angular]; data.v[i], data.a[i] in joint i's frame, with
   data.a the *spatial* acceleration (classical linear acceleration = a.linear + ω × v.linear).
 - rnea fills data.a_gf (with gravity), never data.a: the gravity-free one comes from forwardKinematics.
@@ -30,7 +33,8 @@ class Reference:
     def __init__(self, model, urdf_path):
         P = pin()
         self.model = model
-        self.pm = P.buildModelFromUrdf(str(urdf_path))
+        root = (P.JointModelFreeFlyer(),) if model.floating else ()
+        self.pm = P.buildModelFromUrdf(str(urdf_path), *root)
         if model.locked:                      # a reduced model: compare with Pinocchio's reduced model
             self.pm = P.buildReducedModel(self.pm, [self.pm.getJointId(j) for j in model.locked],
                                           self._locked_q(model.locked))
@@ -40,8 +44,8 @@ class Reference:
             raise ManipdynError(f"{urdf_path}: joint order differs from Pinocchio's: ours "
                                 f"{model.joint_names}, Pinocchio {names}")
         self.pm.gravity.linear = np.asarray(model.gravity, float)
-        self.idx_q = np.array([self.pm.joints[i + 1].idx_q for i in range(model.nv)])
-        self.nq_j = np.array([self.pm.joints[i + 1].nq for i in range(model.nv)])
+        self.idx_q = np.array([self.pm.joints[i + 1].idx_q for i in range(model.njoints)], int)
+        self.nq_j = np.array([self.pm.joints[i + 1].nq for i in range(model.njoints)], int)
 
     def _locked_q(self, locked):
         """Pinocchio's full q with the locked joints at their values (the others at neutral)."""
@@ -53,11 +57,20 @@ class Reference:
         return q
 
     def to_pin_q(self, q):
-        """Our q (nv,) -> Pinocchio's q (nq,): continuous joints as (cos, sin)."""
-        pq = np.zeros(self.pm.nq)
+        """Our q (nq,) -> Pinocchio's q (pm.nq,): continuous joints as (cos, sin), other blocks copied."""
+        pq, m = np.zeros(self.pm.nq), self.model
         for i, (k, n) in enumerate(zip(self.idx_q, self.nq_j)):
-            pq[k:k + n] = (np.cos(q[i]), np.sin(q[i])) if n == 2 else q[i]
+            a, nq = m.idx_q[i], m.nqs[i]
+            pq[k:k + n] = (np.cos(q[a]), np.sin(q[a])) if n == 2 and nq == 1 else q[a:a + nq]
         return pq
+
+    def from_pin_q(self, pq):
+        """Pinocchio's q (pm.nq,) -> ours (nq,): a continuous joint's angle is atan2(sin, cos)."""
+        q, m = np.zeros(self.model.nq), self.model
+        for i, (k, n) in enumerate(zip(self.idx_q, self.nq_j)):
+            a, nq = m.idx_q[i], m.nqs[i]
+            q[a:a + nq] = np.arctan2(pq[k + 1], pq[k]) if n == 2 and nq == 1 else pq[k:k + n]
+        return q
 
     def fext(self, q, f_ext, f_ext_frame="local"):
         """Our {frame: (force, moment)} -> Pinocchio's per-joint fext, via Pinocchio's own frame placements."""
@@ -75,12 +88,12 @@ class Reference:
         return out
 
     def terms(self, q, v, a, f_ext=None, f_ext_frame="local"):
-        """Pinocchio's per-link terms for one state, in our names (see rnea_terms), arrays (nv, 3)."""
-        P, pm, pd, nv = pin(), self.pm, self.pd, self.model.nv
+        """Pinocchio's per-link terms for one state, in our names (see rnea_terms), arrays (nb, 3)."""
+        P, pm, pd, nb = pin(), self.pm, self.pd, self.model.njoints
         pq = self.to_pin_q(q)
         ext = self.fext(q, f_ext, f_ext_frame) if f_ext else None
         tau = (P.rnea(pm, pd, pq, v, a, ext) if ext else P.rnea(pm, pd, pq, v, a)).copy()
-        J = range(1, nv + 1)
+        J = range(1, nb + 1)
         out = dict(
             w=[pd.v[i].angular for i in J], v=[pd.v[i].linear for i in J],
             f=[pd.f[i].linear for i in J], n=[pd.f[i].angular for i in J])
@@ -90,7 +103,7 @@ class Reference:
         P.forwardKinematics(pm, pd, pq, v, a)              # gravity-free spatial accelerations
         out["dw"] = [pd.a[i].angular for i in J]
         out["acc"] = [pd.a[i].linear + np.cross(pd.v[i].angular, pd.v[i].linear) for i in J]
-        out = {k: np.array(x, float).reshape(nv, 3) for k, x in out.items()}
+        out = {k: np.array(x, float).reshape(nb, 3) for k, x in out.items()}
         out["tau"] = tau
         return out
 
@@ -105,7 +118,7 @@ class Reference:
                     qdd=P.aba(pm, pd, pq, v, tau).copy(), cond=float(np.linalg.cond(M)))
 
     def jacobians(self, q, v):
-        """Every body frame's Jacobian and its time derivative, world-aligned and local: (nv, 6, nv) each."""
+        """Every body frame's Jacobian and its time derivative, world-aligned and local: (nb, 6, nv) each."""
         P, pm, pd = pin(), self.pm, self.pd
         pq = self.to_pin_q(q)
         P.computeJointJacobians(pm, pd, pq)

@@ -1,0 +1,144 @@
+"""The configuration space: neutral, integrate, difference, random and normalized configurations.
+
+Names and meaning are Pinocchio's (``pin.neutral``, ``pin.integrate``, ``pin.difference``,
+``pin.randomConfiguration``, ``pin.normalize``), on manipdyn's q (DESIGN.md §3: a continuous joint is one
+angle, where Pinocchio stores cos/sin; a free-flyer root is [x y z qx qy qz qw] as in Pinocchio):
+
+    q ⊕ v         integrate: 1-dof joints q + v; free flyer M(q) exp6(v), v = [linear; angular] body frame
+    q1 ⊖ q0       difference: the v with q0 ⊕ v = q1 (continuous joints: the shortest angle; free flyer
+                  log6(M(q0)⁻¹ M(q1)), rotation angle ≤ π)
+
+The joint formulas are those of ``manipdyn.joints`` (compiled ``integrate_kernel``/``difference_kernel``);
+this module checks the arguments and handles the batch. Every function takes one state (nq,) / (nv,) or a
+batch (N, nq) / (N, nv) and returns the matching shape. A free flyer's quaternion must be of unit norm
+within ``QUAT_TOL`` (InputError naming the row otherwise; ``normalize`` fixes it): the placement formulas
+read it as a rotation.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import InputError
+from .joints import FREEFLYER, PRISMATIC, difference_kernel, integrate_kernel
+from .dynamics.state import as_batch, check_model, check_scalar, unbatch
+
+__all__ = ["neutral", "integrate", "difference", "random_configuration", "normalize", "QUAT_TOL"]
+
+QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a configuration (integrate's output: ~1e-16)
+REVOLUTE_RANGE = np.pi   # random_configuration: unbounded revolute joints in [−π, π] rad
+PRISMATIC_RANGE = 0.5    # ... unbounded prismatic joints in [−0.5, 0.5] m
+FREE_RANGE = 1.0         # ... a free flyer's position in [−1, 1]³ m
+
+
+def _arrays(model):
+    """(kind, continuous, idx_q, idx_v) as writable contiguous arrays, built once per model."""
+    arr = model.__dict__.get("_config_arrays")
+    if arr is None:
+        arr = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
+               np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
+        object.__setattr__(model, "_config_arrays", arr)   # a cache, not model data (Model is frozen)
+    return arr
+
+
+def _quat_slices(model):
+    """The first q index of every free flyer's quaternion (x y z w = q[k:k+4])."""
+    return [int(model.idx_q[i]) + 3 for i in range(model.njoints) if model.kind[i] == FREEFLYER]
+
+
+def check_quaternions(model, Q, name="q"):
+    """Refuse a free-flyer quaternion whose norm is not 1 within QUAT_TOL (Q in batch form (N, nq))."""
+    for k in _quat_slices(model):
+        n = np.linalg.norm(Q[:, k:k + 4], axis=1)
+        bad = np.flatnonzero(np.abs(n - 1.0) > QUAT_TOL)
+        if bad.size:
+            r = int(bad[0])
+            row = f"[{r}]" if Q.shape[0] > 1 else ""
+            raise InputError(f"{name}{row}: the quaternion {model.q_names[k][:-3]}.(qx qy qz qw) = "
+                             f"{Q[r, k:k + 4].tolist()} has norm {n[r]:.12g}, not 1 (within {QUAT_TOL:g}); "
+                             f"normalize it first (manipdyn.normalize)")
+
+
+def neutral(model) -> np.ndarray:
+    """q_neutral (nq,): every joint at 0, a free flyer at the origin with the identity quaternion (0 0 0 1)."""
+    check_model(model)
+    q = np.zeros(model.nq)
+    q[[k + 3 for k in _quat_slices(model)]] = 1.0
+    return q
+
+
+def integrate(model, q, v) -> np.ndarray:
+    """q ⊕ v (nq,) or (N, nq): the configuration reached from q by moving with velocity v for unit time.
+
+    1-dof joints q + v; a free flyer M(q) exp6(v) with v = [linear; angular] in the body frame (SE(3)
+    exponential, Lie group integration as Pinocchio's integrate). q (nq,) or (N, nq), v (nv,) or (N, nv).
+    """
+    (Q, V), single = as_batch(model, q=q, v=v)
+    check_quaternions(model, Q)
+    kind, _, iq, iv = _arrays(model)
+    out = np.empty(Q.shape)
+    integrate_kernel(kind, iq, iv, np.ascontiguousarray(Q), np.ascontiguousarray(V), out)
+    return unbatch(out, single)
+
+
+def difference(model, q0, q1) -> np.ndarray:
+    """q1 ⊖ q0 (nv,) or (N, nv): the velocity v with integrate(q0, v) = q1.
+
+    1-dof joints q1 − q0 (continuous joints wrapped into [−π, π]); a free flyer log6(M(q0)⁻¹ M(q1)), the
+    rotation part of angle ≤ π (at exactly π either direction is a solution).
+    """
+    (Q0, Q1), single = as_batch(model, q0=q0, q1=q1)
+    check_quaternions(model, Q0, "q0")
+    check_quaternions(model, Q1, "q1")
+    kind, continuous, iq, iv = _arrays(model)
+    out = np.empty((Q0.shape[0], model.nv))
+    difference_kernel(kind, continuous, iq, iv, np.ascontiguousarray(Q0), np.ascontiguousarray(Q1), out)
+    return unbatch(out, single)
+
+
+def random_configuration(model, rng=None, n=None) -> np.ndarray:
+    """A random configuration (nq,), or n of them (n, nq), uniform per joint:
+
+    revolute  within [lower, upper] when both are finite, else [−π, π] (continuous joints too);
+    prismatic within [lower, upper] when both are finite, else [−0.5, 0.5] m;
+    free flyer position uniform in [−1, 1]³ m, orientation uniform on SO(3): a unit quaternion from four
+              independent standard normals, normalised (uniform on the sphere S³).
+    rng: a numpy Generator, an int seed, or None (fresh entropy). Pinocchio's randomConfiguration also
+    samples within the limits; its free-flyer position needs finite limits, hence the fixed cube here.
+    """
+    check_model(model)
+    if not (rng is None or isinstance(rng, (np.random.Generator, int, np.integer))) or isinstance(rng, bool):
+        raise InputError(f"rng must be a numpy Generator, an int seed or None, not {type(rng).__name__} {rng!r}")
+    if not isinstance(rng, np.random.Generator):
+        rng = np.random.default_rng(None if rng is None else check_scalar("rng", rng, nonnegative=True,
+                                                                           integer=True))
+    N = 1 if n is None else check_scalar("n", n, nonnegative=True, integer=True)
+    Q = np.empty((N, model.nq))
+    for i in range(model.njoints):
+        k = int(model.idx_q[i])
+        if model.kind[i] == FREEFLYER:
+            Q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (N, 3))
+            u = rng.normal(size=(N, 4))
+            Q[:, k + 3:k + 7] = u / np.linalg.norm(u, axis=1, keepdims=True)
+            continue
+        lo, hi = float(model.lower[i]), float(model.upper[i])
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            r = PRISMATIC_RANGE if model.kind[i] == PRISMATIC else REVOLUTE_RANGE
+            lo, hi = -r, r
+        Q[:, k] = rng.uniform(lo, hi, N)
+    return Q[0] if n is None else Q
+
+
+def normalize(model, q) -> np.ndarray:
+    """q (nq,) or (N, nq) with every free flyer's quaternion divided by its norm (the rest unchanged).
+
+    InputError for a quaternion of norm 0 (it names no rotation)."""
+    (Q,), single = as_batch(model, q=q)
+    Q = Q.copy()
+    for k in _quat_slices(model):
+        n = np.linalg.norm(Q[:, k:k + 4], axis=1, keepdims=True)
+        if np.any(n == 0.0):
+            r = int(np.flatnonzero(n[:, 0] == 0.0)[0])
+            raise InputError(f"q{f'[{r}]' if Q.shape[0] > 1 else ''}: the quaternion "
+                             f"{model.q_names[k][:-3]}.(qx qy qz qw) is zero: it names no rotation")
+        Q[:, k:k + 4] /= n
+    return unbatch(Q, single)
