@@ -142,12 +142,14 @@ class Model:
         """(nb,) index of joint i's first entry in v (and in a, τ)."""
         return _frozen(np.concatenate([[0], np.cumsum(self.nvs)[:-1]]) if self.njoints else [])
 
-    @property
+    @cached_property
     def nq(self) -> int:
+        """Size of q (cached: the fast paths read it on every call)."""
         return int(np.sum(self.nqs))
 
-    @property
+    @cached_property
     def nv(self) -> int:
+        """Size of v, a and τ."""
         return int(np.sum(self.nvs))
 
     @cached_property

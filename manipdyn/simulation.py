@@ -4,6 +4,12 @@ State x = (q, q̇); q̈ = f(t, q, q̇) from forward dynamics (ABA or the Cholesk
 equations of the 1st kind for closed chains, optionally Baumgarte-stabilised or projected back onto the
 closures after every step). Fixed-step methods integrate a batch (N, nv) at once.
 
+Configurations move by the joint model's ``integrate`` (q ⊕ ξ), never by q + ξ: for revolute and
+prismatic joints the two are the same, for a free-flyer root ξ is a body-frame twist and q ⊕ ξ =
+M(q) exp6(ξ). RK4 is then the Runge–Kutta–Munthe-Kaas method: the stages live in the tangent space at
+q_k, where ξ̇ = dexp⁻¹_{−ξ}(v) = v + ½ [ξ, v] + 1/12 [ξ, [ξ, v]] (fourth order; the brackets vanish for
+1-dof joints). The adaptive reference integrates q̇ = (R v_lin, ½ quat ⊗ ω) for a free flyer.
+
 This module sits above dynamics/ and constraints/ (it calls both), so neither of them imports it.
 """
 from __future__ import annotations
@@ -13,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .configuration import check_quaternions
 from .constraints import constrained_forward_dynamics, project
 from .dynamics.aba import forward_dynamics
 from .dynamics.state import as_batch, as_real, check_finite, check_scalar
@@ -44,14 +51,14 @@ def _torque(tau, shape, single, names):
     """τ(t, q, v) for None, a constant (nv,) or (N, nv) array or a callable, checked on every call: the
     callable must return real values of the state's shape ((nv,) for one state), finite."""
     if tau is None:
-        return lambda t, q, v: np.zeros_like(q)
+        return lambda t, q, v: np.zeros_like(v)
     if not callable(tau):
         tau = as_real("tau", tau)
         if tau.shape not in (shape[1:], shape):
             raise InputError(f"tau has shape {tau.shape}; expected {shape[1:]}"
                              + ("" if single else f" or {shape}") + ", None or a callable tau(t, q, v)")
         check_finite("tau", tau)
-        return lambda t, q, v: np.broadcast_to(tau, q.shape)
+        return lambda t, q, v: np.broadcast_to(tau, v.shape)
     user = tau
 
     def checked(t, q, v):
@@ -59,7 +66,7 @@ def _torque(tau, shape, single, names):
             out = as_real(f"tau(t, q, v) at t = {t:.6g} s", user(t, q[0], v[0]) if single else user(t, q, v))
         except InputError as exc:
             raise _TorqueError(str(exc), True) from None
-        want = q.shape[1:] if single else q.shape
+        want = v.shape[1:] if single else v.shape
         if out.shape != want:
             raise _TorqueError(f"tau(t, q, v) returned shape {out.shape} at t = {t:.6g} s; expected {want}", True)
         bad = ~np.isfinite(out)
@@ -67,7 +74,7 @@ def _torque(tau, shape, single, names):
             i = np.argwhere(bad)[0]
             raise _TorqueError(f"tau(t, q, v) returned {out[tuple(i)]} at t = {t:.6g} s"
                                + ("" if single else f", initial state {i[0]}") + f", joint {names[i[-1]]!r}")
-        return out.reshape(q.shape)
+        return out.reshape(v.shape)
     return checked
 
 
@@ -79,16 +86,51 @@ def accelerations(model, forward="aba", stabilization="none", baumgarte=(10.0, 1
     return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=forward)
 
 
-def _step(method, accel, torque, t, q, v, h):
-    """One step of size h: semi-implicit Euler or classical RK4."""
-    if method == "euler":                       # v_{k+1} = v_k + h q̈(q_k, v_k); q_{k+1} = q_k + h v_{k+1}
+def _step(method, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
+    """One step of size h: semi-implicit Euler or classical RK4 (RKMK on a free flyer: q ⊕ ξ = plus(q, ξ),
+    ξ̇ = dexpinv(ξ, v); for 1-dof joints plus is + and dexpinv returns v)."""
+    if method == "euler":                       # v_{k+1} = v_k + h q̈(q_k, v_k); q_{k+1} = q_k ⊕ h v_{k+1}
         v1 = v + h * accel(q, v, torque(t, q, v))
-        return q + h * v1, v1
+        return plus(q, h * v1), v1
+    rate = (lambda xi, w: w) if dexpinv is None else dexpinv
     k1q, k1v = v, accel(q, v, torque(t, q, v))
-    k2q, k2v = v + 0.5 * h * k1v, accel(q + 0.5 * h * k1q, v + 0.5 * h * k1v, torque(t + 0.5 * h, q + 0.5 * h * k1q, v + 0.5 * h * k1v))
-    k3q, k3v = v + 0.5 * h * k2v, accel(q + 0.5 * h * k2q, v + 0.5 * h * k2v, torque(t + 0.5 * h, q + 0.5 * h * k2q, v + 0.5 * h * k2v))
-    k4q, k4v = v + h * k3v, accel(q + h * k3q, v + h * k3v, torque(t + h, q + h * k3q, v + h * k3v))
-    return q + h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+    x2, v2 = 0.5 * h * k1q, v + 0.5 * h * k1v
+    q2 = plus(q, x2)
+    k2q, k2v = rate(x2, v2), accel(q2, v2, torque(t + 0.5 * h, q2, v2))
+    x3, v3 = 0.5 * h * k2q, v + 0.5 * h * k2v
+    q3 = plus(q, x3)
+    k3q, k3v = rate(x3, v3), accel(q3, v3, torque(t + 0.5 * h, q3, v3))
+    x4, v4 = h * k3q, v + h * k3v
+    q4 = plus(q, x4)
+    k4q, k4v = rate(x4, v4), accel(q4, v4, torque(t + h, q4, v4))
+    return plus(q, h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)), v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+
+
+def _group_ops(model):
+    """(plus, dexpinv) of the configuration space: (np.add, None) without a free flyer; else q ⊕ ξ by
+    the joint model's integrate and ξ̇ = v + ½ ad_ξ v + 1/12 ad_ξ² v on the free flyer's 6 entries
+    (ad_ξ w = [ξ_ω × w_v + ξ_v × w_ω; ξ_ω × w_ω], twists [linear; angular])."""
+    if not model.floating:
+        return np.add, None
+    from .configuration import _arrays
+    from .joints import integrate_kernel
+    kind, _, iq, iv = _arrays(model)
+
+    def plus(Q, X):
+        out = np.empty_like(Q)
+        integrate_kernel(kind, iq, iv, np.ascontiguousarray(Q), np.ascontiguousarray(X), out)
+        return out
+
+    def ad(xi, w):
+        return np.concatenate([np.cross(xi[:, 3:6], w[:, :3]) + np.cross(xi[:, :3], w[:, 3:6]),
+                               np.cross(xi[:, 3:6], w[:, 3:6])], axis=1)
+
+    def dexpinv(xi, v):
+        out = v.copy()
+        a1 = ad(xi, v[:, :6])
+        out[:, :6] += 0.5 * a1 + ad(xi, a1) / 12.0
+        return out
+    return plus, dexpinv
 
 
 MAX_POSITION = 1e6  # |q| (rad, m) and |q̇| (rad/s, m/s) beyond any manipulator's range: a runaway (at
@@ -115,6 +157,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
     torque at t0 is an InputError; later, DivergenceError: the controller followed a diverging state).
     """
     (Q, V), single = as_batch(model, q0=q0, v0=v0)
+    check_quaternions(model, Q, "q0")
     t0, t1 = _span(t_span)
     if not isinstance(method, str) or method not in ("euler", "rk4", "adaptive"):
         raise InputError(f"method must be 'euler', 'rk4' or 'adaptive', not {method!r}")
@@ -126,7 +169,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
                                                                    ("max_rate", max_rate)))
     max_steps = check_scalar("max_steps", (10**5 if method == "adaptive" else 10**7) if max_steps is None
                              else max_steps, positive=True, integer=True)
-    accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, Q.shape, single, model.joint_names)
+    accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, V.shape, single, model.v_names)
     if not isinstance(forward, str) or forward not in ("aba", "cholesky"):
         raise InputError(f"forward must be 'aba' or 'cholesky', not {forward!r}")
     watch = _Watch(model, single, bounds, t0)
@@ -146,9 +189,10 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
     Qs, Vs = np.empty((n + 1,) + Q.shape), np.empty((n + 1,) + V.shape)
     Qs[0], Vs[0] = Q, V
     project = _projector(model) if stabilization == "projection" else None
+    plus, dexpinv = _group_ops(model)
     for k in range(n):
         try:
-            Q, V = _step(method, accel, torque, T[k], Q, V, T[k + 1] - T[k])
+            Q, V = _step(method, accel, torque, T[k], Q, V, T[k + 1] - T[k], plus, dexpinv)
             if project is not None:
                 Q, V = project(Q, V)
         except _TorqueError as exc:
@@ -157,7 +201,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
             raise DivergenceError(f"simulation of {model.name!r} diverged at t = {T[k]:.6g} s: {exc}") from None
         watch(T[k + 1], Q, V)
         Qs[k + 1], Vs[k + 1] = Q, V
-    Qs, Vs = np.moveaxis(Qs, 0, 1), np.moveaxis(Vs, 0, 1)       # (N, T, nv)
+    Qs, Vs = np.moveaxis(Qs, 0, 1), np.moveaxis(Vs, 0, 1)       # (N, T, nq), (N, T, nv)
     return SimResult(T, Qs[0] if single else Qs, Vs[0] if single else Vs, method, float(dt), n,
                      time.perf_counter() - start)
 
@@ -205,13 +249,14 @@ class _Watch:
 
     def __call__(self, t, Q, V):
         X = np.hstack([Q, V])
-        nv = self.model.nv
-        bad = ~(np.abs(X) <= np.repeat(self.bounds, nv))      # NaN counts as bad
+        nq = self.model.nq
+        bad = ~(np.abs(X) <= np.repeat(self.bounds, (nq, self.model.nv)))      # NaN counts as bad
         if bad.any():
             row, col = (int(i) for i in np.argwhere(bad)[0])
-            what, joint = ("q", "v")[col // nv], self.model.joint_names[col % nv]
+            k = int(col >= nq)
+            what, joint = ("q", "v")[k], (self.model.q_names[col] if k == 0 else self.model.v_names[col - nq])
             why = "is not finite" if not np.isfinite(X[row, col]) else \
-                f"exceeds {('max_position', 'max_rate')[col // nv]} = {self.bounds[col // nv]:g}"
+                f"exceeds {('max_position', 'max_rate')[k]} = {self.bounds[k]:g}"
             raise DivergenceError(f"simulation of {self.model.name!r} diverged at t = {t:.6g} s"
                                   + ("" if self.single else f" (initial state {row})")
                                   + f": {what}[{joint!r}] = {X[row, col]:.3g} {why}")
@@ -230,17 +275,21 @@ def _projector(model):
 def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol, max_steps, watch):
     """scipy's DOP853 on x = (q, q̇), stepped here so every step is watched (non-finite, beyond the
     bounds) and counted (at most max_steps); returns every accepted step as solve_ivp does."""
-    nv = model.nv
+    nq = model.nq
+    qdot = _qdot(model)
 
     def rhs(t, x):
-        q, v = x[:nv], x[nv:]
+        q, v = x[:nq], x[nq:]
+        if model.floating:                                   # the solver's q drifts off ‖quat‖ = 1
+            q = q.copy()
+            q[3:7] /= np.linalg.norm(q[3:7])
         try:
             a = accel(q, v, torque(t, q[None], v[None])[0])
         except _TorqueError as exc:
             watch.torque(t, exc)
         except (InputError, NumericalError) as exc:
             raise DivergenceError(f"simulation of {model.name!r} diverged at t = {t:.6g} s: {exc}") from None
-        return np.concatenate([v, a])
+        return np.concatenate([qdot(q, v), a])
 
     with np.errstate(over="ignore", invalid="ignore"):       # the watch reports what overflows
         return _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch)
@@ -249,19 +298,42 @@ def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol, max_steps, watch
 def _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch):
     """The stepping loop of _adaptive."""
     from scipy.integrate import DOP853
-    nv = model.nv
+    nq = model.nq
     solver = DOP853(rhs, t0, np.concatenate([q0, v0]), t1, rtol=rtol, atol=atol)
     ts, ys = [t0], [solver.y.copy()]
     while solver.status == "running":
         if len(ts) > max_steps:
             raise DivergenceError(f"simulation of {model.name!r} did not reach t = {t1:g} s within max_steps = "
                                   f"{max_steps} adaptive steps (stopped at t = {solver.t:.6g} s, max |q̇| = "
-                                  f"{np.max(np.abs(solver.y[nv:]), initial=0.0):.3g}); raise max_steps or rtol")
+                                  f"{np.max(np.abs(solver.y[nq:]), initial=0.0):.3g}); raise max_steps or rtol")
         msg = solver.step()
         if solver.status == "failed":
             raise DivergenceError(f"simulation of {model.name!r} stopped at t = {solver.t:.6g} s: {msg}")
-        watch(solver.t, solver.y[None, :nv], solver.y[None, nv:])
+        watch(solver.t, solver.y[None, :nq], solver.y[None, nq:])
         ts.append(solver.t)
         ys.append(solver.y.copy())
     Y = np.array(ys)
-    return np.array(ts), Y[:, :nv], Y[:, nv:]
+    if model.floating:
+        Y[:, 3:7] /= np.linalg.norm(Y[:, 3:7], axis=1, keepdims=True)
+    return np.array(ts), Y[:, :nq], Y[:, nq:]
+
+
+def _qdot(model):
+    """q̇(q, v) (nq,): v for 1-dof joints; a free-flyer root's position moves with R v_lin (world axes),
+    its quaternion with ½ quat ⊗ (ω, 0) (body-frame ω)."""
+    if not model.floating:
+        return lambda q, v: v
+
+    def qdot(q, v):
+        out = np.empty(model.nq)
+        out[7:] = v[6:]
+        x, y, z, w = q[3:7]
+        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        out[:3] = R @ v[:3]
+        a, b, c = v[3:6]
+        out[3:7] = 0.5 * np.array([w * a + y * c - z * b, w * b + z * a - x * c,
+                                   w * c + x * b - y * a, -(x * a + y * b + z * c)])
+        return out
+    return qdot

@@ -42,13 +42,17 @@ def unpack(I, F):
     """Views of the model arrays: parent, kind, iq, iv, nvj (nb,), S (nv, 6), axis (nb, 3),
     R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3), inertia (nb, 3, 3), mg = −g (3,)."""
     nb = I.shape[0]
-    nv = 0
-    for i in range(nb):
-        nv += I[i, 4]
-    k = np.cumsum(np.array([0, 6 * nv, 3 * nb, 9 * nb, 3 * nb, nb, 3 * nb, 9 * nb, 3]))
-    return (I[:, 0], I[:, 1], I[:, 2], I[:, 3], I[:, 4], F[k[0]:k[1]].reshape(nv, 6),
-            F[k[1]:k[2]].reshape(nb, 3), F[k[2]:k[3]].reshape(nb, 3, 3), F[k[3]:k[4]].reshape(nb, 3),
-            F[k[4]:k[5]], F[k[5]:k[6]].reshape(nb, 3), F[k[6]:k[7]].reshape(nb, 3, 3), F[k[7]:k[8]])
+    nv = (F.shape[0] - 3 - 28 * nb) // 6          # F holds 6 nv + 28 nb + 3 numbers
+    k1 = 6 * nv
+    k2 = k1 + 3 * nb
+    k3 = k2 + 9 * nb
+    k4 = k3 + 3 * nb
+    k5 = k4 + nb
+    k6 = k5 + 3 * nb
+    k7 = k6 + 9 * nb
+    return (I[:, 0], I[:, 1], I[:, 2], I[:, 3], I[:, 4], F[:k1].reshape(nv, 6),
+            F[k1:k2].reshape(nb, 3), F[k2:k3].reshape(nb, 3, 3), F[k3:k4].reshape(nb, 3),
+            F[k4:k5], F[k5:k6].reshape(nb, 3), F[k6:k7].reshape(nb, 3, 3), F[k7:k7 + 3])
 
 
 # -- 3-vector helpers (inlined into every kernel) -------------------------------------------------------
