@@ -37,8 +37,8 @@ DYN_TERMS = {
     "C": "C (Christoffel) vs computeCoriolisMatrix", "g": "g vs computeGeneralizedGravity",
     "nle": "C q̇ + g vs nonLinearEffects", "lagrange_ne": "M q̈ + C q̇ + g vs our Newton–Euler τ",
     "qdd_aba": "q̈ (ABA) vs aba, err/cond(M)", "qdd_cholesky": "q̈ (Cholesky) vs aba, err/cond(M)",
-    "J_world": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
-    "dJ_world": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
+    "J_local_world_aligned": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
+    "dJ_local_world_aligned": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
 }
 CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
                 "qdd_closed": "closed q̈ vs constraintDynamics, err/κ"}   # κ = cond(M) cond(Φ_q)²
@@ -161,7 +161,7 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, chunk=250):
                     qdd_aba=aba(model, q, v, t), qdd_cholesky=forward_dynamics(model, q, v, t, method="cholesky"))
         ours["nle"] = np.einsum("nij,nj->ni", ours["C"], v) + ours["g"]
         ours["lagrange_ne"] = np.einsum("nij,nj->ni", ours["M_crba"], a) + ours["nle"]
-        for key in ("world", "local"):
+        for key in ("local_world_aligned", "local"):
             ours["J_" + key] = np.stack([frame_jacobian(model, q, b, key) for b in model.body_names], 1)
             ours["dJ_" + key] = np.stack([frame_jacobian_dot(model, q, v, b, key) for b in model.body_names], 1)
         tau_ne = rnea(model, q, v, a)
