@@ -43,6 +43,9 @@ _ANALYTIC = "tests/unit/test_analytic.py"
 _PROPS = "tests/unit/test_lagrange_properties.py"
 _FOURBAR = "tests/unit/test_fourbar.py"
 _CLOSED_FAST = "tests/batch/test_fast_paths.py::test_closed_chain_kernel_equals_reference"
+_LOOPS = "tests/crosscheck/test_spatial_loops.py"
+_CLOSED_KERNELS = "tests/batch/test_kernels_vs_readable.py::test_closed_chain_kernels_equal_readable"
+_FLOAT = "tests/crosscheck/test_free_flyer_kinematics.py"
 _SPM = "tests/unit/test_spm_chapter.py"
 _DH = "tests/unit/test_dh.py"
 
@@ -51,9 +54,9 @@ AREA_TESTS = {
     "loader": ("tests/unit/test_q_order.py", "tests/crosscheck/test_single_joint.py",
                "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py",
                "tests/properties/test_random_trees.py"),
-    "kinematics": ("tests/unit/test_analytic_spatial.py",),
+    "kinematics": ("tests/unit/test_analytic_spatial.py", _FLOAT),
     "rnea": ("tests/batch/test_kernels_vs_readable.py", "tests/unit/test_analytic_spatial.py"),
-    "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py",
+    "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py", _FLOAT,
                  "tests/batch/test_kernels_vs_readable.py"),
     "aba": ("tests/batch/test_kernels_vs_readable.py",),
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
@@ -92,17 +95,30 @@ FAULTS = (
           "parallel-axis theorem with one product term of the wrong sign: merged (fixed-joint) and reduced bodies get wrong inertia"),
     # ---------------------------------------------------------------- kinematics (dynamics/kinematics.py)
     Fault("kin-jdot-local-term-sign", "kinematics", "manipdyn/dynamics/kinematics.py",
-          "dJ = _to_local(dJ, Rf) - np.concatenate(",
-          "dJ = _to_local(dJ, Rf) + np.concatenate(",
-          ("tests/unit/test_aau_example.py", _ZOO), "local J̇ = Rᵀ J̇_w + [ω]× Rᵀ J_w (the frame-rotation term's sign)"),
+          "                dJ[o, r] = u[o] - (wl[1] * t[o + 2] - wl[2] * t[o + 1])\n"
+          "                dJ[o + 1, r] = u[o + 1] - (wl[2] * t[o] - wl[0] * t[o + 2])\n"
+          "                dJ[o + 2, r] = u[o + 2] - (wl[0] * t[o + 1] - wl[1] * t[o])\n",
+          "                dJ[o, r] = u[o] + (wl[1] * t[o + 2] - wl[2] * t[o + 1])\n"
+          "                dJ[o + 1, r] = u[o + 1] + (wl[2] * t[o] - wl[0] * t[o + 2])\n"
+          "                dJ[o + 2, r] = u[o + 2] + (wl[0] * t[o + 1] - wl[1] * t[o])\n",
+          ("tests/unit/test_aau_example.py", _FLOAT, _ZOO), "local J̇ = Rᵀ J̇_w + [ω]× Rᵀ J_w (the frame-rotation term's sign)"),
     Fault("kin-local-jacobian-rows-swapped", "kinematics", "manipdyn/dynamics/kinematics.py",
-          "Jl[:, :3], Jl[:, 3:] = np.swapaxes(Rf, 1, 2) @ J[:, :3], np.swapaxes(Rf, 1, 2) @ J[:, 3:]",
-          "Jl[:, :3], Jl[:, 3:] = np.swapaxes(Rf, 1, 2) @ J[:, 3:], np.swapaxes(Rf, 1, 2) @ J[:, :3]",
-          (_ZOO,), "local Jacobian rows [angular; linear] instead of [linear; angular]"),
+          "J[:3, r], J[3:, r] = t[:3], t[3:]",
+          "J[:3, r], J[3:, r] = t[3:], t[:3]",
+          (_FLOAT, _ZOO), "local Jacobian rows [angular; linear] instead of [linear; angular]"),
     Fault("kin-jdot-joint-origin-velocity", "kinematics", "manipdyn/dynamics/kinematics.py",
-          "cross(z[j], vp - vel[j])",
-          "cross(z[j], vp)",
-          (_FOURBAR, _ZOO), "revolute J̇ column uses the point's velocity, not relative to the joint origin"),
+          "ux, uy, uz = xd[0] - vw[j, 0], xd[1] - vw[j, 1], xd[2] - vw[j, 2]",
+          "ux, uy, uz = xd[0], xd[1], xd[2]",
+          (_FOURBAR, _FLOAT, _ZOO), "J̇ column uses the point's velocity, not relative to the joint origin"),
+    Fault("kin-lever-arm-from-body-origin", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "    J[:, :] = 0.0\n    j = b\n    while j >= 0:\n        dx, dy, dz = x[0] - pw[j, 0], x[1] - pw[j, 1], x[2] - pw[j, 2]\n",
+          "    J[:, :] = 0.0\n    j = b\n    while j >= 0:\n        dx, dy, dz = x[0] - pw[b, 0], x[1] - pw[b, 1], x[2] - pw[b, 2]\n",
+          (_FOURBAR, _LOOPS, _FLOAT), "Jacobian column [l + a × (x − o_b); a]: lever arm from the point's own body "
+          "origin, not joint j's (Jacobians, the Lagrange route and the closure rows alike)"),
+    Fault("kin-jdot-axis-rate-dropped", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "dJ[0, r] = wy * lz - wz * ly + by * dz - bz * dy + ay * uz - az * uy",
+          "dJ[0, r] = by * dz - bz * dy + ay * uz - az * uy",
+          (_FLOAT, _LOOPS), "J̇ linear x row without l̇ = ω_j × l (a free flyer's or prismatic column turning with its body)"),
     # ---------------------------------------------------------------- RNEA (dynamics/rnea.py, state.py, fast.py)
     Fault("rnea-coriolis-sign", "rnea", "manipdyn/dynamics/rnea.py",
           "cross(w_in, qd * z)",
@@ -170,6 +186,15 @@ FAULTS = (
           "fx = m * (lx + ay * c[2] - az * c[1])",
           "fx = m * (ay * c[2] - az * c[1])",
           (_CRBA,), "CRBA: F = I^c s drops the x component of s's linear part (prismatic joints, free flyer)"),
+    Fault("lagrange-free-flyer-bracket-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
+          "    out[:, :6, :] -= np.swapaxes(ad, 1, 2) @ M[:, :6, :]\n",
+          "",
+          (_FLOAT,), "free-flyer C without the third bracket term −ad_ξᵀ M (Christoffel symbols as if the root's "
+          "directions commuted)"),
+    Fault("lagrange-dM-lift-rule-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
+          "            dJ[:, :3, lift] = np.cross(np.swapaxes(a[:, lift], 1, 2), Jv[:, :, k, None], axis=1)\n",
+          "",
+          (_PROPS, _FLOAT), "∂J_j/∂q_k without [a_j × J_v,k; 0] for j supporting k (the CoM moving under joint j's axis)"),
     # ---------------------------------------------------------------- ABA (dynamics/aba.py, fast.py)
     Fault("aba-bias-force-sign", "aba", "manipdyn/dynamics/aba.py",
           'pA[i] = -np.einsum("nba,nb->na", _crm(vel[i]), Iv)',
@@ -192,18 +217,22 @@ FAULTS = (
           "_rot3t(R[i], -mg, t2)",
           (_FAST, _PROPS), "compiled ABA: base acceleration +g"),
     # ---------------------------------------------------------------- constraints (constraints/*)
-    Fault("closure-fast-orientation-bias-offset", "constraints", "manipdyn/constraints/fast.py",
-          "bias[row] = daxb @ (wA - wB) + axb @ (aA - aB)",
-          "bias[row] = daxb @ (wA - wB) + axb @ (aA - aB) + 0.1",
-          (_CLOSED_FAST, _FOURBAR), "compiled closures: a constant 0.1 added to every orientation row's Φ̇_q q̇"),
+    Fault("closure-orientation-bias-offset", "constraints", "manipdyn/constraints/closures.py",
+          "bias[row] = gyro + acc",
+          "bias[row] = gyro + acc + 0.1",
+          (_LOOPS, _CLOSED_KERNELS, _FOURBAR), "closure rows: a constant 0.1 added to every orientation row's Φ̇_q q̇"),
     Fault("closure-fixed-pair-index", "constraints", "manipdyn/constraints/closures.py",
           "return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 1])]",
           "return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 2])]",
-          (_CLOSED_FAST, _FOURBAR), "fixed closure's third pair (x_A, z_B) instead of (x_A, y_B): rotation about z free"),
-    Fault("closure-fast-pair-slot", "constraints", "manipdyn/constraints/fast.py",
+          (_LOOPS, _CLOSED_KERNELS, _FOURBAR), "fixed closure's third pair (x_A, z_B) instead of (x_A, y_B): rotation about z free"),
+    Fault("closure-pair-slot", "constraints", "manipdyn/constraints/closures.py",
           "flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 15 + 3 * m:18 + 3 * m] = a, b",
           "flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 12 + 3 * m:15 + 3 * m] = a, b",
-          (_CLOSED_FAST, _FOURBAR), "compiled closures: b vectors stored one slot early (a fixed closure reads b2, b3, 0)"),
+          (_LOOPS, _CLOSED_KERNELS, _FOURBAR), "closure rows: b vectors stored one slot early (a fixed closure reads b2, b3, 0)"),
+    Fault("closure-position-bias-sign", "constraints", "manipdyn/constraints/closures.py",
+          "acc += (dJ[0, d, r] - dJ[1, d, r]) * v[r]",
+          "acc += (dJ[1, d, r] - dJ[0, d, r]) * v[r]",
+          (_LOOPS, _CLOSED_KERNELS, _FOURBAR), "closure rows: position rows' Φ̇_q q̇ of p_B − p_A (Φ of p_A − p_B)"),
     Fault("closure-baumgarte-alpha-sign", "constraints", "manipdyn/constraints/dynamics.py",
           'c = c - 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi',
           'c = c + 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi',
@@ -221,14 +250,10 @@ FAULTS = (
           "tol = rtol",
           ("tests/unit/test_closed_sim.py", _FOURBAR, _CLOSED_FAST),
           "compiled rank test ignores |Φ| off the closures: redundant rows count as rank mid-step"),
-    Fault("closure-fast-lever-arm", "constraints", "manipdyn/constraints/fast.py",
-          "J[:3, j] = np.cross(z[j], x - pw[j])",
-          "J[:3, j] = np.cross(z[j], x - pw[b])",
-          (_CLOSED_FAST, _FOURBAR), "compiled closure Jacobian: lever arm from the body's origin, not joint j's"),
     # ---------------------------------------------------------------- integrators (simulation.py)
     Fault("integrate-explicit-euler", "integrators", "manipdyn/simulation.py",
-          "return q + h * v1, v1",
-          "return q + h * v, v1",
+          "return plus(q, h * v1), v1",
+          "return plus(q, h * v), v1",
           ("tests/unit/test_integrate.py",), "explicit Euler (q from v_k) in place of symplectic Euler (q from v_k+1)"),
     Fault("integrate-rk4-weight", "integrators", "manipdyn/simulation.py",
           "v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)",

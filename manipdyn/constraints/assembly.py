@@ -151,14 +151,13 @@ def _newton(model, q, free, U0, sign0, *, tol, max_iter, max_step, max_cond, dam
 def project(model, q, v, *, tol=1e-12, max_iter=20):
     """(q, v) returned to Φ = 0 (minimum-norm Newton steps) and Φ_q q̇ = 0 (kinetic-energy-minimal:
     q̇ ← q̇ − M⁻¹Φ_qᵀ(Φ_q M⁻¹ Φ_qᵀ)⁻¹ Φ_q q̇). One state (nv,) or a batch (N, nv), row by row."""
-    from .fast import closure_rows
     (Q, V), single = as_batch(model, q=q, v=v)
     tol = check_scalar("tol", tol, positive=True)
     max_iter = check_scalar("max_iter", max_iter, nonnegative=True, integer=True)
     Q, V = Q.copy(), V.copy()
     for s in range(Q.shape[0]):
         for it in range(max_iter + 1):
-            Phi, Jc, _ = closure_rows(model, Q[s])
+            Phi, Jc = (x[0] for x in _closure_terms(model, Q[s:s + 1])[:2])
             if np.max(np.abs(Phi), initial=0.0) <= tol:
                 break
             if it == max_iter or not np.all(np.isfinite(Phi)):

@@ -1,4 +1,6 @@
-"""Loop-closure kinematics: Φ(q), the constraint Jacobian Φ_q and the bias Φ̇_q q̇, exact.
+"""Loop-closure kinematics: Φ(q), the constraint Jacobian Φ_q and the bias Φ̇_q q̇, exact — one compiled
+source (``closure_rows``) on the one forward kinematics (core.fk_pass) and the frame Jacobians of
+kinematics.py, used by ``closure_terms`` and by the closed-chain KKT kernel (constraints/fast.py).
 
 For a closure between frame A (on the parent body) and frame B (on the child body), world coordinates:
   position rows (every type):  Φ = p_A − p_B,             Φ_q = J_A,v − J_B,v
@@ -6,17 +8,22 @@ For a closure between frame A (on the parent body) and frame B (on the child bod
                                Φ_q = (a × b)ᵀ (J_A,ω − J_B,ω)   since d(a·b)/dt = (a × b)·(ω_A − ω_B)
   revolute: a ∈ {n1, n2} ⊥ the parent axis e_A, b = the child axis e_B (2 rows, 5 in all);
   fixed: (a, b) = (y_A, z_B), (z_A, x_B), (x_A, y_B) (3 rows, 6 in all); spherical: position only.
-Φ̇_q q̇ is the same derivative taken once more at q̈ = 0 (chapter Eq. 26: Φ_q q̈ + Φ̇_q q̇ = 0).
-Rows are labelled "<closure>.x|y|z" (position) and "<closure>.r1|r2|r3" (orientation).
+Φ̇_q q̇ is the same derivative taken once more at q̈ = 0 (chapter Eq. 26: Φ_q q̈ + Φ̇_q q̇ = 0):
+  position rows (J̇_A,v − J̇_B,v) q̇;  orientation rows  d(a × b)/dt · (ω_A − ω_B) + (a × b)·(J̇_A,ω − J̇_B,ω) q̇,
+  d(a × b)/dt = (ω_A × a) × b + a × (ω_B × b).
+J, J̇ are kinematics.point_jacobian(_dot) of the closure points (world-aligned, Pinocchio's
+LOCAL_WORLD_ALIGNED). Rows are labelled "<closure>.x|y|z" (position) and "<closure>.r1|r2|r3" (orientation).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.kinematics import axes_world, body_twists, placements, point_jacobian, point_jacobian_dot
-from ..dynamics.state import as_batch, as_real, check_finite, check_model, check_output, quiet, unbatch
+from .._jit import njit
+from ..dynamics.core import cross3, fk_pass, kernel_arrays, rot3, unpack
+from ..dynamics.kinematics import body_point, point_jacobian, point_jacobian_dot, point_velocity
+from ..dynamics.state import (as_batch, as_real, check_finite, check_model, check_output, quiet,
+                              raise_kernel_error, unbatch)
 from ..errors import InputError
-from ..spatial import cross
 
 
 def _perp_pair(e):
@@ -39,24 +46,139 @@ def _pairs(c):
 
 
 def row_labels(model):
-    """Name of every constraint row, in order."""
+    """Name of every constraint row, in order (a new list each call; built once per model)."""
     check_model(model)
-    out = []
-    for c in model.constraints:
-        out += [f"{c.name}.{k}" for k in ("x", "y", "z")]
-        out += [f"{c.name}.r{k + 1}" for k in range(len(_pairs(c)))]
-    return out
+    labels = model.__dict__.get("_row_labels")
+    if labels is None:
+        labels = []
+        for c in model.constraints:
+            labels += [f"{c.name}.{k}" for k in ("x", "y", "z")]
+            labels += [f"{c.name}.r{k + 1}" for k in range(len(_pairs(c)))]
+        object.__setattr__(model, "_row_labels", tuple(labels))   # a cache, not model data (Model is frozen)
+    return list(labels)
 
 
-def _pose(R, p, b, N):
-    """World rotation and position of body b (the fixed base for b = -1): (N, 3, 3), (N, 3)."""
-    return (np.broadcast_to(np.eye(3), (N, 3, 3)), np.zeros((N, 3))) if b < 0 else (R[b], p[b])
+def n_rows(model) -> int:
+    """m, the number of closure rows."""
+    return sum(c.n_rows for c in model.constraints)
+
+
+def closure_arrays(model):
+    """Closures in kernel form, built once per model: ints CI (nc, 3) = [parent, child, n_pairs], floats
+    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, a in the parent's frame, b in the child's)."""
+    arr = model.__dict__.get("_closure_arrays")
+    if arr is None:
+        nc = len(model.constraints)
+        ints, flts = np.zeros((nc, 3), np.int64), np.zeros((nc, 24))
+        for k, c in enumerate(model.constraints):
+            pairs = _pairs(c)
+            ints[k] = c.parent, c.child, len(pairs)
+            flts[k, :3], flts[k, 3:6] = c.pp, c.pc
+            for m, (a, b) in enumerate(pairs):
+                flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 15 + 3 * m:18 + 3 * m] = a, b
+        arr = (ints, flts)
+        object.__setattr__(model, "_closure_arrays", arr)     # a cache, not model data (Model is frozen)
+    return arr
+
+
+# -- the rows, compiled --------------------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def closure_scratch(nb, nv):
+    """Scratch of closure_rows, allocated once per kernel call: forward kinematics (Rl, pl, Rw, pw, ω, ȯ),
+    per side (A, B) J, J̇ (2, 6, nv), the body's axes, the point and its velocity; 3-vectors (8, 3)."""
+    return (np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3)), np.zeros((nb, 3)),
+            np.zeros((nb, 3)), np.empty((2, 6, nv)), np.zeros((2, 6, nv)), np.empty((2, 3, 3)), np.empty((2, 3)),
+            np.zeros((2, 3)), np.eye(3), np.zeros((8, 3)))
+
+
+@njit(cache=True, inline="always")
+def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
+    """Φ (m,), Φ_q (m, nv) and, when v has entries, Φ̇_q q̇ (m,) of one state q (nq,), v (nv,), rows in
+    row_labels order (the module docstring gives them); W = closure_scratch(nb, nv)."""
+    parent, iv, nvj, S = I[:, 0], I[:, 3], I[:, 4], unpack(I, F)[5]
+    Rl, pl, Rw, pw, ww, vw, J, dJ, Rs, x, xd, eye, t = W
+    a, b, axb, wA, wB, t1, t2, t3 = t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]
+    nv, with_v = Jc.shape[1], v.shape[0] > 0
+    fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+    row = 0
+    for k in range(CI.shape[0]):
+        for side in range(2):                                 # 0: A on the parent, 1: B on the child
+            body = CI[k, side]
+            body_point(body, Rw, pw, eye, CF[k, 3 * side:3 * side + 3], Rs[side], x[side])   # Rs: the body's axes
+            point_jacobian(parent, iv, nvj, S, body, Rw, pw, x[side], J[side])
+            if with_v:
+                point_velocity(body, pw, ww, vw, x[side], xd[side])
+                point_jacobian_dot(parent, iv, nvj, S, body, Rw, pw, ww, vw, x[side], xd[side], dJ[side])
+        for d in range(3):                                    # position rows: p_A − p_B
+            Phi[row] = x[0, d] - x[1, d]
+            acc = 0.0
+            for r in range(nv):
+                Jc[row, r] = J[0, d, r] - J[1, d, r]
+                if with_v:
+                    acc += (dJ[0, d, r] - dJ[1, d, r]) * v[r]   # (J̇_A,v − J̇_B,v) q̇
+            if with_v:
+                bias[row] = acc
+            row += 1
+        _omega(CI[k, 0], ww, wA)
+        _omega(CI[k, 1], ww, wB)
+        for m in range(CI[k, 2]):                             # orientation rows: a·b
+            rot3(Rs[0], CF[k, 6 + 3 * m:9 + 3 * m], a)
+            rot3(Rs[1], CF[k, 15 + 3 * m:18 + 3 * m], b)
+            cross3(a, b, axb)
+            Phi[row] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+            acc = 0.0
+            for r in range(nv):                               # (a × b)ᵀ (J_A,ω − J_B,ω), its J̇ q̇ term
+                Jc[row, r] = _axb_rows(axb, J, r)
+                if with_v:
+                    acc += _axb_rows(axb, dJ, r) * v[r]
+            if with_v:                                        # d(a × b)/dt = (ω_A × a) × b + a × (ω_B × b)
+                cross3(wA, a, t1)
+                cross3(t1, b, t2)
+                cross3(wB, b, t1)
+                cross3(a, t1, t3)
+                gyro = 0.0
+                for c in range(3):
+                    gyro += (t2[c] + t3[c]) * (wA[c] - wB[c])
+                bias[row] = gyro + acc
+            row += 1
+
+
+@njit(cache=True, inline="always")
+def _axb_rows(axb, J, r):
+    """(a × b)·(J_A,ω − J_B,ω) of column r, J = (J_A, J_B) (2, 6, nv)."""
+    return (axb[0] * (J[0, 3, r] - J[1, 3, r]) + axb[1] * (J[0, 4, r] - J[1, 4, r])
+            + axb[2] * (J[0, 5, r] - J[1, 5, r]))
+
+
+@njit(cache=True, inline="always")
+def _omega(b, ww, out):
+    """out = world angular velocity of body b (zero for the fixed base)."""
+    for c in range(3):
+        out[c] = ww[b, c] if b >= 0 else 0.0
+
+
+@njit(cache=True)
+def closure_kernel(I, F, CI, CF, Q, V, Phi, Jc, bias):
+    """closure_rows for every state: Q (N, nq), V (N, nv) or (N, 0); Φ (N, m), Φ_q (N, m, nv), Φ̇_q q̇ (N, m).
+    Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
+    N = Q.shape[0]
+    W = closure_scratch(I.shape[0], Jc.shape[2])
+    for s in range(N):
+        for k in range(Q.shape[1]):
+            if not np.isfinite(Q[s, k]):
+                return s * Q.shape[1] + k
+        for k in range(V.shape[1]):
+            if not np.isfinite(V[s, k]):
+                return N * Q.shape[1] + s * V.shape[1] + k
+        closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[s], Jc[s], bias[s])
+    return -1
 
 
 @quiet
 def closure_terms(model, q, v=None):
-    """Φ (N, m), Φ_q (N, m, nv) and, with v, Φ̇_q q̇ (N, m) (None without v) for a batch q, v (N, nv), or
-    Φ (m,), Φ_q (m, nv), Φ̇_q q̇ (m,) for one state (nv,)."""
+    """Φ (N, m), Φ_q (N, m, nv) and, with v, Φ̇_q q̇ (N, m) (None without v) for a batch q (N, nq), v (N, nv),
+    or Φ (m,), Φ_q (m, nv), Φ̇_q q̇ (m,) for one state."""
     if v is None:
         (Q,), single = as_batch(model, q=q)
         V = None
@@ -71,39 +193,17 @@ def closure_terms(model, q, v=None):
 
 
 def _closure_terms(model, Q, V=None):
-    """closure_terms on checked batches Q, V (N, nv)."""
-    N = Q.shape[0]
-    R, p = placements(model, Q)
-    z = axes_world(model, R)
-    tw = body_twists(model, p, z, V) if V is not None else None
-    phi, jac, bias = [], [], []
-    for c in model.constraints:
-        (RA, oA), (RB, oB) = _pose(R, p, c.parent, N), _pose(R, p, c.child, N)
-        pA, pB = oA + np.einsum("nij,j->ni", RA, c.pp), oB + np.einsum("nij,j->ni", RB, c.pc)
-        JA, JB = point_jacobian(model, R, p, z, c.parent, pA), point_jacobian(model, R, p, z, c.child, pB)
-        phi.append(pA - pB)
-        jac.append(JA[:, :3] - JB[:, :3])
-        if tw is not None:
-            w, vel = tw
-            dJA = point_jacobian_dot(model, p, z, w, vel, c.parent, pA)
-            dJB = point_jacobian_dot(model, p, z, w, vel, c.child, pB)
-            bias.append(np.einsum("nij,nj->ni", dJA[:, :3] - dJB[:, :3], V))
-            wA, wB = (np.zeros((N, 3)) if b < 0 else w[b] for b in (c.parent, c.child))
-        for a0, b0 in _pairs(c):
-            a, b = np.einsum("nij,j->ni", RA, a0), np.einsum("nij,j->ni", RB, b0)
-            axb = cross(a, b)
-            phi.append(np.einsum("ni,ni->n", a, b)[:, None])
-            jac.append(np.einsum("ni,nij->nj", axb, JA[:, 3:] - JB[:, 3:])[:, None])
-            if tw is not None:   # d/dt[(a × b)·(ω_A − ω_B)] at q̈ = 0
-                daxb = cross(cross(wA, a), b) + cross(a, cross(wB, b))
-                dw0 = np.einsum("nij,nj->ni", dJA[:, 3:] - dJB[:, 3:], V)
-                bias.append((np.einsum("ni,ni->n", daxb, wA - wB) + np.einsum("ni,ni->n", axb, dw0))[:, None])
-    m = len(phi)
-    if m == 0:
-        empty = np.zeros((N, 0))
-        return empty, np.zeros((N, 0, model.nv)), (empty if V is not None else None)
-    Phi, Jac = np.concatenate(phi, axis=1), np.concatenate(jac, axis=1)
-    return Phi, Jac, (np.concatenate(bias, axis=1) if V is not None else None)
+    """closure_terms on finite batches Q (N, nq), V (N, nv), results unchecked (batch form)."""
+    N, m = Q.shape[0], n_rows(model)
+    Phi, Jc, bias = np.empty((N, m)), np.empty((N, m, model.nv)), np.empty((N, m))
+    if m:
+        Q = np.ascontiguousarray(Q, float)
+        Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V, float)
+        code = closure_kernel(*kernel_arrays(model), *closure_arrays(model), Q, Vk, Phi, Jc, bias)
+        if code != -1:
+            raise_kernel_error(model, code, ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, Vk),
+                               "closure_terms")
+    return Phi, Jc, (bias if V is not None else None)
 
 
 RANK_RTOL = 1e-6   # rows whose new direction is below 1e-6 of the largest row are redundant: off the

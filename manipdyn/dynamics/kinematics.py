@@ -1,161 +1,240 @@
-"""Placements, geometric Jacobians and their time derivatives, for any tree and joint type.
+"""Frame placements, geometric Jacobians and their time derivatives, for any tree and joint type — read
+off the one forward kinematics (core.fk_pass), compiled.
 
-Jacobian rows are [linear; angular] as in Pinocchio. ``reference="world"`` means world-aligned axes at the
-frame's origin (Pinocchio's LOCAL_WORLD_ALIGNED), ``"local"`` the frame's own axes. Column j of the
-world-aligned Jacobian of a point p (Eqs. 29–30 generalised): revolute j: [z_j × (p − o_j); z_j];
-prismatic j: [z_j; 0]; zero unless joint j supports the frame. z_j is joint j's axis and o_j its origin
-(body j's origin) in world coordinates.
+Jacobian rows are [linear; angular] as in Pinocchio. Two references:
+- ``"local_world_aligned"`` (default): world-aligned axes at the frame's origin (Pinocchio's
+  LOCAL_WORLD_ALIGNED): J q̇ = [ṗ; ω], the velocity of the frame's origin and its angular velocity, in
+  world coordinates. (Pinocchio's WORLD — the twist of the body point at the world origin — is another
+  thing; ``"world"`` is refused for that reason.)
+- ``"local"``: the same twist in the frame's own axes (Pinocchio's LOCAL), J_l = diag(Rᵀ, Rᵀ) J.
+
+Column of velocity r of joint j (Eqs. 29–30, for every joint type): the joint's motion subspace column
+S_r = [s_l; s_a] (body j's frame, joints.motion_subspace) turned into the world, l = R_j s_l, a = R_j s_a,
+moves a point x fixed to a body that joint j supports with  ẋ = l + a × (x − o_j),  ω = a
+(o_j = body j's origin): revolute [z × (x − o_j); z], prismatic [z; 0], free flyer six columns. Zero for a
+joint that does not support the body. J̇ is the exact time derivative along the motion (Pinocchio's
+getFrameJacobianTimeVariation): S_r is constant in body j's frame, so ȧ = ω_j × a and l̇ = ω_j × l, and
+    J̇ column = [l̇ + ȧ × (x − o_j) + a × (ẋ − ȯ_j); ȧ];   local: J̇_l = diag(Rᵀ, Rᵀ) J̇ − [ω']× J_l blockwise,
+with ω' = Rᵀ ω the frame's angular velocity in its own axes (its axes turn with it).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from .._jit import njit
 from ..errors import InputError
-from ..model import REVOLUTE
-from ..spatial import cross, skew
-from .core import joint_placements
-from .state import as_batch, check_output, frame_of, quiet, unbatch
+from .core import fk_pass, kernel_arrays, sandwich3, unpack
+from .state import as_batch, check_output, frame_of, quiet, raise_kernel_error, unbatch
+
+REFERENCES = ("local_world_aligned", "local")
 
 
-def placements(model, Q):
-    """World placement of every body for a batch Q (N, nv): R (nv, N, 3, 3), p (nv, N, 3)."""
-    Rp, pp = joint_placements(model, Q)
-    R, p = np.empty_like(Rp), np.empty_like(pp)
-    for i in range(model.nv):
-        j = model.parent[i]
-        R[i], p[i] = (Rp[i], pp[i]) if j < 0 else (R[j] @ Rp[i], p[j] + np.einsum("nij,nj->ni", R[j], pp[i]))
-    return R, p
+# -- the columns, compiled (inlined into every kernel that needs a Jacobian) -------------------------------
+
+@njit(cache=True, inline="always")
+def point_jacobian(parent, iv, nvj, S, b, Rw, pw, x, J):
+    """J (6, nv) = world-aligned Jacobian of the world point x (3,) fixed to body b (-1: the fixed base,
+    J = 0): column r of every joint j supporting b is [l + a × (x − o_j); a], (l; a) = R_j S_r."""
+    J[:, :] = 0.0
+    j = b
+    while j >= 0:
+        dx, dy, dz = x[0] - pw[j, 0], x[1] - pw[j, 1], x[2] - pw[j, 2]
+        for r in range(iv[j], iv[j] + nvj[j]):
+            lx, ly, lz, ax, ay, az = _column(Rw[j], S[r])
+            J[0, r] = lx + ay * dz - az * dy
+            J[1, r] = ly + az * dx - ax * dz
+            J[2, r] = lz + ax * dy - ay * dx
+            J[3, r], J[4, r], J[5, r] = ax, ay, az
+        j = parent[j]
+
+
+@njit(cache=True, inline="always")
+def point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, x, xd, dJ):
+    """J̇ (6, nv) of point_jacobian along the motion: ω_j = ww[j], ȯ_j = vw[j] (world angular velocity of
+    body j and velocity of its origin, core.fk_pass), ẋ = xd; column [l̇ + ȧ × (x − o_j) + a × (ẋ − ȯ_j); ȧ]
+    with ȧ = ω_j × a, l̇ = ω_j × l."""
+    dJ[:, :] = 0.0
+    j = b
+    while j >= 0:
+        dx, dy, dz = x[0] - pw[j, 0], x[1] - pw[j, 1], x[2] - pw[j, 2]
+        ux, uy, uz = xd[0] - vw[j, 0], xd[1] - vw[j, 1], xd[2] - vw[j, 2]      # ẋ − ȯ_j
+        wx, wy, wz = ww[j, 0], ww[j, 1], ww[j, 2]
+        for r in range(iv[j], iv[j] + nvj[j]):
+            lx, ly, lz, ax, ay, az = _column(Rw[j], S[r])
+            bx, by, bz = wy * az - wz * ay, wz * ax - wx * az, wx * ay - wy * ax   # ȧ = ω_j × a
+            dJ[0, r] = wy * lz - wz * ly + by * dz - bz * dy + ay * uz - az * uy
+            dJ[1, r] = wz * lx - wx * lz + bz * dx - bx * dz + az * ux - ax * uz
+            dJ[2, r] = wx * ly - wy * lx + bx * dy - by * dx + ax * uy - ay * ux
+            dJ[3, r], dJ[4, r], dJ[5, r] = bx, by, bz
+        j = parent[j]
+
+
+@njit(cache=True, inline="always")
+def _column(R, s):
+    """(l, a) = (R s[:3], R s[3:]) as six scalars: a motion-subspace column turned into the world."""
+    return (R[0, 0] * s[0] + R[0, 1] * s[1] + R[0, 2] * s[2], R[1, 0] * s[0] + R[1, 1] * s[1] + R[1, 2] * s[2],
+            R[2, 0] * s[0] + R[2, 1] * s[1] + R[2, 2] * s[2], R[0, 0] * s[3] + R[0, 1] * s[4] + R[0, 2] * s[5],
+            R[1, 0] * s[3] + R[1, 1] * s[4] + R[1, 2] * s[5], R[2, 0] * s[3] + R[2, 1] * s[4] + R[2, 2] * s[5])
+
+
+@njit(cache=True, inline="always")
+def point_velocity(b, pw, ww, vw, x, xd):
+    """xd = ẋ of the world point x fixed to body b: ȯ_b + ω_b × (x − o_b) (zero on the fixed base)."""
+    if b < 0:
+        xd[:] = 0.0
+        return
+    dx, dy, dz = x[0] - pw[b, 0], x[1] - pw[b, 1], x[2] - pw[b, 2]
+    xd[0] = vw[b, 0] + ww[b, 1] * dz - ww[b, 2] * dy
+    xd[1] = vw[b, 1] + ww[b, 2] * dx - ww[b, 0] * dz
+    xd[2] = vw[b, 2] + ww[b, 0] * dy - ww[b, 1] * dx
+
+
+@njit(cache=True, inline="always")
+def body_point(b, Rw, pw, Rl, pl, R, p):
+    """(R, p) = world placement of a frame (Rl, pl) given in body b's frame (b = -1: in the world)."""
+    for a in range(3):
+        for c in range(3):
+            R[a, c] = Rl[a, c] if b < 0 else Rw[b, a, 0] * Rl[0, c] + Rw[b, a, 1] * Rl[1, c] + Rw[b, a, 2] * Rl[2, c]
+        p[a] = pl[a] if b < 0 else pw[b, a] + Rw[b, a, 0] * pl[0] + Rw[b, a, 1] * pl[1] + Rw[b, a, 2] * pl[2]
+
+
+@njit(cache=True, inline="always")
+def _to_local(Rf, w, J, dJ, with_dot):
+    """In place: J ← diag(Rᵀ, Rᵀ) J; J̇ ← diag(Rᵀ, Rᵀ) J̇ − [ω']× J_l blockwise, ω' = Rᵀ ω (w: the frame's
+    world angular velocity)."""
+    wl, t, u = np.empty(3), np.empty(6), np.empty(6)
+    for k in range(3):
+        wl[k] = Rf[0, k] * w[0] + Rf[1, k] * w[1] + Rf[2, k] * w[2]
+    for r in range(J.shape[1]):
+        for k in range(6):                                    # t = diag(Rᵀ, Rᵀ) J, u = diag(Rᵀ, Rᵀ) J̇
+            o, c = k - k % 3, k % 3
+            t[k] = Rf[0, c] * J[o, r] + Rf[1, c] * J[o + 1, r] + Rf[2, c] * J[o + 2, r]
+            if with_dot:
+                u[k] = Rf[0, c] * dJ[o, r] + Rf[1, c] * dJ[o + 1, r] + Rf[2, c] * dJ[o + 2, r]
+        if with_dot:
+            for o in (0, 3):                                  # − ω' × (each block of J_l)
+                dJ[o, r] = u[o] - (wl[1] * t[o + 2] - wl[2] * t[o + 1])
+                dJ[o + 1, r] = u[o + 1] - (wl[2] * t[o] - wl[0] * t[o + 2])
+                dJ[o + 2, r] = u[o + 2] - (wl[0] * t[o + 1] - wl[1] * t[o])
+        J[:3, r], J[3:, r] = t[:3], t[3:]
+
+
+@njit(cache=True)
+def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
+    """For every state of Q (N, nq) [and V (N, nv)]: the world placement Rf (N, 3, 3), pf (N, 3) of the frame
+    (Rl, pl) on body b; want ≥ 1: its Jacobian J (N, 6, nv); want = 2: J̇ (N, 6, nv); local: in the frame's
+    axes. Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
+    parent, kind, iq, iv, nvj, S = unpack(I, F)[:6]
+    N, nb = Q.shape[0], I.shape[0]
+    Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    ww, vw, xd, w0 = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3)
+    for s in range(N):
+        for k in range(Q.shape[1]):
+            if not np.isfinite(Q[s, k]):
+                return s * Q.shape[1] + k
+        for k in range(V.shape[1]):
+            if not np.isfinite(V[s, k]):
+                return N * Q.shape[1] + s * V.shape[1] + k
+        fk_pass(I, F, Q[s], V[s], Rp, pp, Rw, pw, ww, vw)
+        body_point(b, Rw, pw, Rl, pl, Rf[s], pf[s])
+        if want >= 1:
+            point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf[s], J[s])
+        if want == 2:
+            point_velocity(b, pw, ww, vw, pf[s], xd)
+            point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf[s], xd, dJ[s])
+        if local and want >= 1:
+            _to_local(Rf[s], ww[b] if b >= 0 else w0, J[s], dJ[s], want == 2)
+    return -1
+
+
+@njit(cache=True)
+def com_jacobians_kernel(I, F, Q, c, J, Iw):
+    """For every state and body b: world CoM c (N, nb, 3), its world-aligned Jacobian J (N, nb, 6, nv) and
+    the world inertia about the CoM Iw = R I Rᵀ (N, nb, 3, 3) — what the Lagrange route sums over."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    N, nb = Q.shape[0], I.shape[0]
+    Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    ww, vw, v0, eye = np.empty((nb, 3)), np.empty((nb, 3)), np.empty(0), np.eye(3)
+    tmp, Rc = np.empty((3, 3)), np.empty((3, 3))
+    for s in range(N):
+        fk_pass(I, F, Q[s], v0, Rp, pp, Rw, pw, ww, vw)
+        for b in range(nb):
+            body_point(b, Rw, pw, eye, com[b], Rc, c[s, b])
+            point_jacobian(parent, iv, nvj, S, b, Rw, pw, c[s, b], J[s, b])
+            Iw[s, b] = 0.0
+            sandwich3(Rw[b], inertia[b], tmp, Iw[s, b])
+
+
+# -- Python entry points -----------------------------------------------------------------------------------
+
+def _frame_terms(model, call, frame, Q, V, want, reference):
+    """Run frame_kernel on checked batches; returns Rf, pf, J, J̇ (batch form; J, J̇ empty when not wanted)."""
+    fr = frame_of(model, frame)
+    N, nv = Q.shape[0], model.nv
+    Rf, pf = np.empty((N, 3, 3)), np.empty((N, 3))
+    J = np.zeros((N, 6, nv)) if want >= 1 else np.empty((N, 0, 0))
+    dJ = np.zeros((N, 6, nv)) if want == 2 else np.empty((N, 0, 0))
+    Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V)
+    code = frame_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), Vk, int(fr.body), np.asarray(fr.R, float),
+                        np.asarray(fr.p, float), want, reference == "local", Rf, pf, J, dJ)
+    if code != -1:
+        names, batches = ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, V)
+        raise_kernel_error(model, code, names, batches, call)
+    return Rf, pf, J, dJ
+
+
+@quiet
+def frame_placement(model, q, frame):
+    """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
+    (Q,), single = as_batch(model, q=q)
+    Rf, pf, _, _ = _frame_terms(model, "frame_placement", frame, Q, None, 0, "local_world_aligned")
+    Rf, pf = (check_output("frame_placement", k, x, model, dict(q=Q)) for k, x in (("R", Rf), ("p", pf)))
+    return unbatch(Rf, single), unbatch(pf, single)
+
+
+@quiet
+def frame_jacobian(model, q, frame, reference="local_world_aligned"):
+    """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
+    (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
+    _check_reference(reference)
+    (Q,), single = as_batch(model, q=q)
+    J = _frame_terms(model, "frame_jacobian", frame, Q, None, 1, reference)[2]
+    return unbatch(check_output("frame_jacobian", "J", J, model, dict(q=Q), axis=2), single)
+
+
+@quiet
+def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
+    """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
+    docstring gives the columns)."""
+    _check_reference(reference)
+    (Q, V), single = as_batch(model, q=q, v=v)
+    dJ = _frame_terms(model, "frame_jacobian_dot", frame, Q, V, 2, reference)[3]
+    return unbatch(check_output("frame_jacobian_dot", "J̇", dJ, model, dict(q=Q, v=V), axis=2), single)
+
+
+def com_jacobians(model, Q):
+    """Per body, for a checked batch Q (N, nq): world CoM c (nb, N, 3), CoM Jacobian J (nb, N, 6, nv)
+    (world-aligned), world inertia about the CoM Iw (nb, N, 3, 3)."""
+    N, nb = Q.shape[0], model.njoints
+    c, J, Iw = np.empty((N, nb, 3)), np.empty((N, nb, 6, model.nv)), np.empty((N, nb, 3, 3))
+    if nb:
+        com_jacobians_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), c, J, Iw)
+    return np.moveaxis(c, 1, 0), np.moveaxis(J, 1, 0), np.moveaxis(Iw, 1, 0)
 
 
 def supports(model) -> np.ndarray:
-    """(nv, nv) bool: supports[b, j] is True when joint j moves body b (j is b or one of its ancestors)."""
-    S = np.eye(model.nv, dtype=bool)
-    for i in range(model.nv):
+    """(nb, nb) bool: supports[b, j] is True when joint j moves body b (j is b or one of its ancestors)."""
+    S = np.eye(model.njoints, dtype=bool)
+    for i in range(model.njoints):
         if model.parent[i] >= 0:
             S[i] |= S[model.parent[i]]
     return S
 
 
-def support_path(model, body) -> list:
-    """The joints that move ``body``: body, parent[body], ... up to the base (iterative, O(depth))."""
-    out = []
-    while body >= 0:
-        out.append(int(body))
-        body = model.parent[body]
-    return out
-
-
-def axes_world(model, R):
-    """z_j in world coordinates: (nv, N, 3)."""
-    return np.einsum("jnab,jb->jna", R, model.axis)
-
-
-def point_jacobian(model, R, p, z, body, point):
-    """World-aligned Jacobian (N, 6, nv) of a point (N, 3) rigidly attached to ``body``."""
-    N = point.shape[0]
-    J = np.zeros((N, 6, model.nv))
-    if body < 0:
-        return J
-    for j in sorted(support_path(model, body)):
-        if model.kind[j] == REVOLUTE:
-            J[:, :3, j], J[:, 3:, j] = cross(z[j], point - p[j]), z[j]
-        else:
-            J[:, :3, j] = z[j]
-    return J
-
-
-def _frame_world(model, R, p, frame):
-    """(body, R_frame (N, 3, 3), p_frame (N, 3)) of a named frame in world coordinates."""
-    fr = frame_of(model, frame)
-    if fr.body < 0:
-        N = R.shape[1]
-        return fr.body, np.broadcast_to(fr.R, (N, 3, 3)), np.broadcast_to(fr.p, (N, 3))
-    return fr.body, R[fr.body] @ fr.R, p[fr.body] + np.einsum("nij,j->ni", R[fr.body], fr.p)
-
-
-@quiet
-def frame_placement(model, q, frame):
-    """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3))."""
-    (Q,), single = as_batch(model, q=q)
-    frame_of(model, frame)
-    _, Rf, pf = _frame_world(model, *placements(model, Q), frame)
-    Rf, pf = (check_output("frame_placement", k, np.array(x), model, dict(q=Q))
-              for k, x in (("R", Rf), ("p", pf)))
-    return unbatch(Rf, single), unbatch(pf, single)
-
-
-def _to_local(J, Rf):
-    """Rotate both 3-row blocks of a world-aligned Jacobian into the frame's axes."""
-    Jl = np.empty_like(J)
-    Jl[:, :3], Jl[:, 3:] = np.swapaxes(Rf, 1, 2) @ J[:, :3], np.swapaxes(Rf, 1, 2) @ J[:, 3:]
-    return Jl
-
-
-@quiet
-def frame_jacobian(model, q, frame, reference="world"):
-    """J (6, nv) or (N, 6, nv), rows [linear; angular]: twist of ``frame`` = J q̇ (Eqs. 29–30)."""
-    _check_reference(reference)
-    (Q,), single = as_batch(model, q=q)
-    frame_of(model, frame)
-    R, p = placements(model, Q)
-    body, Rf, pf = _frame_world(model, R, p, frame)
-    J = point_jacobian(model, R, p, axes_world(model, R), body, pf)
-    J = J if reference == "world" else _to_local(J, Rf)
-    return unbatch(check_output("frame_jacobian", "J", J, model, dict(q=Q), axis=2), single)
-
-
-@quiet
-def frame_jacobian_dot(model, q, v, frame, reference="world"):
-    """J̇ (6, nv) or (N, 6, nv), exact time derivative of frame_jacobian along q̇.
-
-    World-aligned: ż_j = ω_j × z_j; revolute column d/dt[z_j × (p − o_j)] = ż_j × (p − o_j) + z_j × (ṗ − ȯ_j);
-    prismatic column ż_j. Local: J̇_l = Rᵀ J̇_w − [ω'_f]× Rᵀ J_w (the frame's axes turn with it).
-    """
-    _check_reference(reference)
-    (Q, V), single = as_batch(model, q=q, v=v)
-    frame_of(model, frame)
-    R, p = placements(model, Q)
-    z = axes_world(model, R)
-    body, Rf, pf = _frame_world(model, R, p, frame)
-    J = point_jacobian(model, R, p, z, body, pf)
-    w, vel = body_twists(model, p, z, V)
-    dJ = point_jacobian_dot(model, p, z, w, vel, body, pf)
-    if reference == "local":
-        W = skew(np.einsum("nji,nj->ni", Rf, w[body]) if body >= 0 else np.zeros_like(pf))   # [ω'_f]×
-        Jl = _to_local(J, Rf)
-        dJ = _to_local(dJ, Rf) - np.concatenate([W @ Jl[:, :3], W @ Jl[:, 3:]], axis=1)
-    return unbatch(check_output("frame_jacobian_dot", "J̇", dJ, model, dict(q=Q, v=V), axis=2), single)
-
-
-def point_jacobian_dot(model, p, z, w, vel, body, point):
-    """J̇ (N, 6, nv) of a point (N, 3) fixed to ``body``, world-aligned, from world twists (w, vel)."""
-    dJ = np.zeros(point.shape[:1] + (6, model.nv))
-    if body < 0:
-        return dJ
-    vp = vel[body] + cross(w[body], point - p[body])            # velocity of the point
-    for j in sorted(support_path(model, body)):
-        dz = cross(w[j], z[j])                                  # ż_j = ω_j × z_j
-        if model.kind[j] == REVOLUTE:
-            dJ[:, :3, j] = cross(dz, point - p[j]) + cross(z[j], vp - vel[j])
-            dJ[:, 3:, j] = dz
-        else:
-            dJ[:, :3, j] = dz
-    return dJ
-
-
-def body_twists(model, p, z, V):
-    """World angular velocity and world velocity of each body origin: (nv, N, 3) each."""
-    w, vel = np.zeros_like(p), np.zeros_like(p)
-    for i in range(model.nv):
-        j = model.parent[i]
-        w0, v0 = (0.0, 0.0) if j < 0 else (w[j], vel[j] + cross(w[j], p[i] - p[j]))
-        if model.kind[i] == REVOLUTE:
-            w[i], vel[i] = w0 + V[:, i, None] * z[i], v0
-        else:
-            w[i], vel[i] = w0, v0 + V[:, i, None] * z[i]
-    return w, vel
-
-
 def _check_reference(reference):
-    if not isinstance(reference, str) or reference not in ("world", "local"):
-        raise InputError(f"reference must be 'world' or 'local', not {reference!r}")
+    if isinstance(reference, str) and reference == "world":
+        raise InputError("reference='world' is ambiguous: use 'local_world_aligned' (world-aligned axes at the "
+                         "frame's origin, Pinocchio's LOCAL_WORLD_ALIGNED); Pinocchio's WORLD is another "
+                         "convention (the twist at the world origin), not offered here")
+    if not isinstance(reference, str) or reference not in REFERENCES:
+        raise InputError(f"reference must be 'local_world_aligned' or 'local', not {reference!r}")

@@ -3,7 +3,15 @@
 M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23) — summed over links from their Jacobians
 ("lagrange") or by the composite-rigid-body algorithm ("crba", the fast route). C comes from the
 Christoffel symbols of M with ∂M/∂q derived analytically from the derivatives of the link Jacobians; g
-from the potential energy V = −Σ m_b gᵀ c_b. None of these calls the Newton–Euler code.
+from the potential energy V = −Σ m_b gᵀ c_b. None of these calls the Newton–Euler code: the Lagrange
+route reads the CoM Jacobians of kinematics.com_jacobians (the one forward kinematics), for any joint type.
+
+With a free-flyer root, v is not q̇: its six entries are the root's twist in its own frame, and q moves on
+a Lie group. "∂M/∂q_k" is then the derivative along the k-th velocity direction (X_k; for a 1-dof joint
+∂/∂q_k), and the free flyer's directions do not commute, [X_i, X_j] = X_[e_i, e_j] (the se(3) bracket):
+the Christoffel symbols of the kinetic metric in this frame gain the bracket terms (Koszul's formula),
+    2Γ_kij = X_i M_jk + X_j M_ik − X_k M_ij + ⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩,
+C_kj = Σ_i Γ_kij v_i, and Ṁ − 2C stays skew-symmetric (Ṁ = Σ_k X_k(M) v_k).
 """
 from __future__ import annotations
 
@@ -12,19 +20,9 @@ import numpy as np
 from ..errors import InputError
 from ..model import REVOLUTE
 from ..spatial import cross, skew
-from .kinematics import axes_world, placements, point_jacobian, supports
 from .crba import crba
+from .kinematics import com_jacobians, supports
 from .state import as_batch, check_output, quiet, unbatch
-
-
-def _com_jacobians(model, R, p):
-    """Per body: world CoM (nv, N, 3), CoM Jacobian (nv, N, 6, nv), world inertia about CoM (nv, N, 3, 3)."""
-    z = axes_world(model, R)
-    c = p + np.einsum("bnij,bj->bni", R, model.com)
-    J = np.stack([point_jacobian(model, R, p, z, b, c[b]) for b in range(model.nv)]) if model.nv else \
-        np.zeros((0, R.shape[1], 6, 0))
-    Iw = R @ model.inertia[:, None] @ np.swapaxes(R, -1, -2)
-    return c, J, Iw, z
 
 
 def mass_matrix(model, q, method="crba"):
@@ -39,51 +37,60 @@ def mass_matrix(model, q, method="crba"):
         return crba(model, q)
     (Q,), single = as_batch(model, q=q)
     if method == "lagrange":
-        _, J, Iw, _ = _com_jacobians(model, *placements(model, Q))
-        Jv, Jw = J[:, :, :3], J[:, :, 3:]
-        M = np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
+        M = _lagrange_mass_matrix(model, *com_jacobians(model, Q)[1:])
     else:
         raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
     return unbatch(check_output("mass_matrix", "M", M, model, dict(q=Q)), single)
+
+
+def _lagrange_mass_matrix(model, J, Iw):
+    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3)."""
+    Jv, Jw = J[:, :, :3], J[:, :, 3:]
+    return np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
 
 
 @quiet
 def gravity_torques(model, q):
     """g(q) = ∂V/∂q with V = −Σ_b m_b gᵀ c_b(q): g = −Σ_b m_b J_vbᵀ g (nv,) or (N, nv)."""
     (Q,), single = as_batch(model, q=q)
-    _, J, _, _ = _com_jacobians(model, *placements(model, Q))
+    J = com_jacobians(model, Q)[1]
     g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)
     return unbatch(check_output("gravity_torques", "g", g, model, dict(q=Q)), single)
 
 
-def mass_matrix_derivatives(model, Q):
-    """∂M/∂q_k for a batch: (N, nv(k), nv, nv), exact, from derivatives of the link Jacobians.
+def mass_matrix_derivatives(model, Q, terms=None):
+    """X_k(M) for a batch Q (N, nq): (N, nv(k), nv, nv), exact, from derivatives of the link Jacobians.
 
-    With z_k the axis of revolute joint k, for body b's CoM Jacobian column j (k, j supporting b):
-      k supports j (k = j included):  ∂J_j/∂q_k = z_k × J_j   (both blocks turn with joint k)
-      j supports k, k ≠ j:            ∂J_j/∂q_k = [z_j × J_v,k; 0] for revolute j, 0 for prismatic j
-    and ∂(R I Rᵀ)/∂q_k = [z_k]× I_w − I_w [z_k]× when k supports b. Prismatic k: only the second rule.
+    X_k is the k-th velocity direction (∂/∂q_k for 1-dof joints; a free flyer's body-frame twist e_k).
+    Moving along it turns every body joint(k) supports about a_k (world, = the angular part of column k:
+    z_k for a revolute joint, 0 for a prismatic one). For body b's CoM Jacobian column j (k, j supporting b):
+      joint(k) supports joint(j) (same joint included):  X_k J_j = a_k × J_j   (both blocks turn with it)
+      joint(j) supports joint(k), another joint:         X_k J_j = [a_j × J_v,k; 0]   (the CoM moves by J_v,k)
+    and X_k(R I Rᵀ) = [a_k]× I_w − I_w [a_k]× when joint(k) supports b. ``terms`` = com_jacobians(model, Q).
     """
     N, nv = Q.shape[0], model.nv
-    c, J, Iw, z = _com_jacobians(model, *placements(model, Q))
-    S = supports(model)                                     # S[b, j]: joint j moves body b
+    _, J, Iw = com_jacobians(model, Q) if terms is None else terms
+    Sb = supports(model)                                     # Sb[b, j]: joint j moves body b
+    vj = np.asarray(model.v_joint)                           # the joint of each velocity
+    Sv, Svv = Sb[:, vj], Sb[vj][:, vj]                       # body × velocity, velocity × velocity
+    a = np.stack([J[vj[k], :, 3:, k] for k in range(nv)], 1) if nv else np.zeros((N, 0, 3))   # a_k (N, nv, 3)
     dM = np.zeros((N, nv, nv, nv))
-    for b in range(nv):
-        Jv, Jw = J[b, :, :3], J[b, :, 3:]                   # (N, 3, nv)
-        for k in np.flatnonzero(S[b]):
+    for b in range(model.njoints):
+        Jb, cols = J[b], np.flatnonzero(Sv[b])
+        Jv, Jw = Jb[:, :3], Jb[:, 3:]                        # (N, 3, nv)
+        for k in cols:
             dJ = np.zeros((N, 6, nv))
-            for j in np.flatnonzero(S[b]):
-                if S[j, k] and model.kind[k] == REVOLUTE:   # k supports j
-                    dJ[:, :3, j], dJ[:, 3:, j] = cross(z[k], Jv[:, :, j]), cross(z[k], Jw[:, :, j])
-                elif S[k, j] and k != j and model.kind[j] == REVOLUTE:   # j supports k
-                    dJ[:, :3, j] = cross(z[j], Jv[:, :, k])
+            turn = cols[Svv[cols, k]]                        # joint(k) supports joint(j)
+            lift = cols[Svv[k, cols] & (vj[cols] != vj[k])]  # joint(j) strictly supports joint(k)
+            ak = a[:, k, :, None]
+            dJ[:, :3, turn] = np.cross(ak, Jv[:, :, turn], axis=1)
+            dJ[:, 3:, turn] = np.cross(ak, Jw[:, :, turn], axis=1)
+            dJ[:, :3, lift] = np.cross(np.swapaxes(a[:, lift], 1, 2), Jv[:, :, k, None], axis=1)
             dJv, dJw = dJ[:, :3], dJ[:, 3:]
             sym = model.mass[b] * np.einsum("nai,naj->nij", dJv, Jv) + np.einsum("nai,nab,nbj->nij", dJw, Iw[b], Jw)
-            dM[:, k] += sym + np.swapaxes(sym, 1, 2)
-            if model.kind[k] == REVOLUTE:
-                Z = skew(z[k])
-                dI = Z @ Iw[b] - Iw[b] @ Z
-                dM[:, k] += np.einsum("nai,nab,nbj->nij", Jw, dI, Jw)
+            Z = skew(a[:, k])
+            dI = Z @ Iw[b] - Iw[b] @ Z
+            dM[:, k] += sym + np.swapaxes(sym, 1, 2) + np.einsum("nai,nab,nbj->nij", Jw, dI, Jw)
     return dM
 
 
@@ -91,10 +98,41 @@ def mass_matrix_derivatives(model, Q):
 def coriolis_matrix(model, q, v):
     """C(q, q̇) (nv, nv) or (N, nv, nv) from the Christoffel symbols of M:
 
-    C_ij = Σ_k ½ (∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k, so that Ṁ − 2C is skew-symmetric.
+    C_ij = Σ_k ½ (∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k, so that Ṁ − 2C is skew-symmetric; with a
+    free flyer, plus its bracket terms (module docstring, ``_bracket_terms``).
     """
     (Q, V), single = as_batch(model, q=q, v=v)
-    dM = mass_matrix_derivatives(model, Q)                   # dM[n, k, i, j] = ∂M_ij/∂q_k
+    terms = com_jacobians(model, Q)
+    dM = mass_matrix_derivatives(model, Q, terms)            # dM[n, k, i, j] = ∂M_ij/∂q_k
     C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
                - np.einsum("nijk,nk->nij", dM, V))
+    if model.floating:
+        C += _bracket_terms(_lagrange_mass_matrix(model, *terms[1:]), V)
     return unbatch(check_output("coriolis_matrix", "C", C, model, dict(q=Q, v=V)), single)
+
+
+def _ad(x):
+    """ad_ξ (N, 6, 6), ξ = [v; ω] (N, 6): ad_ξ η = [ω × η_v + v × η_ω; ω × η_ω], the se(3) bracket [ξ, η]."""
+    out = np.zeros(x.shape[:1] + (6, 6))
+    W, L = skew(x[:, 3:]), skew(x[:, :3])
+    out[:, :3, :3], out[:, :3, 3:], out[:, 3:, 3:] = W, L, W
+    return out
+
+
+def _bracket_terms(M, V):
+    """½ Σ_i v_i (⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩) as a matrix [k, j], the root
+    directions X_0..X_5 being the only ones that do not commute: with ξ = v[:6], f = (M v)[:6],
+      first:  M[:, :6] ad_ξ  (columns j of the root)
+      second: ⟨f, [e_k, e_j]⟩ = [[0, −[f_v]×], [−[f_v]×, −[f_ω]×]]  (root block)
+      third:  −ad_ξᵀ M[:6, :]  (rows k of the root)."""
+    N, nv = V.shape
+    xi, f = V[:, :6], np.einsum("nij,nj->ni", M[:, :6], V)
+    out = np.zeros((N, nv, nv))
+    ad = _ad(xi)
+    out[:, :, :6] += M[:, :, :6] @ ad
+    Fv, Fw = skew(f[:, :3]), skew(f[:, 3:])
+    out[:, :3, 3:6] -= Fv
+    out[:, 3:6, :3] -= Fv
+    out[:, 3:6, 3:6] -= Fw
+    out[:, :6, :] -= np.swapaxes(ad, 1, 2) @ M[:, :6, :]
+    return 0.5 * out

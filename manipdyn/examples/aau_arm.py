@@ -7,7 +7,7 @@ constant. Five joints cannot follow a 6-D twist, so Eq. 28's J⁻¹ does not exi
 5-D: the tool point's position (3 rows) and the direction d of the tool's z axis, held pointing down so
 the tool plate stays horizontal (2 rows: d·n1, d·n2 with n1, n2 ⊥ d*); the yaw about that axis is left
 free (five joints). Its Jacobian is
-    J_task = [J_v ; (d × n1)ᵀ J_ω ; (d × n2)ᵀ J_ω]   (5 × 5, J from frame_jacobian(tool, "world"))
+    J_task = [J_v ; (d × n1)ᵀ J_ω ; (d × n2)ᵀ J_ω]   (5 × 5, J from frame_jacobian(tool), world-aligned)
 q̇ = J_task⁻¹ [ẋ; 0] and q̈ = J_task⁻¹([ẍ; 0] − J̇_task q̇) (Eq. 31 corrected: J̇ acts on q̇, not J̇⁻¹ on v),
 q by Newton on the pose error at every sample (closed loop, from the previous sample). Near a singularity
 (σ_min(J_task) below ``sigma_min`` = 0.05) the solver switches to damped least squares,

@@ -43,8 +43,8 @@ DYN_TERMS = {
     "C": "C (Christoffel) vs computeCoriolisMatrix", "g": "g vs computeGeneralizedGravity",
     "nle": "C q̇ + g vs nonLinearEffects", "lagrange_ne": "M q̈ + C q̇ + g vs our Newton–Euler τ",
     "qdd_aba": "q̈ (ABA) vs aba, err/cond(M)", "qdd_cholesky": "q̈ (Cholesky) vs aba, err/cond(M)",
-    "J_world": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
-    "dJ_world": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
+    "J_local_world_aligned": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
+    "dJ_local_world_aligned": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
 }
 CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
                 "qdd_closed": "closed q̈ vs constraintDynamics, err/κ"}   # κ = cond(M) cond(Φ_q)²
@@ -219,9 +219,9 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
         C=lambda q, v, t: coriolis_matrix(model, q, v), g=lambda q, v, t: gravity_torques(model, q),
         qdd_aba=lambda q, v, t: aba(model, q, v, t),
         qdd_cholesky=lambda q, v, t: forward_dynamics(model, q, v, t, method="cholesky"),
-        J_world=lambda q, v, t: _jacobians(model, q, None, "world"),
+        J_world=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
         J_local=lambda q, v, t: _jacobians(model, q, None, "local"),
-        dJ_world=lambda q, v, t: _jacobians(model, q, v, "world"),
+        dJ_world=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),
         dJ_local=lambda q, v, t: _jacobians(model, q, v, "local"))
     for s0 in range(0, Q.shape[0], chunk):
         q, v, a, t = (X[s0:s0 + chunk] for X in (Q, V, A, T))

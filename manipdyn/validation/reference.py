@@ -125,7 +125,7 @@ class Reference:
         P.computeJointJacobiansTimeVariation(pm, pd, pq, v)
         P.updateFramePlacements(pm, pd)
         out = {}
-        for key, ref in (("world", P.LOCAL_WORLD_ALIGNED), ("local", P.LOCAL)):
+        for key, ref in (("local_world_aligned", P.LOCAL_WORLD_ALIGNED), ("local", P.LOCAL)):
             ids = [pm.getFrameId(b, P.FrameType.BODY) for b in self.model.body_names]
             # (6, nv) each: eigenpy hands a 6 × 1 matrix back as a vector (6,) when nv = 1
             out["J_" + key] = np.array([np.reshape(P.getFrameJacobian(pm, pd, f, ref), (6, pm.nv)) for f in ids])

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..dynamics.kinematics import placements
+from ..dynamics.core import forward_kinematics
 from ..errors import InputError
 from .geometry import load_visuals
 
@@ -152,7 +152,7 @@ def _segment(g, a, b, r):
 
 def _points(model, Q):
     """World positions of body origins, CoMs, named frames and closure points over the states Q: (K, 3)."""
-    R, p = placements(model, Q)
+    R, p = forward_kinematics(model, np.asarray(Q, float))
     pts = [p.reshape(-1, 3), np.zeros((1, 3)), (p + np.einsum("bnij,bj->bni", R, model.com)).reshape(-1, 3)]
     for f in model.frames.values():
         if f.body >= 0:
@@ -239,16 +239,16 @@ def animate(sc: Scene, t, Q, fps=30.0):
         sc.notes.append(note)
         warnings.warn(f"playback of {sc.model.name!r}: {note}", PlaybackWarning, stacklevel=2)
     Qf = np.column_stack([np.interp(times, t - t[0], Q[:, i]) for i in range(sc.model.nv)])
-    R, p = placements(sc.model, Qf)
+    R, p = forward_kinematics(sc.model, Qf)
     anim = Animation(default_framerate=fps)
     gaps = _closure_gaps(sc.model, Qf)
     for k in range(len(times)):
         with anim.at_frame(_Recorder(), k) as frame:
-            for b in range(sc.model.nv):
+            for b in range(sc.model.njoints):
                 frame[sc.nodes[b]].set_transform(_T(R[b, k], p[b, k]))
             for c, gap in zip(sc.model.constraints, gaps):
                 frame[gap_node(sc, c)].set_property("visible", "boolean", bool(gap[k] > CLOSURE_TOL))
-    sc.frames = {sc.nodes[b]: np.array([_T(R[b, k], p[b, k]) for k in range(len(times))]) for b in range(sc.model.nv)}
+    sc.frames = {sc.nodes[b]: np.array([_T(R[b, k], p[b, k]) for k in range(len(times))]) for b in range(sc.model.njoints)}
     sc.times, sc.fps, sc.gaps = times, fps, gaps
     sc.commands.append(SetAnimation(anim, play=True, repetitions=1))
     return sc

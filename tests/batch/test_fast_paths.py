@@ -54,6 +54,9 @@ def test_fast_aba_refuses_massless_subtree():
 
 @pytest.mark.parametrize("name", ["fourbar.urdf", "spm.urdf"])
 def test_closed_chain_kernel_equals_reference(name):
+    """The KKT kernel (constraints/fast.py) against the readable KKT solve (constraints/dynamics.py). Both read
+    the one source of closure rows (closures.closure_rows), which tests/crosscheck/test_spatial_loops.py and
+    tests/batch/test_kernels_vs_readable.py hold to Pinocchio's frame Jacobians and to finite differences."""
     from conftest import ROOT
     from manipdyn.constraints import closure_terms, rank_report
     from manipdyn.constraints.dynamics import (constrained_forward_dynamics,

@@ -17,9 +17,12 @@ References, none of them manipdyn's closure code:
 - Pinocchio's constraintDynamics (CONTACT_6D for fixed, CONTACT_3D for spherical, two 3-D points on the
   axis for revolute; Baumgarte gains 0) on the manifold, and off it for spherical closures, whose 3-D
   point rows are the same functions as ours;
+- ``PinClosures`` (tests/pin_closures.py): the same rows from Pinocchio's frame placements, frame Jacobians
+  and their time variation at operational frames added on the closure points (Φ_q = J_A − J_B);
 - central finite differences of Φ and of Φ_q along q̇; the law of energy conservation.
-The compiled closure kernel (constraints/fast.py, the route ``constrained_forward_dynamics`` takes without
-f_ext) is compared array by array with the readable route (closures.py, dynamics.py).
+The same loops with a free-flyer root (the base link floating) are held to PinClosures on Pinocchio's
+free-flyer model and to differences along q ⊕ t v. The compiled KKT kernel (constraints/fast.py, the route
+``constrained_forward_dynamics`` takes without f_ext) is compared with the readable KKT solve (dynamics.py).
 """
 import functools
 import json
@@ -28,13 +31,15 @@ from xml.etree import ElementTree
 
 import numpy as np
 import pytest
-from conftest import ROOT, assert_close
+from conftest import ROOT, assert_close, err
+from free_flyer import integrate, random_floating_states, with_free_flyer
+from pin_closures import PinClosures
 
 import manipdyn as md
 from manipdyn.constraints import (closure_terms, complete_state, constrained_forward_dynamics,
                                   constrained_inverse_dynamics, rank_report)
 from manipdyn.constraints.dynamics import constrained_forward_dynamics_reference
-from manipdyn.constraints.fast import closure_rows, constrained_fd_fast
+from manipdyn.constraints.fast import constrained_fd_fast
 from manipdyn.validation.closed import ClosedReference, actuator_torques_by_inversion
 from manipdyn.validation.reference import Reference, pin
 
@@ -218,19 +223,58 @@ def test_jacobian_and_bias_against_finite_differences(name, which):
         assert_close(J_pin, ((Pp - Pm) / (2 * h)).T, 1e-8, "Pinocchio Φ_q vs FD")   # measured ≤ 2.6e-10
 
 
-# ------------------------------------------------------------------ compiled kernel against readable route
+# ------------------------------------------------------------------ a second Pinocchio route: frame Jacobians
 @pytest.mark.parametrize("which", ALL_SETS)
 @pytest.mark.parametrize("name", NAMES)
-def test_kernel_rows_equal_readable_rows(name, which):
-    """closure_rows (compiled) and closure_terms (readable): Φ, Φ_q, Φ̇_q q̇ array by array."""
+def test_closure_terms_against_pinocchio_frame_jacobians(name, which):
+    """Φ, Φ_q = J_A − J_B, Φ̇_q q̇ from Pinocchio's frame Jacobians (PinClosures), batch and one state."""
     L = loop(name)
     Q, V = states(L, which)
     Phi, Jc, bias = closure_terms(L["model"], Q, V)
+    ref = pin_closures(name)
     for s in range(len(Q)):
-        k_phi, k_J, k_b = closure_rows(L["model"], Q[s], V[s])
-        assert_close(k_phi, Phi[s], 2e-14, "Φ")              # measured ≤ 3.3e-16
-        assert_close(k_J, Jc[s], 2e-14, "Φ_q")                # measured ≤ 3.3e-16
-        assert_close(k_b, bias[s], 3e-14, "Φ̇_q q̇")           # measured ≤ 6.3e-16
+        phi_r, J_r, b_r = ref.rows(L["ref"].to_pin_q(Q[s]), V[s])
+        one = closure_terms(L["model"], Q[s], V[s])
+        for what, x, x1, y, tol in (("Φ", Phi[s], one[0], phi_r, 5e-14), ("Φ_q", Jc[s], one[1], J_r, 5e-14),
+                                    ("Φ̇_q q̇", bias[s], one[2], b_r, 1e-13)):   # measured ≤ 4.4e-16, 7.8e-16, 1.1e-15
+            assert_close(x, y, tol, what)
+            assert np.array_equal(x, x1), what                  # one state = its row of the batch
+
+
+@functools.lru_cache(maxsize=None)
+def pin_closures(name):
+    return PinClosures(loop(name)["model"], pin().buildModelFromUrdf(str(LOOPS / MANIFEST[name]["file"])))
+
+
+# ------------------------------------------------------------------ the loops on a floating base
+@functools.lru_cache(maxsize=None)
+def floating(name):
+    """The loop with its base link on a free flyer (mass 2 kg, unit inertia), Pinocchio's rows, 4 states."""
+    P = pin()
+    model = with_free_flyer(loop(name)["model"], 2.0, np.zeros(3), np.eye(3))
+    ref = PinClosures(model, P.buildModelFromUrdf(str(LOOPS / MANIFEST[name]["file"]), P.JointModelFreeFlyer()))
+    Q, V = random_floating_states(model, 4, np.random.default_rng(zlib.crc32(name.encode())))
+    return model, ref, Q, V
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_floating_loops_against_pinocchio_and_differences(name):
+    """With a free-flyer root, off the closures (random q, v): Φ, Φ_q, Φ̇_q q̇ equal Pinocchio's frame rows;
+    and, along q(t) = q ⊕ t v (h = 1e-6), Φ_q v = dΦ/dt and Φ̇_q v = d(Φ_q v)/dt by central differences."""
+    model, ref, Q, V = floating(name)
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    h, worst = 1e-6, dict.fromkeys(("phi", "jac", "bias", "dphi", "dbias"), 0.0)
+    for s in range(len(Q)):
+        for k, x, y in zip(("phi", "jac", "bias"), (Phi[s], Jc[s], bias[s]), ref.rows(Q[s], V[s])):
+            worst[k] = max(worst[k], err(x, y))
+        qp, qm = integrate(model, Q[s], h * V[s])[0], integrate(model, Q[s], -h * V[s])[0]
+        (Pp, Jp, _), (Pm, Jm, _) = closure_terms(model, qp), closure_terms(model, qm)
+        worst["dphi"] = max(worst["dphi"], err(Jc[s] @ V[s], (Pp - Pm) / (2 * h)))
+        worst["dbias"] = max(worst["dbias"], err(bias[s], (Jp - Jm) @ V[s] / (2 * h)))
+    print(f"\n{name}: " + ", ".join(f"{k} {e:.1e}" for k, e in worst.items()))
+    tol = dict(phi=3e-14, jac=3e-14, bias=1e-13, dphi=1e-8, dbias=1e-8)   # measured ≤ 3.3e-16, 4.4e-16, 1.8e-15,
+    #                                                                          2.0e-10, 3.1e-10 (h = 1e-6)
+    assert all(worst[k] <= tol[k] for k in tol), worst
 
 
 @pytest.mark.parametrize("which", ALL_SETS)

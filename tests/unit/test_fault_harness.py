@@ -35,7 +35,7 @@ def test_catalogue_is_large_unique_and_covers_every_area():
     assert len(FAULTS) >= 25
     assert {f.area for f in FAULTS} == set(PF.AREAS)
     assert PF.check_faults(FAULTS) == []
-    required = {"closure-fast-orientation-bias-offset", "closure-fixed-pair-index", "spm-eq59a-drop-term",
+    required = {"closure-orientation-bias-offset", "closure-fixed-pair-index", "spm-eq59a-drop-term",
                 "lagrange-christoffel-sign", "urdf-q-order-by-link-name", "kin-jdot-local-term-sign",
                 "integrate-explicit-euler"}
     assert required <= set(names)

@@ -1,8 +1,9 @@
 """numba's on-disk cache must never hide an edit: changing any kernel source recompiles every compiled
-function that depends on it, across modules (constraints/fast.py inlines callees of dynamics/fast.py).
+function that depends on it, across modules (kinematics.py and closures.py inline core.fk_pass, which
+inlines joints.joint_placement).
 
 The end-to-end case copies the package to a temporary folder, runs it in a fresh interpreter to fill the
-cache, flips a sign in a callee of dynamics/fast.py in the copy, and runs it again in a fresh interpreter:
+cache, flips a sign in a callee in joints.py in the copy, and runs it again in a fresh interpreter:
 the numbers must be those of the edited source — checked against the same edited source run uncompiled
 (MANIPDYN_NOJIT=1) in a second copy, not merely "different".
 """
@@ -19,17 +20,17 @@ from conftest import ROOT, assert_close
 
 from manipdyn import _jit
 
-# rnea_one (dynamics/fast.py) and closure_kernel (constraints/fast.py, which inlines _joint_rotation of
-# dynamics/fast.py) on one fixed state of the spherical parallel manipulator (spatial axes).
+# frame_kernel (dynamics/kinematics.py) and closure_kernel (constraints/closures.py), both inlining
+# joints.joint_placement through core.fk_pass, on one fixed state of the spherical parallel manipulator.
 PROBE = f"""
 import json, numpy as np, manipdyn as md
-from manipdyn.constraints.fast import closure_rows
+from manipdyn.constraints import closure_terms
 m = md.load_urdf({str(ROOT / "urdf" / "spm.urdf")!r})
 rng = np.random.default_rng(3)
-q, v, a = rng.uniform(-3, 3, m.nv), rng.normal(0, 2, m.nv), rng.normal(0, 5, m.nv)
-phi, jac, bias = closure_rows(m, q, v)
+q, v = rng.uniform(-3, 3, m.nq), rng.normal(0, 2, m.nv)
+phi, jac, bias = closure_terms(m, q, v)
 import os; assert md.__file__.startswith(os.getcwd()), md.__file__    # the copy, not the checkout
-print(json.dumps(dict(tau=md.rnea(m, q, v, a).tolist(), phi=phi.tolist(), jac=jac.tolist(),
+print(json.dumps(dict(J=md.frame_jacobian(m, q, "platform").tolist(), phi=phi.tolist(), jac=jac.tolist(),
                       bias=bias.tolist())))
 """
 
@@ -49,10 +50,11 @@ def _copy_package(dst):
 
 
 def _flip_rotation_sign(pkg_root):
-    """Plant a visible edit in a callee: _joint_rotation turns by −q instead of q."""
-    path = pkg_root / "manipdyn" / "dynamics" / "fast.py"
-    new, n = re.subn(r"s, c = np\.sin\(q\), np\.cos\(q\)", "s, c = -np.sin(q), np.cos(q)", path.read_text())
-    assert n == 1, "the edit site in _joint_rotation moved; update this test"
+    """Plant a visible edit in a callee: joint_placement turns a revolute joint by −q instead of q."""
+    path = pkg_root / "manipdyn" / "joints.py"
+    new, n = re.subn(r"s, c = np\.sin\(q\[iq\]\), np\.cos\(q\[iq\]\)", "s, c = -np.sin(q[iq]), np.cos(q[iq])",
+                     path.read_text())
+    assert n == 1, "the edit site in joint_placement moved; update this test"
     path.write_text(new)
 
 
