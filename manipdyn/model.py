@@ -142,11 +142,11 @@ class Model:
         """(nb,) index of joint i's first entry in v (and in a, τ)."""
         return _frozen(np.concatenate([[0], np.cumsum(self.nvs)[:-1]]) if self.njoints else [])
 
-    @property
+    @cached_property
     def nq(self) -> int:
         return int(np.sum(self.nqs))
 
-    @property
+    @cached_property
     def nv(self) -> int:
         return int(np.sum(self.nvs))
 

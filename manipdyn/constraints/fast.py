@@ -9,7 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays, rnea_kernel
+from ..dynamics import core
+from ..dynamics.fast import _joint_rotation, _unpack, crba_kernel, kernel_arrays
+from ..dynamics.rnea import rnea_one
 from ..dynamics.kinematics import supports
 from ..errors import NumericalError, SingularError
 from .closures import RANK_RTOL, _pairs
@@ -124,20 +126,22 @@ def closure_kernel(I, F, CI, CF, S, q, v, Phi, Jc, bias):
 
 
 @njit(cache=True)
-def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
+def constrained_fd_kernel(I, F, IC, FC, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
-    Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
+    (I, F): the model in dynamics/fast.py's form (closures, CRBA); (IC, FC): in dynamics/core.py's form
+    (Newton–Euler). Returns -1 or the flat index of the first non-finite input; -2 if M is not positive
+    definite."""
     N, nv = Q.shape
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
     M = np.empty((1, nv, nv))
-    h = np.empty((1, nv))
+    h, zero = np.empty(nv), np.zeros(nv)
     for s in range(N):
         for i in range(nv):
             if not (np.isfinite(Q[s, i]) and np.isfinite(V[s, i]) and np.isfinite(T[s, i])):
                 return s * nv + i
         closure_kernel(I, F, CI, CF, S, Q[s], V[s], Phi, Jc, bias)
         crba_kernel(I, F, Q[s:s + 1], M)
-        rnea_kernel(I, F, Q[s:s + 1], V[s:s + 1], np.zeros((1, nv)), h)     # h = C q̇ + g
+        rnea_one(IC, FC, Q[s], V[s], zero, h)                                 # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):
@@ -164,7 +168,7 @@ def constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, rtol, QDD, L
             if not M[0, i, i] > 0.0:
                 return -2
         L = np.linalg.cholesky(M[0])
-        Minv_r = np.linalg.solve(L.T, np.linalg.solve(L, T[s] - h[0]))
+        Minv_r = np.linalg.solve(L.T, np.linalg.solve(L, T[s] - h))
         LAM[s] = 0.0
         if r == 0:
             QDD[s] = Minv_r
@@ -185,7 +189,8 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
     try:
-        code = constrained_fd_kernel(I, F, CI, CF, S, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+        code = constrained_fd_kernel(I, F, *core.kernel_arrays(model), CI, CF, S, m, Q, V, T, alpha, beta,
+                                     RANK_RTOL, QDD, LAM, RANK)
     except np.linalg.LinAlgError:
         _overflowed(model, Q, V)
         raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "

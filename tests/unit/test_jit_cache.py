@@ -2,8 +2,8 @@
 function that depends on it, across modules (constraints/fast.py inlines callees of dynamics/fast.py).
 
 The end-to-end case copies the package to a temporary folder, runs it in a fresh interpreter to fill the
-cache, flips a sign in a callee of dynamics/fast.py in the copy, and runs it again in a fresh interpreter:
-the numbers must be those of the edited source — checked against the same edited source run uncompiled
+cache, flips a sign in callees in other modules (joints.py, dynamics/fast.py) in the copy, and runs it again
+in a fresh interpreter: the numbers must be those of the edited source — checked against the same edited source run uncompiled
 (MANIPDYN_NOJIT=1) in a second copy, not merely "different".
 """
 import ast
@@ -19,8 +19,8 @@ from conftest import ROOT, assert_close
 
 from manipdyn import _jit
 
-# rnea_one (dynamics/fast.py) and closure_kernel (constraints/fast.py, which inlines _joint_rotation of
-# dynamics/fast.py) on one fixed state of the spherical parallel manipulator (spatial axes).
+# rnea (dynamics/rnea.py, which compiles joints.joint_placement) and closure_kernel (constraints/fast.py,
+# which inlines callees of dynamics/fast.py) on one fixed state of the spherical parallel manipulator (spatial axes).
 PROBE = f"""
 import json, numpy as np, manipdyn as md
 from manipdyn.constraints.fast import closure_rows
@@ -49,11 +49,18 @@ def _copy_package(dst):
 
 
 def _flip_rotation_sign(pkg_root):
-    """Plant a visible edit in a callee: _joint_rotation turns by −q instead of q."""
-    path = pkg_root / "manipdyn" / "dynamics" / "fast.py"
-    new, n = re.subn(r"s, c = np\.sin\(q\), np\.cos\(q\)", "s, c = -np.sin(q), np.cos(q)", path.read_text())
-    assert n == 1, "the edit site in _joint_rotation moved; update this test"
-    path.write_text(new)
+    """Plant a visible edit in the callees that place a revolute joint: every joint turns by −q instead of
+    q (joints.joint_placement, compiled into rnea.py's kernel, and dynamics/fast.py's _joint_rotation,
+    inlined into constraints/fast.py's closure kernel while it exists)."""
+    edits = (("joints.py", r"s, c = np\.sin\(q0\), np\.cos\(q0\)", "s, c = -np.sin(q0), np.cos(q0)"),
+             ("dynamics/fast.py", r"s, c = np\.sin\(q\), np\.cos\(q\)", "s, c = -np.sin(q), np.cos(q)"))
+    for name, pattern, repl in edits:
+        path = pkg_root / "manipdyn" / name
+        if not path.exists():
+            continue
+        new, n = re.subn(pattern, repl, path.read_text())
+        assert n == 1 or name != "joints.py", "the edit site in joints.joint_placement moved; update this test"
+        path.write_text(new)
 
 
 def _files(folder):
