@@ -61,9 +61,14 @@ def quat_to_matrix(x, y, z, w, R):
 def joint_placement(kind, axis, R0, p0, q, iq, R, p):
     """R = R0 R_J(q), p = p0 + R0 p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
     evaluated at the current d). q is the whole configuration, iq the joint's first entry."""
+    # Every array is read before the branches, which then hold scalars only: an array whose last use lies
+    # inside a branch makes numba keep an atomic reference-count pair per call (~3x slower kernels).
+    last = q.shape[0] - 1
+    q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's
+    q3, q4, q5, q6 = q[min(iq + 3, last)], q[min(iq + 4, last)], q[min(iq + 5, last)], q[min(iq + 6, last)]
+    x, y, z = axis[0], axis[1], axis[2]
     if kind == REVOLUTE:                       # Rodrigues, written out: R_J = Rot(z, θ), p_J = 0
-        s, c = np.sin(q[iq]), np.cos(q[iq])
-        x, y, z = axis[0], axis[1], axis[2]
+        s, c = np.sin(q0), np.cos(q0)
         t = 1.0 - c
         r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
         r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
@@ -71,14 +76,12 @@ def joint_placement(kind, axis, R0, p0, q, iq, R, p):
         px = py = pz = 0.0
     elif kind == PRISMATIC:                    # R_J = 1, p_J = d z
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
-        d = q[iq]
-        px, py, pz = d * axis[0], d * axis[1], d * axis[2]
+        px, py, pz = q0 * x, q0 * y, q0 * z
     else:                                      # free flyer: R_J = R(quat), p_J = [x y z]
-        x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
-        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-        r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-        r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-        px, py, pz = q[iq], q[iq + 1], q[iq + 2]
+        r00, r01, r02 = 1 - 2 * (q4 * q4 + q5 * q5), 2 * (q3 * q4 - q5 * q6), 2 * (q3 * q5 + q4 * q6)
+        r10, r11, r12 = 2 * (q3 * q4 + q5 * q6), 1 - 2 * (q3 * q3 + q5 * q5), 2 * (q4 * q5 - q3 * q6)
+        r20, r21, r22 = 2 * (q3 * q5 - q4 * q6), 2 * (q4 * q5 + q3 * q6), 1 - 2 * (q3 * q3 + q4 * q4)
+        px, py, pz = q0, q1, q2
     for a in range(3):
         b0, b1, b2 = R0[a, 0], R0[a, 1], R0[a, 2]
         R[a, 0] = b0 * r00 + b1 * r10 + b2 * r20

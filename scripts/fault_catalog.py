@@ -39,6 +39,7 @@ _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
 _CRBA = "tests/crosscheck/test_crba.py"
+_RNEA = "tests/crosscheck/test_rnea_kernel.py"
 _ANALYTIC = "tests/unit/test_analytic.py"
 _PROPS = "tests/unit/test_lagrange_properties.py"
 _FOURBAR = "tests/unit/test_fourbar.py"
@@ -55,7 +56,7 @@ AREA_TESTS = {
                "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py",
                "tests/properties/test_random_trees.py"),
     "kinematics": ("tests/unit/test_analytic_spatial.py", _FLOAT),
-    "rnea": ("tests/batch/test_kernels_vs_readable.py", "tests/unit/test_analytic_spatial.py"),
+    "rnea": ("tests/crosscheck/test_rnea_kernel.py", "tests/unit/test_analytic_spatial.py"),
     "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py", _FLOAT,
                  "tests/batch/test_kernels_vs_readable.py"),
     "aba": ("tests/batch/test_kernels_vs_readable.py",),
@@ -121,50 +122,38 @@ FAULTS = (
           (_FLOAT, _LOOPS), "J̇ linear x row without l̇ = ω_j × l (a free flyer's or prismatic column turning with its body)"),
     # ---------------------------------------------------------------- RNEA (dynamics/rnea.py, state.py, fast.py)
     Fault("rnea-coriolis-sign", "rnea", "manipdyn/dynamics/rnea.py",
-          "cross(w_in, qd * z)",
-          "cross(qd * z, w_in)",
-          (_FAST,), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z (readable recursion)"),
+          "put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))",
+          "put(dw, i, add(add(dw_in, AA), cross(VA, w_in)))",
+          (_RNEA, _ANALYTIC), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z"),
     Fault("rnea-gravity-sign", "rnea", "manipdyn/dynamics/rnea.py",
-          "base_dv = np.zeros((N, 3)), np.broadcast_to(-model.gravity, (N, 3))",
-          "base_dv = np.zeros((N, 3)), np.broadcast_to(model.gravity, (N, 3))",
-          (_FAST,), "v̇'_0 = +g instead of −g (readable recursion)"),
+          "dv_in = rot_t(Rl, i, (mg[0], mg[1], mg[2]))",
+          "dv_in = rot_t(Rl, i, (-mg[0], -mg[1], -mg[2]))",
+          (_RNEA, _ANALYTIC), "v̇'_0 = +g instead of −g"),
     Fault("rnea-eq7-centripetal-dropped", "rnea", "manipdyn/dynamics/rnea.py",
-          "dvc[i] = dv[i] + cross(dw[i], c) + cross(w[i], cross(w[i], c))",
-          "dvc[i] = dv[i] + cross(dw[i], c)",
-          (_FAST,), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
+          "dvc_i = add(vec(dv, i), add(cross(dwi, c), cross(wi, cross(wi, c))))",
+          "dvc_i = add(vec(dv, i), cross(dwi, c))",
+          (_RNEA, _ANALYTIC), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
+    Fault("rnea-prismatic-coriolis-factor", "rnea", "manipdyn/dynamics/rnea.py",
+          "add(scale(2.0, cross(w_in, VL)), cross(VA, VL))",
+          "add(cross(w_in, VL), cross(VA, VL))",
+          (_RNEA, _ANALYTIC), "Eq. 12 with ω × ḋ z instead of 2 ω × ḋ z (prismatic Coriolis)"),
+    Fault("rnea-free-flyer-va-cross-vl-dropped", "rnea", "manipdyn/dynamics/rnea.py",
+          "add(scale(2.0, cross(w_in, VL)), cross(VA, VL))",
+          "scale(2.0, cross(w_in, VL))",
+          (_RNEA,), "a joint moving both ways (the free flyer) loses va × vl from the origin's acceleration"),
+    Fault("rnea-eq16-lever-dropped", "rnea", "manipdyn/dynamics/rnea.py",
+          "put(n, j, add(vec(n, j), add(rot(Rl, i, vec(n, i)), cross(vec(pl, i), Rf))))",
+          "put(n, j, add(vec(n, j), rot(Rl, i, vec(n, i))))",
+          (_RNEA, _ANALYTIC), "Eq. 16 without p^{i−1}_i × R f'_i: a child's force exerts no moment on its parent"),
     Fault("rnea-fext-frame-transposed", "rnea", "manipdyn/dynamics/state.py",
           "f, m = f @ fr.R.T, m @ fr.R.T",
           "f, m = f @ fr.R, m @ fr.R",
           (_ANALYTIC, _PROPS), "f_ext in a frame's axes rotated into the body by Rᵀ instead of R"),
-    Fault("fast-rnea-coriolis-sign", "rnea", "manipdyn/dynamics/fast.py",
-          "                dwx += qdd * zx + qd * (wiy * zz - wiz * zy)\n"
-          "                dwy += qdd * zy + qd * (wiz * zx - wix * zz)\n"
-          "                dwz += qdd * zz + qd * (wix * zy - wiy * zx)\n",
-          "                dwx += qdd * zx - qd * (wiy * zz - wiz * zy)\n"
-          "                dwy += qdd * zy - qd * (wiz * zx - wix * zz)\n"
-          "                dwz += qdd * zz - qd * (wix * zy - wiy * zx)\n",
-          (_ANALYTIC, _FAST), "compiled Eq. 5: the ω × θ̇ z term with the wrong sign"),
-    Fault("fast-rnea-gravity-sign", "rnea", "manipdyn/dynamics/fast.py",
-          "a0x, a0y, a0z = mg[0], mg[1], mg[2]",
-          "a0x, a0y, a0z = -mg[0], -mg[1], -mg[2]",
-          (_ANALYTIC, _FAST), "compiled RNEA starts from v̇'_0 = +g"),
-    Fault("fast-rnea-eq7-com-term", "rnea", "manipdyn/dynamics/fast.py",
-          "            ax = dvx + dwy * cz_ - dwz * cy_ + wiy * uz - wiz * uy\n"
-          "            ay = dvy + dwz * cx_ - dwx * cz_ + wiz * ux - wix * uz\n"
-          "            az = dvz + dwx * cy_ - dwy * cx_ + wix * uy - wiy * ux\n",
-          "            ax = dvx + dwy * cz_ - dwz * cy_\n"
-          "            ay = dvy + dwz * cx_ - dwx * cz_\n"
-          "            az = dvz + dwx * cy_ - dwy * cx_\n",
-          (_ANALYTIC, _FAST), "compiled Eq. 7 without the centripetal term ω × (ω × p_C)"),
-    Fault("fast-rnea-prismatic-coriolis-factor", "rnea", "manipdyn/dynamics/fast.py",
-          "                dvx += 2.0 * qd * (wiy * zz - wiz * zy) + qdd * zx\n"
-          "                dvy += 2.0 * qd * (wiz * zx - wix * zz) + qdd * zy\n"
-          "                dvz += 2.0 * qd * (wix * zy - wiy * zx) + qdd * zz\n",
-          "                dvx += qd * (wiy * zz - wiz * zy) + qdd * zx\n"
-          "                dvy += qd * (wiz * zx - wix * zz) + qdd * zy\n"
-          "                dvz += qd * (wix * zy - wiy * zx) + qdd * zz\n",
-          (_ANALYTIC, _FAST), "compiled Eq. 12 with ω × ḋ z instead of 2 ω × ḋ z (prismatic Coriolis)"),
-    # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, crba.py)
+    Fault("rnea-fext-world-rotation-transposed", "rnea", "manipdyn/dynamics/rnea.py",
+          "fe, ne = rot_t(Rw, b, fe), rot_t(Rw, b, ne)",
+          "fe, ne = rot(Rw, b, fe), rot(Rw, b, ne)",
+          (_RNEA, "tests/batch/test_batch.py"), "a world-axes f_ext turned into the body by Rw instead of Rwᵀ"),
+    # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, fast.py)
     Fault("lagrange-christoffel-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
           '- np.einsum("nijk,nk->nij", dM, V))',
           '+ np.einsum("nijk,nk->nij", dM, V))',

@@ -56,3 +56,27 @@ def zoo_paths():
 
 
 AAU = ROOT / "urdf" / "aau_arm.urdf"
+
+
+def free_flyer_model(text, **kw):
+    """Our model of URDF text with a free-flyer root joint "root_joint" (Pinocchio's
+    buildModelFromUrdf(path, JointModelFreeFlyer()) of the same file), built in the tests only: the file
+    is loaded under an added fixed link joined to its root link by a continuous joint at the identity
+    (so the root link becomes body 0 with its own and its merged links' inertia, the rest of the tree
+    numbered after it in the same order), and that joint is made the free flyer."""
+    import dataclasses
+    import re
+
+    import manipdyn as md
+    from manipdyn.joints import FREEFLYER
+    root = md.load_urdf_string(text, **kw).root_link
+    extra = (f'<link name="__fixed_world"/><joint name="root_joint" type="continuous"><parent link="__fixed_world"/>'
+             f'<child link="{root}"/><origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>')
+    pinned = md.load_urdf_string(re.sub(r"(<robot\b[^>]*>)", lambda m: m.group(1) + extra, text, count=1), **kw)
+    assert pinned.joint_names[0] == "root_joint" and pinned.body_names[0] == root
+    ff = lambda x, v: np.concatenate([[v], np.asarray(x)[1:]])      # noqa: E731  (joint 0's entry replaced)
+    return dataclasses.replace(
+        pinned, root_link="__fixed_world", kind=ff(pinned.kind, FREEFLYER).astype(int),
+        continuous=ff(pinned.continuous, False).astype(bool), axis=np.vstack([np.zeros(3), pinned.axis[1:]]),
+        lower=ff(pinned.lower, -np.inf), upper=ff(pinned.upper, np.inf),
+        effort=ff(pinned.effort, np.inf), velocity=ff(pinned.velocity, np.inf))

@@ -9,22 +9,22 @@ import numpy as np
 from .._jit import njit
 from ..dynamics.core import kernel_arrays
 from ..dynamics.crba import crba_kernel
-from ..dynamics.fast import rnea_kernel
-from ..dynamics.fast import kernel_arrays as dynamics_arrays    # the model form rnea_kernel reads
+from ..dynamics.rnea import rnea_one
 from ..errors import NumericalError, SingularError
 from .closures import RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
 
 
 @njit(cache=True)
-def constrained_fd_kernel(I, F, Id, Fd, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
+def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
-    (I, F): core.kernel_arrays (the closure rows); (Id, Fd): the form rnea_kernel and crba_kernel read.
+    (I, F): core.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
     Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
     N, nq, nv = Q.shape[0], Q.shape[1], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
     W = closure_scratch(I.shape[0], nv)
     M = np.empty((1, nv, nv))
     h = np.empty((1, nv))
+    zero = np.zeros(nv)
     for s in range(N):
         for i in range(nq):
             if not np.isfinite(Q[s, i]):
@@ -34,7 +34,7 @@ def constrained_fd_kernel(I, F, Id, Fd, CI, CF, m, Q, V, T, alpha, beta, rtol, Q
                 return N * nq + s * nv + i
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi, Jc, bias)
         crba_kernel(I, F, Q[s:s + 1], M)
-        rnea_kernel(Id, Fd, Q[s:s + 1], V[s:s + 1], np.zeros((1, nv)), h)     # h = C q̇ + g
+        rnea_one(I, F, Q[s], V[s], zero, h[0])                                 # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):
@@ -82,7 +82,7 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(V.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
     try:
-        code = constrained_fd_kernel(I, F, *dynamics_arrays(model), CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL,
+        code = constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL,
                                      QDD, LAM, RANK)
     except np.linalg.LinAlgError:
         _overflowed(model, Q, V)
@@ -96,7 +96,7 @@ def _overflowed(model, Q, V):
     from ..dynamics.lagrange import mass_matrix
     from ..dynamics.rnea import rnea
     try:
-        rnea(model, Q, V, np.zeros_like(Q))
+        rnea(model, Q, V, np.zeros_like(V))
         mass_matrix(model, Q)
     except NumericalError as exc:
         raise NumericalError(f"constrained_forward_dynamics, in {exc}") from None

@@ -1,6 +1,5 @@
-"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py and aba.py
-(the readable references, which the tests hold these kernels to), written with scalar 3-vectors so that one
-state costs no numpy dispatch and a batch runs in one compiled loop.
+"""Compiled kernels (numba) of the articulated-body algorithm (aba.py is the readable reference the tests
+hold them to); Newton–Euler is compiled in rnea.py, the CRBA in crba.py.
 
 The kernels take the model as plain arrays (``kernel_arrays``), states as (N, nv) C-contiguous float64, and
 write into preallocated outputs. Finiteness is checked inside the loop: a kernel returns the flat index of
@@ -64,106 +63,6 @@ def _joint_translation(R0, p0, axis, rev, q, out):
     """out = p^{i-1}_i: p0 (revolute) or p0 + d R0 axis (prismatic, evaluated at the current d, Eqs. 8–12)."""
     for k in range(3):
         out[k] = p0[k] if rev else p0[k] + q * (R0[k, 0] * axis[0] + R0[k, 1] * axis[1] + R0[k, 2] * axis[2])
-
-
-@njit(cache=True)
-def rnea_kernel(I, F, Q, V, A, tau):
-    """τ for every state of (Q, V, A) (N, nv) into tau (N, nv): the chapter's Eqs. 3–18. Returns -1, the
-    flat index of the first non-finite input, or -2 - nv - (flat index) of the first non-finite τ."""
-    parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
-    N, nv = Q.shape
-    R = np.empty((nv, 3, 3))
-    p = np.empty((nv, 3))
-    w = np.empty((nv, 3))
-    dw = np.empty((nv, 3))
-    dv = np.empty((nv, 3))
-    f = np.empty((nv, 3))
-    n = np.empty((nv, 3))
-    for s in range(N):
-        for i in range(nv):                      # outward recursion
-            q, qd, qdd = Q[s, i], V[s, i], A[s, i]
-            if not (np.isfinite(q) and np.isfinite(qd) and np.isfinite(qdd)):
-                return s * nv + i
-            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
-            Ri = R[i]
-            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
-            j = parent[i]
-            if j < 0:
-                w0x = w0y = w0z = 0.0
-                dw0x = dw0y = dw0z = 0.0
-                a0x, a0y, a0z = mg[0], mg[1], mg[2]
-            else:
-                w0x, w0y, w0z = w[j, 0], w[j, 1], w[j, 2]
-                dw0x, dw0y, dw0z = dw[j, 0], dw[j, 1], dw[j, 2]
-                # v̇_{i-1} + ω̇_{i-1} × p + ω_{i-1} × (ω_{i-1} × p)   (Eq. 6, in frame i−1)
-                px, py, pz = p[i, 0], p[i, 1], p[i, 2]
-                cx, cy, cz = w0y * pz - w0z * py, w0z * px - w0x * pz, w0x * py - w0y * px
-                a0x = dv[j, 0] + dw0y * pz - dw0z * py + w0y * cz - w0z * cy
-                a0y = dv[j, 1] + dw0z * px - dw0x * pz + w0z * cx - w0x * cz
-                a0z = dv[j, 2] + dw0x * py - dw0y * px + w0x * cy - w0y * cx
-            zx, zy, zz = axis[i, 0], axis[i, 1], axis[i, 2]
-            # rotate into frame i: x_i = Rᵀ x_{i-1}
-            wix = Ri[0, 0] * w0x + Ri[1, 0] * w0y + Ri[2, 0] * w0z
-            wiy = Ri[0, 1] * w0x + Ri[1, 1] * w0y + Ri[2, 1] * w0z
-            wiz = Ri[0, 2] * w0x + Ri[1, 2] * w0y + Ri[2, 2] * w0z
-            dwx = Ri[0, 0] * dw0x + Ri[1, 0] * dw0y + Ri[2, 0] * dw0z
-            dwy = Ri[0, 1] * dw0x + Ri[1, 1] * dw0y + Ri[2, 1] * dw0z
-            dwz = Ri[0, 2] * dw0x + Ri[1, 2] * dw0y + Ri[2, 2] * dw0z
-            dvx = Ri[0, 0] * a0x + Ri[1, 0] * a0y + Ri[2, 0] * a0z
-            dvy = Ri[0, 1] * a0x + Ri[1, 1] * a0y + Ri[2, 1] * a0z
-            dvz = Ri[0, 2] * a0x + Ri[1, 2] * a0y + Ri[2, 2] * a0z
-            if rev[i]:                           # Eqs. 3, 5
-                dwx += qdd * zx + qd * (wiy * zz - wiz * zy)
-                dwy += qdd * zy + qd * (wiz * zx - wix * zz)
-                dwz += qdd * zz + qd * (wix * zy - wiy * zx)
-                wix += qd * zx
-                wiy += qd * zy
-                wiz += qd * zz
-            else:                                # Eq. 12: + 2 ω × ḋ z + d̈ z
-                dvx += 2.0 * qd * (wiy * zz - wiz * zy) + qdd * zx
-                dvy += 2.0 * qd * (wiz * zx - wix * zz) + qdd * zy
-                dvz += 2.0 * qd * (wix * zy - wiy * zx) + qdd * zz
-            w[i, 0], w[i, 1], w[i, 2] = wix, wiy, wiz
-            dw[i, 0], dw[i, 1], dw[i, 2] = dwx, dwy, dwz
-            dv[i, 0], dv[i, 1], dv[i, 2] = dvx, dvy, dvz
-            # Eq. 7, 13, 14: inertial force and moment; moment about the frame origin (Eq. 16's p_C × f_C)
-            cx_, cy_, cz_ = com[i, 0], com[i, 1], com[i, 2]
-            ux, uy, uz = wiy * cz_ - wiz * cy_, wiz * cx_ - wix * cz_, wix * cy_ - wiy * cx_
-            ax = dvx + dwy * cz_ - dwz * cy_ + wiy * uz - wiz * uy
-            ay = dvy + dwz * cx_ - dwx * cz_ + wiz * ux - wix * uz
-            az = dvz + dwx * cy_ - dwy * cx_ + wix * uy - wiy * ux
-            m = mass[i]
-            fx, fy, fz = m * ax, m * ay, m * az
-            I = inertia[i]
-            Iwx = I[0, 0] * wix + I[0, 1] * wiy + I[0, 2] * wiz
-            Iwy = I[1, 0] * wix + I[1, 1] * wiy + I[1, 2] * wiz
-            Iwz = I[2, 0] * wix + I[2, 1] * wiy + I[2, 2] * wiz
-            f[i, 0], f[i, 1], f[i, 2] = fx, fy, fz
-            n[i, 0] = I[0, 0] * dwx + I[0, 1] * dwy + I[0, 2] * dwz + wiy * Iwz - wiz * Iwy + cy_ * fz - cz_ * fy
-            n[i, 1] = I[1, 0] * dwx + I[1, 1] * dwy + I[1, 2] * dwz + wiz * Iwx - wix * Iwz + cz_ * fx - cx_ * fz
-            n[i, 2] = I[2, 0] * dwx + I[2, 1] * dwy + I[2, 2] * dwz + wix * Iwy - wiy * Iwx + cx_ * fy - cy_ * fx
-        for i in range(nv - 1, -1, -1):          # inward recursion, Eqs. 15–18
-            if rev[i]:
-                tau[s, i] = n[i, 0] * axis[i, 0] + n[i, 1] * axis[i, 1] + n[i, 2] * axis[i, 2]
-            else:
-                tau[s, i] = f[i, 0] * axis[i, 0] + f[i, 1] * axis[i, 1] + f[i, 2] * axis[i, 2]
-            j = parent[i]
-            if j >= 0:
-                Ri = R[i]
-                rfx = Ri[0, 0] * f[i, 0] + Ri[0, 1] * f[i, 1] + Ri[0, 2] * f[i, 2]
-                rfy = Ri[1, 0] * f[i, 0] + Ri[1, 1] * f[i, 1] + Ri[1, 2] * f[i, 2]
-                rfz = Ri[2, 0] * f[i, 0] + Ri[2, 1] * f[i, 1] + Ri[2, 2] * f[i, 2]
-                px, py, pz = p[i, 0], p[i, 1], p[i, 2]
-                f[j, 0] += rfx
-                f[j, 1] += rfy
-                f[j, 2] += rfz
-                n[j, 0] += Ri[0, 0] * n[i, 0] + Ri[0, 1] * n[i, 1] + Ri[0, 2] * n[i, 2] + py * rfz - pz * rfy
-                n[j, 1] += Ri[1, 0] * n[i, 0] + Ri[1, 1] * n[i, 1] + Ri[1, 2] * n[i, 2] + pz * rfx - px * rfz
-                n[j, 2] += Ri[2, 0] * n[i, 0] + Ri[2, 1] * n[i, 1] + Ri[2, 2] * n[i, 2] + px * rfy - py * rfx
-        for i in range(nv):                      # the result is finite (else an intermediate overflowed)
-            if not np.isfinite(tau[s, i]):
-                return -2 - nv - (s * nv + i)
-    return -1
 
 
 @njit(cache=True, inline="always")
@@ -365,12 +264,6 @@ def aba_kernel(I, F, Q, V, T, out):
                 aw[i, k] = t1[k] + (qdd * z[k] if rev[i] else 0.0)
                 av[i, k] = t2[k] + (0.0 if rev[i] else qdd * z[k])
     return -1
-
-
-@njit(cache=True)
-def rnea_one(I, F, q, v, a, tau):
-    """One state (nv,) through rnea_kernel, without Python-side reshapes."""
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], tau[np.newaxis, :])
 
 
 @njit(cache=True)

@@ -1,20 +1,43 @@
 """Recursive Newton–Euler inverse dynamics (Luh, Walker & Paul 1980), in the chapter's vector form.
 
-Every vector is expressed in its own link frame (the chapter's primes): body i's frame is its URDF link
-frame, joint i moves along z'_i = ``model.axis[i]``. ``R`` below is R^{λ(i)}_i (body i in its parent λ(i)),
-so the chapter's R^i_{i-1} x is ``rot_t(R, x)``. A tree replaces "link i+1" by the children of link i.
-Gravity enters as a base acceleration: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g (DESIGN.md §6).
+One source: the kernel below is the chapter's recursion (Eqs. 3–18 with the errata of DESIGN.md §6), compiled
+by numba, and the same text runs as plain Python under MANIPDYN_NOJIT=1. Every vector is a 3-vector in its own
+link frame (the chapter's primes): body i's frame is its URDF link frame. (R, p) = (Rl[i], pl[i]) is body i in
+its parent λ(i) (``joints.joint_placement``), so the chapter's R^i_{i−1} x is Rᵀ x (``rot_t``). A tree replaces
+"link i+1" by the children of link i; parent[i] < i, so one sweep each way suffices.
+
+The joint enters through its motion subspace S (``joints``: rows [linear; angular], constant in the body frame):
+with (vl, va) = S q̇ and (al, aa) = S q̈ of joint i, and w_in, dw_in, dv_in the parent's ω', ω̇', v̇' moved to
+body i's origin and axes, the chapter's revolute (Eqs. 3–6) and prismatic (Eqs. 9–12) cases are one formula:
+
+    ω'_i  = w_in + va                                    (Eq. 3; prismatic Eq. 9)
+    ω̇'_i  = dw_in + aa + w_in × va                       (Eq. 5; prismatic Eq. 10)
+    v̇'_i  = dv_in + al + 2 w_in × vl + va × vl           (Eq. 6; prismatic Eq. 12; free flyer: al + va × vl)
+    τ_i   = Sᵀ [f'_i; n'_i]                              (Eqs. 17, 18)
+
+Gravity enters as a base acceleration: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g (DESIGN.md §6). A free-flyer root (q = [x y z
+qx qy qz qw], v = [linear; angular] in the body frame) is the same recursion: its τ entries are the wrench
+[f'; n'] the root body needs, in its own frame about its origin.
+
+External wrenches (f_ext = {frame: (force, moment)}: what the environment applies on that body, about the
+frame's origin, in the frame's axes or in world axes) reach the kernel as rows (``state.wrench_rows``): the
+wrench (N, K, 6) = [force; moment] in body axes ("local") or world axes ("world": the kernel turns it into the
+body with the orientation it accumulates in the same outward pass), the body (K,) and the frame's origin in
+body axes (K, 3), about which the moment is taken.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..model import REVOLUTE
-from ..spatial import cross, rot, rot_t
-from .fast import kernel_arrays, rnea_kernel, rnea_one
-from .core import joint_placements
-from .state import (as_batch, check_f_ext, check_output, external_wrenches, fast_shape, raise_kernel_error,
-                    quiet, unbatch)
+from .._jit import njit
+from ..joints import joint_force, joint_placement, joint_velocity
+from .core import kernel_arrays, unpack
+from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch, wrench_rows
+
+TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
+NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
+_NO_X, _NO_B, _NO_P, _NO_T = np.zeros((0, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 0, NT))
+_QVA = ("q", "v", "a")
 
 
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -22,39 +45,33 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
 
     Parameters
     ----------
-    q, v, a : (nv,) or (N, nv) joint positions, rates and accelerations (q order of ``model``).
+    q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations (model.v_names order).
     f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, wrench the environment applies
         on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or world axes.
     Returns
     -------
-    tau : (nv,) or (N, nv) joint torques (revolute) and forces (prismatic).
-
-    Without f_ext this runs the compiled kernel (dynamics/fast.py), held by the tests to ``rnea_terms``,
-    the readable recursion below; with f_ext it runs the readable recursion.
+    tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
     """
     nd = fast_shape(model, q, v, a) if f_ext is None and f_ext_frame == "local" else 0
-    if nd == 0:                                                 # checked and converted first
+    if nd == 1:                                                 # one state, no Python-side reshapes
+        tau = np.empty(v.shape)
+        code = rnea_one(*kernel_arrays(model), q, v, a, tau)
+    elif nd == 2:
+        tau = np.empty(v.shape)
+        code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, _NO_T)
+    else:                                                       # checked and converted first
         (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-        if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None:
-            return unbatch(_terms(model, Q, V, A, f_ext, f_ext_frame, "rnea")["tau"], single)
-        if model.nv == 0:
-            return unbatch(np.zeros(Q.shape), single)
-        q, v, a = (unbatch(x, single) for x in (Q, V, A))
-        nd = 1 if single else 2
-    tau = np.empty(q.shape)
-    code = (rnea_one if nd == 1 else rnea_kernel)(*kernel_arrays(model), q, v, a, tau)
+        return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea")[0], single)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
     return tau
 
 
-_QVA = ("q", "v", "a")
-
-
 def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
-    """Every per-link intermediate of the Newton–Euler recursion, in link frames.
+    """Every per-link intermediate of the Newton–Euler recursion, in link frames, from the same kernel pass.
 
-    Returns a dict of arrays; per-link arrays have shape (N, nv, 3) (or (nv, 3) for one state):
+    Returns a dict of arrays; per-link arrays have shape (N, nb, 3) (or (nb, 3) for one state), nb =
+    model.njoints bodies in q order:
       w, dw    ω'_i, ω̇'_i                      (Eqs. 3, 5; prismatic 9, 10)
       v        v'_i, velocity of the frame origin (Eqs. 4, 11)
       dv       v̇'_i, including the −g base offset (Eqs. 6, 12)
@@ -62,78 +79,220 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
       dvc      v̇'_Ci, including −g                (Eq. 7)
       fc, nc   inertial force m v̇'_Ci and moment I ω̇' + ω' × I ω' about the CoM (Eqs. 13, 14)
       f, n     force and moment link i−1 exerts on link i, about frame i's origin (Eqs. 15, 16)
-      R        (N, nv, 3, 3) orientation of each link frame in the base frame
-      tau      (N, nv) joint torques/forces (Eqs. 17, 18)
+      R        (N, nb, 3, 3) orientation of each link frame in the base frame
+      tau      (N, nv) joint torques/forces (Eqs. 17, 18); a free-flyer root's six entries are its f, n
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-    out = _terms(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms")
+    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True)
+    out = {k: T[:, :, 3 * m:3 * m + 3] for m, k in enumerate(TERMS)}
+    out["R"] = T[:, :, 3 * len(TERMS):].reshape(T.shape[:2] + (3, 3))
+    inputs = dict(q=Q, v=V, a=A)
+    for k, x in out.items():
+        check_output("rnea_terms", k, x, model, inputs, "link")
+    out["tau"] = tau
     return {k: unbatch(x, single) for k, x in out.items()}
 
 
 @quiet
-def _terms(model, Q, V, A, f_ext, f_ext_frame, call):
-    """rnea_terms on checked batches (N, nv); every array checked finite (NumericalError names ``call``)."""
-    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])           # before the work
-    out = _outward(model, Q, V, A)
-    ext = external_wrenches(model, f_ext, f_ext_frame, Q.shape[0], out["R"])
-    out.update(_inward(model, out, ext))
-    out = {k: np.moveaxis(x, 0, 1) for k, x in out.items() if k != "Rp"}
-    out["tau"] = out["tau"][..., 0]
-    inputs = dict(q=Q, v=V, a=A)
-    for k in ("tau", "w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n", "R"):   # τ first: the result
-        check_output(call, k, out[k], model, inputs, "joint" if k == "tau" else "link")
-    return out
+def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
+    """The kernel on checked batches Q (N, nq), V, A (N, nv): τ (N, nv) and the per-link terms (N, nb, NT)
+    (or an empty array); f_ext checked and converted first."""
+    N, nb = Q.shape[0], model.njoints
+    X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
+    tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT) if terms else (0, nb, NT))
+    if nb == 0:
+        return tau, T
+    Q, V, A = (np.ascontiguousarray(x) for x in (Q, V, A))
+    code = rnea_kernel(*kernel_arrays(model), Q, V, A, X, body, point, f_ext_frame == "world", tau, T)
+    if code != -1:
+        raise_kernel_error(model, code, _QVA, (Q, V, A), call, "tau", tau)
+    return tau, T
 
 
-def _outward(model, Q, V, A):
-    """Outward recursion i: 1 → n, velocities and accelerations (arrays (nv, N, 3))."""
-    nv, N = model.nv, Q.shape[0]
-    Rp, pp = joint_placements(model, Q)                     # R^{i-1}_i, p^{i-1}_i
-    w, dw, vel, dv, dvc = (np.empty((nv, N, 3)) for _ in range(5))
-    R = np.empty((nv, N, 3, 3))                              # orientation in the base frame
-    zero, base_dv = np.zeros((N, 3)), np.broadcast_to(-model.gravity, (N, 3))  # v̇'_0 = −g
-    for i in range(nv):
-        j = model.parent[i]
-        w0, dw0, v0, dv0 = (zero, zero, zero, base_dv) if j < 0 else (w[j], dw[j], vel[j], dv[j])
-        R[i] = Rp[i] if j < 0 else R[j] @ Rp[i]
-        z, p, qd, qdd = model.axis[i], pp[i], V[:, i, None], A[:, i, None]
-        w_in = rot_t(Rp[i], w0)                               # R^i_{i-1} ω'_{i-1}
-        vel[i] = rot_t(Rp[i], v0 + cross(w0, p))              # Eq. 4
-        dv[i] = rot_t(Rp[i], dv0 + cross(dw0, p) + cross(w0, cross(w0, p)))   # Eq. 6 (32c uses v̇'_{i-1})
-        if model.kind[i] == REVOLUTE:
-            w[i] = w_in + qd * z                              # Eq. 3 (as corrected: ω'_{i-1}, θ̇_i)
-            dw[i] = rot_t(Rp[i], dw0) + qdd * z + cross(w_in, qd * z)   # Eq. 5 (32b: left side is ω̇')
-        else:
-            w[i] = w_in                                       # Eq. 9
-            dw[i] = rot_t(Rp[i], dw0)                         # Eq. 10
-            vel[i] += qd * z                                  # Eq. 11
-            dv[i] += 2.0 * cross(w[i], qd * z) + qdd * z      # Eq. 12
-        c = model.com[i]
-        dvc[i] = dv[i] + cross(dw[i], c) + cross(w[i], cross(w[i], c))   # Eq. 7 (32d as printed is wrong)
-    acc = dv + np.einsum("knji,j->kni", R, model.gravity)    # remove the −g offset: v̇ + Rᵀ g
-    return dict(w=w, dw=dw, v=vel, dv=dv, acc=acc, dvc=dvc, R=R, Rp=(Rp, pp))
+# -- the kernel -----------------------------------------------------------------------------------------------
+# 3-vectors inside the recursion are 3-tuples (values: no array views, no allocation in the loops).
+
+@njit(cache=True, inline="always")
+def vec(x, i):
+    """Row i of x (n, 3) as a 3-tuple."""
+    return x[i, 0], x[i, 1], x[i, 2]
 
 
-def _inward(model, out, ext):
-    """Inward recursion i: n → 1, joint forces/moments and torques (Eqs. 13–18)."""
-    Rp, pp = out["Rp"]
-    w, dw, dvc = out["w"], out["dw"], out["dvc"]
-    I, c = model.inertia, model.com
-    fc = model.mass[:, None, None] * dvc                                  # Eq. 13: f'_Ci = m_i v̇'_Ci
-    Iw = np.einsum("kij,knj->kni", I, w)
-    nc = np.einsum("kij,knj->kni", I, dw) + cross(w, Iw)                  # Eq. 14
-    f = fc.copy()
-    n = nc + cross(np.broadcast_to(c[:, None, :], fc.shape), fc)          # p'_Ci × f'_Ci of Eq. 16
-    if ext is not None:                   # the environment's wrench on link i: f_i = f_Ci + ... − f_ext
-        f -= ext[0]
-        n -= ext[1]
-    tau = np.empty(w.shape[:2] + (1,))
-    for i in reversed(range(model.nv)):   # children come after parents, so they are complete here
-        jnt = n[i] if model.kind[i] == REVOLUTE else f[i]
-        tau[i, :, 0] = jnt @ model.axis[i]                                # Eqs. 17, 18
-        j = model.parent[i]
+@njit(cache=True, inline="always")
+def put(x, i, a):
+    """x[i] = a (a 3-tuple)."""
+    x[i, 0], x[i, 1], x[i, 2] = a[0], a[1], a[2]
+
+
+@njit(cache=True, inline="always")
+def add(a, b):
+    return a[0] + b[0], a[1] + b[1], a[2] + b[2]
+
+
+@njit(cache=True, inline="always")
+def sub(a, b):
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
+
+
+@njit(cache=True, inline="always")
+def scale(k, a):
+    return k * a[0], k * a[1], k * a[2]
+
+
+@njit(cache=True, inline="always")
+def cross(a, b):
+    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, inline="always")
+def rot(R, i, x):
+    """R[i] x for R (n, 3, 3)."""
+    return (R[i, 0, 0] * x[0] + R[i, 0, 1] * x[1] + R[i, 0, 2] * x[2],
+            R[i, 1, 0] * x[0] + R[i, 1, 1] * x[1] + R[i, 1, 2] * x[2],
+            R[i, 2, 0] * x[0] + R[i, 2, 1] * x[1] + R[i, 2, 2] * x[2])
+
+
+@njit(cache=True, inline="always")
+def rot_t(R, i, x):
+    """R[i]ᵀ x for R (n, 3, 3): the chapter's R^i_{i−1} x when R[i] = R^{i−1}_i."""
+    return (R[i, 0, 0] * x[0] + R[i, 1, 0] * x[1] + R[i, 2, 0] * x[2],
+            R[i, 0, 1] * x[0] + R[i, 1, 1] * x[1] + R[i, 2, 1] * x[2],
+            R[i, 0, 2] * x[0] + R[i, 1, 2] * x[1] + R[i, 2, 2] * x[2])
+
+
+@njit(cache=True)
+def rnea_one(I, F, q, v, a, tau):
+    """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` with N = 1."""
+    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B, _NO_P, False,
+                       tau[np.newaxis, :], np.zeros((0, 0, NT)))
+
+
+@njit(cache=True, inline="always")
+def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
+    """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
+
+    I, F: the model in core form (``core.kernel_arrays``); Q (N, nq), V, A (N, nv); X (N, K, 6) external
+    wrenches [force; moment about xp[k]] on bodies xb (K,) int, in body axes (world=False) or world axes
+    (world=True), K = 0 for none; tau (N, nv) result; T (N, nb, NT) per-link terms (TERMS, then R), or an
+    array with no rows to skip them. The bodies' world orientations are accumulated only when world
+    wrenches or the terms need them. Returns -1, ≥ 0 for a non-finite input (state index), or −2 − nb − k
+    for a non-finite τ at flat index k of tau.
+    """
+    mdl = unpack(I, F)
+    N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
+    RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
+    work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
+    keep = T.shape[0] > 0
+    for s in range(N):
+        for k in range(Q.shape[1]):
+            if not np.isfinite(Q[s, k]):
+                return s
+        for k in range(nv):
+            if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
+                return s
+        outward(mdl, work, Q[s], V[s], A[s], world or keep)
+        external(work, X, s, xb, xp, world)
+        inward(mdl, work, tau[s])
+        if keep:
+            store_terms(mdl, work, T[s])
+        for k in range(nv):                    # the result is finite (else an intermediate overflowed)
+            if not np.isfinite(tau[s, k]):
+                return -2 - nb - (s * nv + k)
+    return -1
+
+
+@njit(cache=True, inline="always")
+def outward(mdl, work, q, v, a, orient):
+    """Outward pass i = 1 … nb (Eqs. 3–14): ω'_i, ω̇'_i, v'_i (origin velocity), v̇'_i of every body, its
+    inertial wrench (``inertial``), and if orient its world orientation Rw_i = Rw_λ R."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
+    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    vl, va, al, aa = sv[0], sv[1], sv[2], sv[3]
+    for i in range(parent.shape[0]):
+        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])   # R^{i−1}_i, p^{i−1}_i
+        j = parent[i]
+        if j < 0:                                          # the fixed base: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g
+            w_in, dw_in, v_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            dv_in = rot_t(Rl, i, (mg[0], mg[1], mg[2]))
+        else:                                              # the parent's motion at body i's origin, in its axes
+            p, w0 = vec(pl, i), vec(w, j)
+            w_in = rot_t(Rl, i, w0)                        # R^i_{i−1} ω'_{i−1} (Eq. 3 uses ω'_{i−1})
+            dw_in = rot_t(Rl, i, vec(dw, j))
+            v_in = rot_t(Rl, i, add(vec(vel, j), cross(w0, p)))                   # Eq. 4
+            dv_in = rot_t(Rl, i, add(vec(dv, j), add(cross(vec(dw, j), p), cross(w0, cross(w0, p)))))
+            #                                              Eq. 6 (32c: v̇'_{i−1}, in frame i−1)
+        joint_velocity(S, iv[i], nvj[i], v, vl, va)        # S q̇ = [vl; va]
+        joint_velocity(S, iv[i], nvj[i], a, al, aa)        # S q̈ = [al; aa]
+        VL, VA, AL, AA = vec(sv, 0), vec(sv, 1), vec(sv, 2), vec(sv, 3)
+        put(w, i, add(w_in, VA))                           # Eq. 3 (as corrected: ω'_{i−1}, θ̇_i); Eq. 9
+        put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))   # Eq. 5 (32b: left side is ω̇'); Eq. 10
+        put(vel, i, add(v_in, VL))                         # Eq. 4; prismatic Eq. 11
+        put(dv, i, add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL))))   # Eqs. 6, 12
+        inertial(i, mdl, work)
+        if orient:
+            for r in range(3):
+                for c in range(3):
+                    Rw[i, r, c] = Rl[i, r, c] if j < 0 else \
+                        Rw[j, r, 0] * Rl[i, 0, c] + Rw[j, r, 1] * Rl[i, 1, c] + Rw[j, r, 2] * Rl[i, 2, c]
+
+
+@njit(cache=True, inline="always")
+def inertial(i, mdl, work):
+    """Body i's inertial wrench about its origin: v̇'_C (Eq. 7, as 32d should read), f'_C (Eq. 13), n'_C
+    (Eq. 14), f'_i = f'_C, n'_i = n'_C + p'_C × f'_C (Eq. 16's CoM term)."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
+    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    c, wi, dwi = vec(com, i), vec(w, i), vec(dw, i)
+    dvc_i = add(vec(dv, i), add(cross(dwi, c), cross(wi, cross(wi, c))))   # Eq. 7 (32d as printed is wrong)
+    fc_i = scale(mass[i], dvc_i)                                          # Eq. 13: f'_Ci = m_i v̇'_Ci
+    nc_i = add(rot(inertia, i, dwi), cross(wi, rot(inertia, i, wi)))      # Eq. 14
+    put(dvc, i, dvc_i)
+    put(fc, i, fc_i)
+    put(nc, i, nc_i)
+    put(f, i, fc_i)
+    put(n, i, add(nc_i, cross(c, fc_i)))
+
+
+@njit(cache=True, inline="always")
+def external(work, X, s, xb, xp, world):
+    """f'_b −= f_e, n'_b −= n_e + p × f_e for each wrench (f_e, n_e) the environment applies on body b about
+    its point p (body axes); world-axes wrenches are first turned into the body: Rw_bᵀ f_e, Rw_bᵀ n_e."""
+    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    for k in range(xb.shape[0]):
+        b = xb[k]
+        fe, ne = (X[s, k, 0], X[s, k, 1], X[s, k, 2]), (X[s, k, 3], X[s, k, 4], X[s, k, 5])
+        if world:
+            fe, ne = rot_t(Rw, b, fe), rot_t(Rw, b, ne)
+        put(f, b, sub(vec(f, b), fe))
+        put(n, b, sub(vec(n, b), add(ne, cross(vec(xp, k), fe))))
+
+
+@njit(cache=True, inline="always")
+def inward(mdl, work, tau):
+    """Inward pass i = nb … 1 (Eqs. 15–18): τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18), then the parent takes
+    f'_λ += R f'_i (Eq. 15) and n'_λ += R n'_i + p × R f'_i (Eq. 16; 32h: p^{i−1}_i × R^{i−1}_i f'_i)."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
+    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    for i in range(parent.shape[0] - 1, -1, -1):        # children come after parents: complete here
+        joint_force(S, iv[i], nvj[i], f[i], n[i], tau)
+        j = parent[i]
         if j >= 0:
-            Rf = rot(Rp[i], f[i])                                         # R^{i-1}_i f'_i
-            f[j] += Rf                                                    # Eq. 15
-            n[j] += rot(Rp[i], n[i]) + cross(pp[i], Rf)                   # Eq. 16 (32h: p^{i-1}_i)
-    return dict(fc=fc, nc=nc, f=f, n=n, tau=tau)
+            Rf = rot(Rl, i, vec(f, i))
+            put(f, j, add(vec(f, j), Rf))                                                  # Eq. 15
+            put(n, j, add(vec(n, j), add(rot(Rl, i, vec(n, i)), cross(vec(pl, i), Rf))))  # Eq. 16
+
+
+@njit(cache=True, inline="always")
+def store_terms(mdl, work, T):
+    """T (nb, NT) = [ω', ω̇', v', v̇', acc, v̇'_C, f'_C, n'_C, f', n', Rw] per body (TERMS order), with
+    acc = v̇' + Rwᵀ g: v̇' without the −g offset of v̇'_0."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
+    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    for i in range(T.shape[0]):
+        acc = sub(vec(dv, i), rot_t(Rw, i, (mg[0], mg[1], mg[2])))
+        for m, x in enumerate((vec(w, i), vec(dw, i), vec(vel, i), vec(dv, i), acc, vec(dvc, i), vec(fc, i),
+                               vec(nc, i), vec(f, i), vec(n, i))):
+            T[i, 3 * m], T[i, 3 * m + 1], T[i, 3 * m + 2] = x
+        for r in range(3):
+            for c in range(3):
+                T[i, 30 + 3 * r + c] = Rw[i, r, c]

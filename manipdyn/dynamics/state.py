@@ -165,28 +165,43 @@ def check_f_ext(model, f_ext, f_ext_frame, N):
     return out or None
 
 
+def wrench_rows(model, f_ext, f_ext_frame, N):
+    """f_ext = {frame: (force, moment)} checked and laid out for the kernels: one row per wrench on a moving body.
+
+    Returns X (N, K, 6) = [force; moment] of each wrench, body (K,) int64 and point (K, 3) = the frame's
+    origin in body axes, about which the moment is taken. With f_ext_frame="local" the frame's axes are
+    turned into the body's (x_body = R_frame x_frame), so X is in body axes; with "world" X stays in world
+    axes (the kernel turns it with the body orientation it computes). Wrenches on the fixed base (frames of
+    the root body) change no joint torque and are dropped; K = 0 for none.
+    """
+    rows = [w for w in (check_f_ext(model, f_ext, f_ext_frame, N) or ()) if w[0].body >= 0]
+    X, body, point = np.empty((N, len(rows), 6)), np.empty(len(rows), np.int64), np.empty((len(rows), 3))
+    for k, (fr, f, m) in enumerate(rows):
+        if f_ext_frame == "local":       # frame axes -> body axes
+            f, m = f @ fr.R.T, m @ fr.R.T
+        X[:, k, :3], X[:, k, 3:], body[k], point[k] = f, m, fr.body, fr.p
+    return X, body, point
+
+
 def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     """Convert f_ext = {frame: (force, moment)} to per-body (force, moment about the body origin) in body axes.
 
     The wrench is what the environment applies on the body, about the named frame's origin, expressed in
-    that frame (f_ext_frame="local") or in world axes ("world"). Returns F, Mo of shape (nv, N, 3), or None.
-    R_world (nv, N, 3, 3) is the bodies' orientation, needed for "world". Wrenches on the fixed base
-    (frames of the root body) change no joint torque and are dropped.
+    that frame (f_ext_frame="local") or in world axes ("world"). Returns F, Mo of shape (nb, N, 3), or None.
+    R_world (nb, N, 3, 3) is the bodies' orientation, needed for "world". Wrenches on the fixed base
+    (frames of the root body) change no joint torque and are dropped. (``wrench_rows``, summed per body.)
     """
-    wrenches = check_f_ext(model, f_ext, f_ext_frame, N)
-    if wrenches is None:
+    X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
+    if not f_ext:
         return None
     F, Mo = np.zeros((model.njoints, N, 3)), np.zeros((model.njoints, N, 3))
-    for fr, f, m in wrenches:
-        if fr.body < 0:
-            continue
-        if f_ext_frame == "world":       # world axes -> body axes, then -> frame-independent below
-            f = np.einsum("nji,nj->ni", R_world[fr.body], f)
-            m = np.einsum("nji,nj->ni", R_world[fr.body], m)
-        else:                            # frame axes -> body axes
-            f, m = f @ fr.R.T, m @ fr.R.T
-        F[fr.body] += f
-        Mo[fr.body] += m + np.cross(fr.p, f)   # moment about the body origin
+    for k, b in enumerate(body):
+        f, m = X[:, k, :3], X[:, k, 3:]
+        if f_ext_frame == "world":       # world axes -> body axes
+            f = np.einsum("nji,nj->ni", R_world[b], f)
+            m = np.einsum("nji,nj->ni", R_world[b], m)
+        F[b] += f
+        Mo[b] += m + np.cross(point[k], f)     # moment about the body origin
     return F, Mo
 
 
@@ -196,17 +211,23 @@ _F64 = np.dtype(np.float64)
 def fast_shape(model, *arrays):
     """1 or 2 when the arrays are float64 ndarrays q (nq,) or (N, nq) and then (nv,) or (N, nv) of the
     same N, with nv ≥ 1 — the compiled kernels then take them as they are (any memory layout) and check
-    finiteness themselves; 0 otherwise (take as_batch's checks and conversions)."""
+    finiteness themselves; 0 otherwise (take as_batch's checks and conversions). (Written for speed: it
+    runs before every single-state call.)"""
     x0 = arrays[0]
     if type(x0) is not np.ndarray or x0.dtype is not _F64 or type(model) is not Model:
         return 0
-    nd = x0.ndim
-    if not 1 <= nd <= 2 or x0.shape[-1] != model.nq or not model.njoints:
+    shape = x0.shape
+    nd = len(shape)
+    if nd == 1:
+        want = (model.nv,)
+    elif nd == 2:
+        want = (shape[0], model.nv)
+    else:
         return 0
-    nv = model.nv
+    if shape[-1] != model.nq or not want[-1]:
+        return 0
     for x in arrays[1:]:
-        if type(x) is not np.ndarray or x.dtype is not _F64 or x.ndim != nd or x.shape[-1] != nv \
-                or x.shape[:-1] != x0.shape[:-1]:
+        if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != want:
             return 0
     return nd
 

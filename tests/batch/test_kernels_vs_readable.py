@@ -4,11 +4,12 @@ example-robot-data arms, random trees and random spatial loops — closed-chain 
 (random q, q̇ that violate them).
 
 The kernels are called directly (dynamics/fast.py, constraints/closures.py, constraints/fast.py), so no
-wrapper can route around them. References: the readable modules rnea_terms (rnea.py), aba_reference
-(aba.py) for the open-chain kernels (the CRBA kernel: tests/crosscheck/test_crba.py); for the closure rows
-(closure_kernel, the one source of Φ, Φ_q, Φ̇_q q̇) Pinocchio's frame placements, Jacobians and their time
-variation (tests/pin_closures.py); for the KKT kernel the KKT solve of constraints/dynamics.py with
-independent_rows, fed by M and h of the readable recursions.
+wrapper can route around them. References: aba_reference (aba.py) for the ABA kernel (Newton–Euler and the
+CRBA have one source each, held to Pinocchio and to themselves uncompiled in tests/crosscheck/
+test_rnea_kernel.py and test_crba.py); for the closure rows (closure_kernel, the one source of Φ, Φ_q,
+Φ̇_q q̇) Pinocchio's frame placements, Jacobians and their time variation (tests/pin_closures.py); for the
+KKT kernel the KKT solve of constraints/dynamics.py with independent_rows, fed by the Lagrange-route M and
+by rnea.
 """
 import functools
 import warnings
@@ -24,7 +25,7 @@ from manipdyn.constraints.closures import closure_arrays, closure_kernel
 from manipdyn.constraints.fast import constrained_fd_kernel
 from manipdyn.dynamics.core import kernel_arrays as core_arrays
 from manipdyn.dynamics.aba import aba_reference
-from manipdyn.dynamics.fast import aba_kernel, aba_one, kernel_arrays, rnea_kernel, rnea_one
+from manipdyn.dynamics.fast import aba_kernel, aba_one, kernel_arrays
 from manipdyn.spatial import rpy_matrix
 from manipdyn.validation import random_states
 from manipdyn.validation.reference import Reference, pin
@@ -136,24 +137,22 @@ def _call(one, batch, n, *args, out):
 
 
 def open_chain_errors(model, n):
-    """err (§3 measure) of τ, M and q̈ of the kernels against the readable recursions, for shape n."""
+    """err (§3 measure) of M and q̈ of the kernels against the readable recursions, for shape n."""
     I, F = kernel_arrays(model)
     q, v, a = _states(model, n, 31)
-    tau = _call(rnea_one, rnea_kernel, n, I, F, q, v, a, out=np.empty(q.shape))
     t = np.random.default_rng(32).normal(0.0, 5.0, q.shape)
     qdd = _call(aba_one, aba_kernel, n, I, F, q, v, t, out=np.empty(q.shape))
-    return {"tau": err(tau, md.rnea_terms(model, q, v, a)["tau"]),
-            "qdd": err(qdd, aba_reference(model, q, v, t))}
+    return {            "qdd": err(qdd, aba_reference(model, q, v, t))}
 
 
 def readable_constrained_fd(model, Q, V, T, baumgarte):
-    """q̈, λ and rank of Eq. 27 by the readable KKT solve: M and h from the readable recursions (no compiled
-    M or h), the rows from closure_terms (held to Pinocchio in closed_chain_errors)."""
+    """q̈, λ and rank of Eq. 27 by the readable KKT solve: M from the Lagrange route, h from rnea, the rows
+    from closure_terms (held to Pinocchio in closed_chain_errors)."""
     Phi, Jc, bias = closure_terms(model, Q, V)
     c = -bias
     if baumgarte is not None:
         c = c - 2.0 * baumgarte[0] * np.einsum("nij,nj->ni", Jc, V) - baumgarte[1] ** 2 * Phi
-    rhs = T - md.rnea_terms(model, Q, V, np.zeros_like(Q))["tau"]
+    rhs = T - md.rnea(model, Q, V, np.zeros_like(V))
     M = md.mass_matrix(model, Q, method="lagrange")
     qdd, lam, rank = np.empty_like(Q), np.zeros_like(Phi), np.empty(len(Q), int)
     for s in range(len(Q)):
@@ -204,8 +203,7 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
             out[key] = max(out[key], err(x, y))
     alpha, beta = (0.0, 0.0) if baumgarte is None else baumgarte
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((N, m)), np.empty(N, np.int64)
-    code = constrained_fd_kernel(I, F, *kernel_arrays(model), CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD,
-                                 LAM, RANK)
+    code = constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
     assert code == -1, f"kernel returned {code}"
     qdd, lam, rank = readable_constrained_fd(model, Q, V, T, baumgarte)
     assert RANK.tolist() == rank.tolist(), f"rank {RANK} != readable {rank}"
@@ -216,30 +214,30 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
 # ---- tolerances: §3 error measure, the worst over the three shapes (and both Baumgarte settings) as
 # measured on correct code, × 30 rounded up; "measured" beside each (closed chains: the worst of two runs
 # whose states differ by round-off, being assembled by projection through the rows under test) ----------
-OPEN_TOL = {                                                              # measured: τ, M, q̈
-    "aau_arm": dict(tau=2e-14, qdd=5e-15),                       # 4.2e-16 2.0e-16 1.4e-16
-    "spm": dict(tau=7e-16, qdd=2e-14),                           # 2.1e-17 4.3e-19 3.9e-16
-    "fourbar": dict(tau=7e-15, qdd=6e-15),                       # 2.2e-16 6.9e-18 1.7e-16
-    "ur5_robot": dict(tau=9e-15, qdd=8e-16),                     # 2.9e-16 2.7e-16 2.6e-17
-    "ur10_robot": dict(tau=2e-14, qdd=4e-15),                    # 4.1e-16 3.3e-16 1.0e-16
-    "ur3_robot": dict(tau=2e-14, qdd=3e-15),                     # 5.8e-16 2.2e-16 8.6e-17
-    "ur5_gripper": dict(tau=2e-14, qdd=2e-15),                   # 4.4e-16 4.1e-16 5.3e-17
-    "panda": dict(tau=2e-14, qdd=8e-15),                         # 5.9e-16 2.5e-16 2.6e-16
-    "kinova": dict(tau=7e-15, qdd=2e-15),                        # 2.2e-16 2.1e-16 4.8e-17
-    "xarm7": dict(tau=3e-14, qdd=6e-16),                         # 9.0e-16 2.4e-16 1.9e-17
-    "z1": dict(tau=2e-14, qdd=2e-14),                            # 4.9e-16 2.2e-16 3.4e-16
-    "so100": dict(tau=5e-15, qdd=2e-15),                         # 1.7e-16 6.9e-18 6.6e-17
-    "so101": dict(tau=2e-14, qdd=2e-15),                         # 4.4e-16 1.7e-18 5.1e-17
-    "double_pendulum": dict(tau=4e-15, qdd=8e-15),               # 1.1e-16 2.6e-18 2.6e-16
-    "double_pendulum_continuous": dict(tau=4e-15, qdd=8e-15),    # 1.1e-16 2.6e-18 2.6e-16
-    "TwoDofs": dict(tau=9e-16, qdd=6e-15),                       # 2.8e-17 3.5e-18 1.8e-16
-    "finger_edu": dict(tau=3e-15, qdd=3e-14),                    # 8.3e-17 8.7e-19 7.9e-16
-    "allegro_right_hand": dict(tau=7e-16, qdd=2e-14),            # 2.1e-17 1.6e-19 4.1e-16
-    "allegro_left_hand": dict(tau=5e-16, qdd=7e-15),             # 1.4e-17 1.6e-19 2.1e-16
-    "baxter": dict(tau=2e-14, qdd=2e-14),                        # 5.6e-16 2.0e-16 5.9e-16
-    "talos_left_arm": dict(tau=2e-14, qdd=2e-14),                # 6.4e-16 2.2e-16 3.9e-16
-    "tree5": dict(tau=2e-14, qdd=1e-14),                         # 6.5e-16 2.6e-16 3.1e-16
-    "tree6": dict(tau=3e-14, qdd=3e-14),                         # 6.8e-16 2.9e-16 7.3e-16
+OPEN_TOL = {                                                              # measured q̈: last column
+    "aau_arm": dict(qdd=5e-15),                       # 4.2e-16 2.0e-16 1.4e-16
+    "spm": dict(qdd=2e-14),                           # 2.1e-17 4.3e-19 3.9e-16
+    "fourbar": dict(qdd=6e-15),                       # 2.2e-16 6.9e-18 1.7e-16
+    "ur5_robot": dict(qdd=8e-16),                     # 2.9e-16 2.7e-16 2.6e-17
+    "ur10_robot": dict(qdd=4e-15),                    # 4.1e-16 3.3e-16 1.0e-16
+    "ur3_robot": dict(qdd=3e-15),                     # 5.8e-16 2.2e-16 8.6e-17
+    "ur5_gripper": dict(qdd=2e-15),                   # 4.4e-16 4.1e-16 5.3e-17
+    "panda": dict(qdd=8e-15),                         # 5.9e-16 2.5e-16 2.6e-16
+    "kinova": dict(qdd=2e-15),                        # 2.2e-16 2.1e-16 4.8e-17
+    "xarm7": dict(qdd=6e-16),                         # 9.0e-16 2.4e-16 1.9e-17
+    "z1": dict(qdd=2e-14),                            # 4.9e-16 2.2e-16 3.4e-16
+    "so100": dict(qdd=2e-15),                         # 1.7e-16 6.9e-18 6.6e-17
+    "so101": dict(qdd=2e-15),                         # 4.4e-16 1.7e-18 5.1e-17
+    "double_pendulum": dict(qdd=8e-15),               # 1.1e-16 2.6e-18 2.6e-16
+    "double_pendulum_continuous": dict(qdd=8e-15),    # 1.1e-16 2.6e-18 2.6e-16
+    "TwoDofs": dict(qdd=6e-15),                       # 2.8e-17 3.5e-18 1.8e-16
+    "finger_edu": dict(qdd=3e-14),                    # 8.3e-17 8.7e-19 7.9e-16
+    "allegro_right_hand": dict(qdd=2e-14),            # 2.1e-17 1.6e-19 4.1e-16
+    "allegro_left_hand": dict(qdd=7e-15),             # 1.4e-17 1.6e-19 2.1e-16
+    "baxter": dict(qdd=2e-14),                        # 5.6e-16 2.0e-16 5.9e-16
+    "talos_left_arm": dict(qdd=2e-14),                # 6.4e-16 2.2e-16 3.9e-16
+    "tree5": dict(qdd=1e-14),                         # 6.5e-16 2.6e-16 3.1e-16
+    "tree6": dict(qdd=3e-14),                         # 6.8e-16 2.9e-16 7.3e-16
 }
 # q̈, λ: the readable side's M is the Lagrange route (no readable CRBA twin): the max of the tolerances
 # measured with either M
