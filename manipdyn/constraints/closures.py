@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..dynamics.core import cross3, fk_pass, kernel_arrays, rot3, unpack
+from ..dynamics.core import cross3, fk_pass, kernel_arrays, nonfinite_input, rot3, unpack
 from ..dynamics.kinematics import body_point, point_jacobian, point_jacobian_dot, point_velocity
 from ..dynamics.state import (as_batch, as_real, check_finite, check_model, check_output, quiet,
                               raise_kernel_error, unbatch)
@@ -165,12 +165,9 @@ def closure_kernel(I, F, CI, CF, Q, V, Phi, Jc, bias):
     N = Q.shape[0]
     W = closure_scratch(I.shape[0], Jc.shape[2])
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s * Q.shape[1] + k
-        for k in range(V.shape[1]):
-            if not np.isfinite(V[s, k]):
-                return N * Q.shape[1] + s * V.shape[1] + k
+        bad = nonfinite_input(Q, V, s)
+        if bad >= 0:
+            return bad
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[s], Jc[s], bias[s])
     return -1
 

@@ -132,6 +132,18 @@ def fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
             vw[i, 2] += ww[j, 0] * dy - ww[j, 1] * dx
 
 
+@njit(cache=True, inline="always")
+def nonfinite_input(Q, V, s):
+    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V."""
+    for k in range(Q.shape[1]):
+        if not np.isfinite(Q[s, k]):
+            return s * Q.shape[1] + k
+    for k in range(V.shape[1]):
+        if not np.isfinite(V[s, k]):
+            return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
+    return -1
+
+
 @njit(cache=True)
 def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).
@@ -139,12 +151,9 @@ def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     N, nb = Q.shape[0], I.shape[0]
     Rl, pl = np.empty((nb, 3, 3)), np.empty((nb, 3))
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s * Q.shape[1] + k
-        for k in range(V.shape[1]):
-            if not np.isfinite(V[s, k]):
-                return N * Q.shape[1] + s * V.shape[1] + k
+        bad = nonfinite_input(Q, V, s)
+        if bad >= 0:
+            return bad
         fk_pass(I, F, Q[s], V[s], Rl, pl, Rw[s], pw[s], ww[s], vw[s])
     return -1
 

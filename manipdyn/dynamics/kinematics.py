@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import InputError
-from .core import fk_pass, kernel_arrays, sandwich3, unpack
+from .core import fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, check_output, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
@@ -129,12 +129,9 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw, xd, w0 = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3)
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s * Q.shape[1] + k
-        for k in range(V.shape[1]):
-            if not np.isfinite(V[s, k]):
-                return N * Q.shape[1] + s * V.shape[1] + k
+        bad = nonfinite_input(Q, V, s)
+        if bad >= 0:
+            return bad
         fk_pass(I, F, Q[s], V[s], Rp, pp, Rw, pw, ww, vw)
         body_point(b, Rw, pw, Rl, pl, Rf[s], pf[s])
         if want >= 1:

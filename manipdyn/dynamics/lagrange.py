@@ -18,8 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..model import REVOLUTE
-from ..spatial import cross, skew
+from ..spatial import skew
 from .crba import crba
 from .kinematics import com_jacobians, supports
 from .state import as_batch, check_output, quiet, unbatch
