@@ -248,6 +248,10 @@ FAULTS = (
           "v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)",
           "v + h / 6 * (k1v + k2v + 2 * k3v + 2 * k4v)",
           ("tests/unit/test_integrate.py",), "RK4 velocity update with weights 1, 1, 2, 2 (still consistent, wrong order)"),
+    Fault("integrate-rkmk-bracket-sign", "integrators", "manipdyn/simulation.py",
+          "out[:, :6] += 0.5 * a1 + ad(xi, a1) / 12.0",
+          "out[:, :6] += -0.5 * a1 + ad(xi, a1) / 12.0",
+          ("tests/unit/test_floating_simulate.py",), "RK4 on a free flyer with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
     # ---------------------------------------------------------------- the chapter's SPM model (examples/spm.py)
     Fault("spm-eq59a-drop-term", "spm", "manipdyn/examples/spm.py",
           "Ad = np.cross(vd, L.w) + np.cross(L.v, wd)",
