@@ -27,7 +27,7 @@ from pathlib import Path
 import numba
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/fast.py", "constraints/fast.py")   # every file a kernel's code lives in
+KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/aba.py", "dynamics/fast.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
 _FOLDER = re.compile(r"numba-[0-9a-f]{16}")
 

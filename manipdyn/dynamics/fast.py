@@ -1,5 +1,5 @@
-"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py, aba.py and lagrange.py
-(the readable references, which the tests hold these kernels to), written with scalar 3-vectors so that one
+"""Compiled kernels (numba) for the hot paths: the same recursions as rnea.py and lagrange.py (the
+readable references, which the tests hold these kernels to), written with scalar 3-vectors so that one
 state costs no numpy dispatch and a batch runs in one compiled loop.
 
 The kernels take the model as plain arrays (``kernel_arrays``), states as (N, nv) C-contiguous float64, and
@@ -202,172 +202,6 @@ def _sandwich(R, X, tmp, out):
 
 
 @njit(cache=True)
-def aba_kernel(I, F, Q, V, T, out):
-    """q̈ by the articulated-body algorithm (RBDA Table 7.1) for every state; spatial quantities in blocks
-    [angular; linear] of 3-vectors and 3×3 matrices: Iᴬ = [[A, B], [Bᵀ, C]], pᴬ = [pn; pf], c = [cw; cv],
-    U = [uw; uv]. Returns -1, the flat index of the first non-finite input, -2 - i when the articulated
-    inertia D_i of joint i vanishes (singular mass matrix), or -2 - nv - (flat index) of a non-finite q̈."""
-    parent, rev, axis, R0, p0, mass, com, inertia, mg = _unpack(I, F)
-    N, nv = Q.shape
-    R = np.empty((nv, 3, 3))
-    p = np.empty((nv, 3))
-    w, vl = np.empty((nv, 3)), np.empty((nv, 3))
-    cw, cv = np.empty((nv, 3)), np.empty((nv, 3))
-    A, B, C = np.empty((nv, 3, 3)), np.empty((nv, 3, 3)), np.empty((nv, 3, 3))
-    pn, pf = np.empty((nv, 3)), np.empty((nv, 3))
-    uw, uv = np.empty((nv, 3)), np.empty((nv, 3))
-    D, u = np.empty(nv), np.empty(nv)
-    aw, av = np.empty((nv, 3)), np.empty((nv, 3))
-    t1, t2, t3 = np.empty(3), np.empty(3), np.empty(3)
-    dmin = 1e-14 * max(np.max(np.abs(inertia)), np.max(mass), 1e-300)
-    M3, Pm = np.empty((3, 3)), np.empty((3, 3))
-    Ar, Br, Cr = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    for s in range(N):
-        for i in range(nv):                                   # pass 1: velocities, bias terms
-            q, qd = Q[s, i], V[s, i]
-            if not (np.isfinite(q) and np.isfinite(qd) and np.isfinite(T[s, i])):
-                return s * nv + i
-            _joint_rotation(R0[i], axis[i], rev[i], q, R[i])
-            _joint_translation(R0[i], p0[i], axis[i], rev[i], q, p[i])
-            j = parent[i]
-            if j < 0:
-                w[i, :] = 0.0
-                vl[i, :] = 0.0
-            else:                                             # ω_i = Rᵀ ω_λ; v_i = Rᵀ (v_λ + ω_λ × p)
-                _rot3t(R[i], w[j], w[i])
-                _cross(w[j], p[i], t1)
-                for k in range(3):
-                    t1[k] += vl[j, k]
-                _rot3t(R[i], t1, vl[i])
-            z = axis[i]
-            if rev[i]:                                        # c = v × S q̇
-                _cross(w[i], z, cw[i])
-                _cross(vl[i], z, cv[i])
-                for k in range(3):
-                    cw[i, k] *= qd
-                    cv[i, k] *= qd
-                    w[i, k] += qd * z[k]
-            else:
-                _cross(w[i], z, cv[i])
-                for k in range(3):
-                    cw[i, k] = 0.0
-                    cv[i, k] *= qd
-                    vl[i, k] += qd * z[k]
-            m, c, Ic = mass[i], com[i], inertia[i]            # rigid-body blocks about the frame origin
-            cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
-            for a in range(3):
-                for b in range(3):
-                    A[i, a, b] = Ic[a, b] + m * ((cc if a == b else 0.0) - c[a] * c[b])
-                    B[i, a, b] = 0.0
-                    C[i, a, b] = m if a == b else 0.0
-            B[i, 0, 1], B[i, 0, 2], B[i, 1, 2] = -m * c[2], m * c[1], -m * c[0]
-            B[i, 1, 0], B[i, 2, 0], B[i, 2, 1] = m * c[2], -m * c[1], m * c[0]
-            # pᴬ = v ×* (I v): h = I v = [A ω + B v; Bᵀ ω + m v]; v ×* h = [ω × hn + v × hf; ω × hf]
-            for k in range(3):
-                t1[k] = A[i, k, 0] * w[i, 0] + A[i, k, 1] * w[i, 1] + A[i, k, 2] * w[i, 2] \
-                    + B[i, k, 0] * vl[i, 0] + B[i, k, 1] * vl[i, 1] + B[i, k, 2] * vl[i, 2]
-                t2[k] = B[i, 0, k] * w[i, 0] + B[i, 1, k] * w[i, 1] + B[i, 2, k] * w[i, 2] + m * vl[i, k]
-            _cross(w[i], t1, pn[i])
-            _cross(vl[i], t2, t3)
-            _cross(w[i], t2, pf[i])
-            for k in range(3):
-                pn[i, k] += t3[k]
-        for i in range(nv - 1, -1, -1):                       # pass 2: articulated inertias
-            z = axis[i]
-            if rev[i]:                                        # U = Iᴬ S
-                for k in range(3):
-                    uw[i, k] = A[i, k, 0] * z[0] + A[i, k, 1] * z[1] + A[i, k, 2] * z[2]
-                    uv[i, k] = B[i, 0, k] * z[0] + B[i, 1, k] * z[1] + B[i, 2, k] * z[2]
-                D[i] = uw[i, 0] * z[0] + uw[i, 1] * z[1] + uw[i, 2] * z[2]
-                u[i] = T[s, i] - (pn[i, 0] * z[0] + pn[i, 1] * z[1] + pn[i, 2] * z[2])
-            else:
-                for k in range(3):
-                    uw[i, k] = B[i, k, 0] * z[0] + B[i, k, 1] * z[1] + B[i, k, 2] * z[2]
-                    uv[i, k] = C[i, k, 0] * z[0] + C[i, k, 1] * z[1] + C[i, k, 2] * z[2]
-                D[i] = uv[i, 0] * z[0] + uv[i, 1] * z[1] + uv[i, 2] * z[2]
-                u[i] = T[s, i] - (pf[i, 0] * z[0] + pf[i, 1] * z[1] + pf[i, 2] * z[2])
-            if not D[i] > dmin:                               # as aba._check_D: massless moving subtree
-                if np.isfinite(D[i]):
-                    return -2 - i
-                out[s, i] = D[i]                              # D overflowed: reported as q̈_i
-                return -2 - nv - (s * nv + i)
-            j = parent[i]
-            if j < 0:
-                continue
-            inv = 1.0 / D[i]
-            for a in range(3):                                # Iᵃ = Iᴬ − U Uᵀ / D
-                for b in range(3):
-                    A[i, a, b] -= uw[i, a] * uw[i, b] * inv
-                    B[i, a, b] -= uw[i, a] * uv[i, b] * inv
-                    C[i, a, b] -= uv[i, a] * uv[i, b] * inv
-            g = u[i] * inv                                    # pᵃ = pᴬ + Iᵃ c + U u / D
-            for k in range(3):
-                t1[k] = pn[i, k] + uw[i, k] * g
-                t2[k] = pf[i, k] + uv[i, k] * g
-                for l in range(3):
-                    t1[k] += A[i, k, l] * cw[i, l] + B[i, k, l] * cv[i, l]
-                    t2[k] += B[i, l, k] * cw[i, l] + C[i, k, l] * cv[i, l]
-            Ri = R[i]                                         # into the parent frame: force transform
-            _rot3(Ri, t2, t3)                                 # R pf
-            _rot3(Ri, t1, t2)                                 # R pn
-            _cross(p[i], t3, t1)
-            for k in range(3):
-                pf[j, k] += t3[k]
-                pn[j, k] += t2[k] + t1[k]
-            # Iᴬ_λ += Xᵀ Iᵃ X: rotate the blocks (A', B', C'), then shift by P = [p]×:
-            # A += A' + P B'ᵀ − B' P − P C' P;  B += B' + P C';  C += C'
-            Ar[:, :] = 0.0
-            Br[:, :] = 0.0
-            Cr[:, :] = 0.0
-            _sandwich(Ri, A[i], M3, Ar)
-            _sandwich(Ri, B[i], M3, Br)
-            _sandwich(Ri, C[i], M3, Cr)
-            px, py, pz = p[i, 0], p[i, 1], p[i, 2]
-            Pm[0, 0], Pm[0, 1], Pm[0, 2] = 0.0, -pz, py
-            Pm[1, 0], Pm[1, 1], Pm[1, 2] = pz, 0.0, -px
-            Pm[2, 0], Pm[2, 1], Pm[2, 2] = -py, px, 0.0
-            for a in range(3):
-                for b in range(3):
-                    PC, PBt, BP = 0.0, 0.0, 0.0
-                    for k in range(3):
-                        PC += Pm[a, k] * Cr[k, b]
-                        PBt += Pm[a, k] * Br[b, k]
-                        BP += Br[a, k] * Pm[k, b]
-                    M3[a, b] = PC
-                    A[j, a, b] += Ar[a, b] + PBt - BP
-                    B[j, a, b] += Br[a, b] + PC
-                    C[j, a, b] += Cr[a, b]
-            for a in range(3):                                # − P C' P = − (P C') P
-                for b in range(3):
-                    A[j, a, b] -= M3[a, 0] * Pm[0, b] + M3[a, 1] * Pm[1, b] + M3[a, 2] * Pm[2, b]
-        for i in range(nv):                                   # pass 3: accelerations
-            j = parent[i]
-            if j < 0:                                         # a_0 = [0; −g]
-                for k in range(3):
-                    t1[k] = 0.0
-                _rot3t(R[i], mg, t2)
-            else:                                             # X a_λ = [Rᵀ ȧω; Rᵀ (ȧv + ȧω × p)]
-                _rot3t(R[i], aw[j], t1)
-                _cross(aw[j], p[i], t3)
-                for k in range(3):
-                    t3[k] += av[j, k]
-                _rot3t(R[i], t3, t2)
-            for k in range(3):
-                t1[k] += cw[i, k]
-                t2[k] += cv[i, k]
-            qdd = (u[i] - (uw[i, 0] * t1[0] + uw[i, 1] * t1[1] + uw[i, 2] * t1[2]
-                           + uv[i, 0] * t2[0] + uv[i, 1] * t2[1] + uv[i, 2] * t2[2])) / D[i]
-            out[s, i] = qdd
-            if not np.isfinite(qdd):                          # an intermediate overflowed
-                return -2 - nv - (s * nv + i)
-            z = axis[i]
-            for k in range(3):
-                aw[i, k] = t1[k] + (qdd * z[k] if rev[i] else 0.0)
-                av[i, k] = t2[k] + (0.0 if rev[i] else qdd * z[k])
-    return -1
-
-
-@njit(cache=True)
 def crba_kernel(I, F, Q, M):
     """M(q) (N, nv, nv) by the composite-rigid-body algorithm, as lagrange._crba: composites (m, h = m c,
     I_O about the frame origin) carried to the parent, then columns by force transmission. Returns -1,
@@ -447,12 +281,6 @@ def crba_kernel(I, F, Q, M):
 def rnea_one(I, F, q, v, a, tau):
     """One state (nv,) through rnea_kernel, without Python-side reshapes."""
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], tau[np.newaxis, :])
-
-
-@njit(cache=True)
-def aba_one(I, F, q, v, t, out):
-    """One state (nv,) through aba_kernel."""
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], t[np.newaxis, :], out[np.newaxis, :])
 
 
 @njit(cache=True)
