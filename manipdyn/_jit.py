@@ -2,7 +2,7 @@
 and a switch to run the kernels as plain Python.
 
 numba stamps a cached function with its own source file only. constraints/fast.py calls (and inlines)
-kernels of dynamics/fast.py, so after an edit to dynamics/fast.py numba would load the closed-chain
+kernels of dynamics/ and joints.py, so after an edit to joints.py numba would load the closed-chain
 kernel's stale machine code. Here every kernel's cache lives in a folder named by a hash of all the kernel
 sources (``KERNEL_SOURCES``): editing any of them selects a fresh folder, and everything recompiles.
 
@@ -27,8 +27,8 @@ from pathlib import Path
 import numba
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py",
-                  "dynamics/kinematics.py", "dynamics/fast.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
+KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
+                  "dynamics/kinematics.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
 _FOLDER = re.compile(r"numba-[0-9a-f]{16}")
 

@@ -39,6 +39,7 @@ _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
 _CRBA = "tests/crosscheck/test_crba.py"
+_FLOATBASE = "tests/crosscheck/test_floating_base.py"
 _RNEA = "tests/crosscheck/test_rnea_kernel.py"
 _ANALYTIC = "tests/unit/test_analytic.py"
 _PROPS = "tests/unit/test_lagrange_properties.py"
@@ -59,7 +60,7 @@ AREA_TESTS = {
     "rnea": ("tests/crosscheck/test_rnea_kernel.py", "tests/unit/test_analytic_spatial.py"),
     "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py", _FLOAT,
                  "tests/batch/test_kernels_vs_readable.py"),
-    "aba": ("tests/batch/test_kernels_vs_readable.py",),
+    "aba": ("tests/batch/test_fast_paths.py", "tests/crosscheck/test_floating_base.py"),
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
     "integrators": ("tests/unit/test_symplectic_euler.py",),
     "validation": ("tests/crosscheck/test_single_joint.py",),
@@ -186,25 +187,21 @@ FAULTS = (
           (_PROPS, _FLOAT), "∂J_j/∂q_k without [a_j × J_v,k; 0] for j supporting k (the CoM moving under joint j's axis)"),
     # ---------------------------------------------------------------- ABA (dynamics/aba.py, fast.py)
     Fault("aba-bias-force-sign", "aba", "manipdyn/dynamics/aba.py",
-          'pA[i] = -np.einsum("nba,nb->na", _crm(vel[i]), Iv)',
-          'pA[i] = np.einsum("nba,nb->na", _crm(vel[i]), Iv)',
-          (_FAST, _PROPS), "readable ABA: bias force v ×* I v with the wrong sign"),
+          "cross_force(vel[i], t, pA[i])",
+          "cross_force(vel[i], vJ, pA[i])",
+          (_PROPS, _FLOATBASE), "ABA bias force v ×* S q̇ instead of v ×* I v (Table 7.1, pass 1)"),
     Fault("aba-gravity-sign", "aba", "manipdyn/dynamics/aba.py",
-          "a0 = np.concatenate([np.zeros(3), -model.gravity])",
-          "a0 = np.concatenate([np.zeros(3), model.gravity])",
-          (_FAST, _PROPS), "readable ABA: base acceleration +g"),
-    Fault("aba-fext-order", "aba", "manipdyn/dynamics/aba.py",
-          "pA -= np.concatenate([ext[1], ext[0]], axis=-1)",
-          "pA -= np.concatenate([ext[0], ext[1]], axis=-1)",
-          (_PROPS, _ANALYTIC), "readable ABA: external wrench stacked [force; moment] into [angular; linear]"),
-    Fault("fast-aba-pa-sign", "aba", "manipdyn/dynamics/fast.py",
-          "                t1[k] = pn[i, k] + uw[i, k] * g\n                t2[k] = pf[i, k] + uv[i, k] * g\n",
-          "                t1[k] = pn[i, k] - uw[i, k] * g\n                t2[k] = pf[i, k] - uv[i, k] * g\n",
-          (_FAST, _PROPS), "compiled ABA: pᵃ = pᴬ + Iᵃ c − U u / D"),
-    Fault("fast-aba-gravity-sign", "aba", "manipdyn/dynamics/fast.py",
-          "_rot3t(R[i], mg, t2)",
-          "_rot3t(R[i], -mg, t2)",
-          (_FAST, _PROPS), "compiled ABA: base acceleration +g"),
+          "a0[a], a0[3 + a] = mg[a], 0.0",
+          "a0[a], a0[3 + a] = -mg[a], 0.0",
+          (_PROPS, _FLOATBASE), "ABA base acceleration +g"),
+    Fault("aba-fext-sign", "aba", "manipdyn/dynamics/aba.py",
+          "pA[b, a] -= t[a]",
+          "pA[b, a] += t[a]",
+          (_PROPS, _ANALYTIC), "ABA: the external wrench added to the bias force instead of subtracted"),
+    Fault("aba-pa-sign", "aba", "manipdyn/dynamics/aba.py",
+          "x += Y[r, k1] * t[r]",
+          "x -= Y[r, k1] * t[r]",
+          (_PROPS, _FLOATBASE), "ABA: pᵃ = pᴬ + Iᵃ c − U D⁻¹ u"),
     # ---------------------------------------------------------------- constraints (constraints/*)
     Fault("closure-orientation-bias-offset", "constraints", "manipdyn/constraints/closures.py",
           "bias[row] = gyro + acc",

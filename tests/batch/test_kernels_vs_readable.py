@@ -4,9 +4,8 @@ example-robot-data arms, random trees and random spatial loops — closed-chain 
 (random q, q̇ that violate them).
 
 The kernels are called directly (dynamics/fast.py, constraints/closures.py, constraints/fast.py), so no
-wrapper can route around them. References: aba_reference (aba.py) for the ABA kernel (Newton–Euler and the
-CRBA have one source each, held to Pinocchio and to themselves uncompiled in tests/crosscheck/
-test_rnea_kernel.py and test_crba.py); for the closure rows (closure_kernel, the one source of Φ, Φ_q,
+wrapper can route around them. (Newton–Euler, the CRBA and the ABA have one
+source each, held to Pinocchio and to themselves uncompiled in tests/crosscheck/.) References: for the closure rows (closure_kernel, the one source of Φ, Φ_q,
 Φ̇_q q̇) Pinocchio's frame placements, Jacobians and their time variation (tests/pin_closures.py); for the
 KKT kernel the KKT solve of constraints/dynamics.py with independent_rows, fed by the Lagrange-route M and
 by rnea.
@@ -24,8 +23,6 @@ from manipdyn.constraints.dynamics import _kkt
 from manipdyn.constraints.closures import closure_arrays, closure_kernel
 from manipdyn.constraints.fast import constrained_fd_kernel
 from manipdyn.dynamics.core import kernel_arrays as core_arrays
-from manipdyn.dynamics.aba import aba_reference
-from manipdyn.dynamics.fast import aba_kernel, aba_one, kernel_arrays
 from manipdyn.spatial import rpy_matrix
 from manipdyn.validation import random_states
 from manipdyn.validation.reference import Reference, pin
@@ -136,15 +133,6 @@ def _call(one, batch, n, *args, out):
     return out
 
 
-def open_chain_errors(model, n):
-    """err (§3 measure) of M and q̈ of the kernels against the readable recursions, for shape n."""
-    I, F = kernel_arrays(model)
-    q, v, a = _states(model, n, 31)
-    t = np.random.default_rng(32).normal(0.0, 5.0, q.shape)
-    qdd = _call(aba_one, aba_kernel, n, I, F, q, v, t, out=np.empty(q.shape))
-    return {            "qdd": err(qdd, aba_reference(model, q, v, t))}
-
-
 def readable_constrained_fd(model, Q, V, T, baumgarte):
     """q̈, λ and rank of Eq. 27 by the readable KKT solve: M from the Lagrange route, h from rnea, the rows
     from closure_terms (held to Pinocchio in closed_chain_errors)."""
@@ -214,31 +202,6 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
 # ---- tolerances: §3 error measure, the worst over the three shapes (and both Baumgarte settings) as
 # measured on correct code, × 30 rounded up; "measured" beside each (closed chains: the worst of two runs
 # whose states differ by round-off, being assembled by projection through the rows under test) ----------
-OPEN_TOL = {                                                              # measured q̈: last column
-    "aau_arm": dict(qdd=5e-15),                       # 4.2e-16 2.0e-16 1.4e-16
-    "spm": dict(qdd=2e-14),                           # 2.1e-17 4.3e-19 3.9e-16
-    "fourbar": dict(qdd=6e-15),                       # 2.2e-16 6.9e-18 1.7e-16
-    "ur5_robot": dict(qdd=8e-16),                     # 2.9e-16 2.7e-16 2.6e-17
-    "ur10_robot": dict(qdd=4e-15),                    # 4.1e-16 3.3e-16 1.0e-16
-    "ur3_robot": dict(qdd=3e-15),                     # 5.8e-16 2.2e-16 8.6e-17
-    "ur5_gripper": dict(qdd=2e-15),                   # 4.4e-16 4.1e-16 5.3e-17
-    "panda": dict(qdd=8e-15),                         # 5.9e-16 2.5e-16 2.6e-16
-    "kinova": dict(qdd=2e-15),                        # 2.2e-16 2.1e-16 4.8e-17
-    "xarm7": dict(qdd=6e-16),                         # 9.0e-16 2.4e-16 1.9e-17
-    "z1": dict(qdd=2e-14),                            # 4.9e-16 2.2e-16 3.4e-16
-    "so100": dict(qdd=2e-15),                         # 1.7e-16 6.9e-18 6.6e-17
-    "so101": dict(qdd=2e-15),                         # 4.4e-16 1.7e-18 5.1e-17
-    "double_pendulum": dict(qdd=8e-15),               # 1.1e-16 2.6e-18 2.6e-16
-    "double_pendulum_continuous": dict(qdd=8e-15),    # 1.1e-16 2.6e-18 2.6e-16
-    "TwoDofs": dict(qdd=6e-15),                       # 2.8e-17 3.5e-18 1.8e-16
-    "finger_edu": dict(qdd=3e-14),                    # 8.3e-17 8.7e-19 7.9e-16
-    "allegro_right_hand": dict(qdd=2e-14),            # 2.1e-17 1.6e-19 4.1e-16
-    "allegro_left_hand": dict(qdd=7e-15),             # 1.4e-17 1.6e-19 2.1e-16
-    "baxter": dict(qdd=2e-14),                        # 5.6e-16 2.0e-16 5.9e-16
-    "talos_left_arm": dict(qdd=2e-14),                # 6.4e-16 2.2e-16 3.9e-16
-    "tree5": dict(qdd=1e-14),                         # 6.5e-16 2.6e-16 3.1e-16
-    "tree6": dict(qdd=3e-14),                         # 6.8e-16 2.9e-16 7.3e-16
-}
 # q̈, λ: the readable side's M is the Lagrange route (no readable CRBA twin): the max of the tolerances
 # measured with either M
 CLOSED_TOL = {                                                          # measured: Φ, Φ_q, Φ̇_q q̇, q̈, λ
@@ -262,13 +225,6 @@ RANK = {"fourbar": 2, "spm": 4, "loops11": 14, "loops12": 14}     # on or near t
 def _check(errors, tol, what):
     bad = [f"{k}: err {e:.2e} > tol {tol[k]:.0e}" for k, e in errors.items() if not e <= tol[k]]
     assert not bad, f"{what}: " + "; ".join(bad)
-
-
-@pytest.mark.parametrize("n", SHAPES, ids=lambda n: "one" if n is None else f"N{n}")
-@pytest.mark.parametrize("name", OPEN)
-def test_open_chain_kernels_equal_readable(name, n):
-    model, _ = _load(name)
-    _check(open_chain_errors(model, n), OPEN_TOL[name], f"{name}, {n} states")
 
 
 @pytest.mark.parametrize("baumgarte", [None, (3.0, 4.0)], ids=["plain", "baumgarte"])
