@@ -162,7 +162,7 @@ def _play(args) -> int:
         out = Path(args.html)
         if out.is_dir() or not out.resolve().parent.is_dir():
             raise ManipdynError(f"--html {args.html}: not a file in an existing folder")
-    model = load_urdf(args.urdf, **reduction(args))
+    model = load_urdf(args.urdf, root_joint=args.root_joint, **reduction(args))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", viz.GeometryWarning)
         warnings.simplefilter("always", viz.PlaybackWarning)
@@ -249,6 +249,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="folder of package://NAME/ meshes (repeatable); meshes are read only there, in the "
                          "URDF's folder, or in an installed example-robot-data")
     add_reduction_options(pl)
+    add_root_joint_option(pl)
     pl.set_defaults(func=_play)
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
     e.add_argument("name", choices=["aau", "spm"], help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7)")

@@ -29,13 +29,15 @@ def read_trajectory(path, model):
 
 
 def _to_model_order(model, names, q, source):
-    unknown = [n for n in names if n not in model.joint_names]
+    """Columns named by joint (a free flyer's by model.q_names: root_joint.x … root_joint.qw) -> (T, nq)."""
+    unknown = [n for n in names if n not in model.q_names]
     if unknown:
-        raise InputError(f"{source}: joints {unknown} are not moving joints of {model.name!r}")
-    full = np.full((q.shape[0], model.nv), np.nan)
+        raise InputError(f"{source}: joints {unknown} are not moving joints of {model.name!r} "
+                         f"(q entries: {', '.join(model.q_names[:20])})")
+    full = np.full((q.shape[0], model.nq), np.nan)
     for k, n in enumerate(names):
-        full[:, model.joint_index(n)] = q[:, k]
-    missing = [j for j in model.joint_names if j not in names]
+        full[:, model.q_names.index(n)] = q[:, k]
+    missing = [j for j in model.q_names if j not in names]
     if missing and not (model.constraints and set(model.actuated) <= set(names)):
         raise InputError(f"{source}: no column q_<joint> for {missing}")
     return full
@@ -182,7 +184,13 @@ def demo(model, urdf_path):
     t = np.linspace(0.0, 4.0, 121)
     lo, hi = _ranges(model)
     mid, amp = 0.5 * (lo + hi), 0.4 * (hi - lo)
-    Q = mid + amp * np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.nv)))
+    swing = mid + amp * np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.njoints)))
+    if model.floating:                      # the free flyer stays at the origin; the other joints swing
+        from ..configuration import neutral
+        Q = np.tile(neutral(model), (len(t), 1))
+        Q[:, model.idx_q[1:]] = swing[:, 1:]
+        return t, Q
+    Q = swing
     if model.constraints:
         Q[:, [i for i in range(model.nv) if model.joint_names[i] not in model.actuated]] = np.nan
         return t, complete(model, Q)

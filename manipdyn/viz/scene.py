@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..configuration import neutral, normalize
 from ..dynamics.core import forward_kinematics
 from ..errors import InputError
 from .geometry import load_visuals
@@ -67,7 +68,7 @@ def node_name(name) -> str:
 def body_nodes(model) -> dict:
     """Node path of every body (-1: the base), unique even when sanitised names collide."""
     out, used = {}, set()
-    for b in range(-1, model.nv):
+    for b in range(-1, model.njoints):
         base = node_name(model.root_link if b < 0 else model.body_names[b])
         name, k = base, 1
         while name in used:
@@ -91,7 +92,7 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
     from meshcat.commands import SetObject, SetTransform
     from meshcat.path import Path as MPath
     sc = Scene(model)
-    Q = np.zeros((1, model.nv)) if Q_extent is None else np.atleast_2d(Q_extent)
+    Q = neutral(model)[None] if Q_extent is None else np.atleast_2d(Q_extent)
     size = _size(model, Q)
     sc.nodes = body_nodes(model)
     visuals = load_visuals(urdf_path, package_dirs) if urdf_path is not None else []
@@ -108,17 +109,17 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
         fr = model.frame(v.link)
         add(f"{sc.nodes[fr.body]}/{node_name(v.link)}_visual{k}", v.geometry, _T(fr.R, fr.p) @ v.placement, v.rgba)
     r = 0.015 * size
-    for b in range(model.nv):                       # default capsules for links without a visual
+    for b in range(model.njoints):                       # default capsules for links without a visual
         if model.body_names[b] in drawn:
             continue
-        ends = [model.p0[c] for c in range(model.nv) if model.parent[c] == b]
+        ends = [model.p0[c] for c in range(model.njoints) if model.parent[c] == b]
         ends += [f.p for f in model.frames.values() if f.body == b and np.linalg.norm(f.p) > 1e-9
                  and f.name not in drawn]
         add(f"{sc.nodes[b]}/joint_sphere", g.Sphere(1.6 * r), np.eye(4), (0.9, 0.55, 0.1, 1.0))
         for k, e in enumerate(e for e in ends if np.linalg.norm(e) > 1e-9):
             add(f"{sc.nodes[b]}/capsule{k}", *_segment(g, np.zeros(3), np.asarray(e), r), (0.6, 0.65, 0.75, 1.0))
     if model.root_link not in drawn:
-        ends = [model.p0[c] for c in range(model.nv) if model.parent[c] < 0]
+        ends = [model.p0[c] for c in range(model.njoints) if model.parent[c] < 0]
         for k, e in enumerate(ends):
             if np.linalg.norm(e) > 1e-9:
                 add(f"{sc.nodes[-1]}/capsule{k}", *_segment(g, np.zeros(3), np.asarray(e), 1.3 * r), (0.3, 0.3, 0.3, 1.0))
@@ -129,7 +130,7 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
             (0.1, 0.4, 0.9, 1.0))
         add(gap_node(sc, c), g.Sphere(2.5 * r), _T(np.eye(3), c.pc), (1.0, 0.0, 0.0, 0.7))
     if show_frames:
-        for b in range(model.nv):
+        for b in range(model.njoints):
             sc.commands.append(SetObject(g.triad(4 * r), path=MPath(tuple(f"{sc.nodes[b]}/frame".strip("/").split("/")))))
     sc.commands += camera_commands(model, Q, size)
     return sc
@@ -182,16 +183,16 @@ def camera_commands(model, Q, size=None):
 
 
 def check_trajectory(model, t, Q):
-    """(t (T,), Q (T, nv)) as float arrays, checked: 1 ≤ T ≤ MAX_SAMPLES, finite, times increasing, finite span."""
+    """(t (T,), Q (T, nq)) as float arrays, checked: 1 ≤ T ≤ MAX_SAMPLES, finite, times increasing, finite span."""
     t, Q = np.asarray(t, dtype=float), np.asarray(Q, dtype=float)
-    if Q.ndim == 1 and t.ndim == 1 and model.nv != 1 and Q.shape == (model.nv,):
+    if Q.ndim == 1 and t.ndim == 1 and model.nq != 1 and Q.shape == (model.nq,):
         Q = Q[None]
-    Q = Q.reshape(-1, 1) if Q.ndim == 1 and model.nv == 1 else Q
+    Q = Q.reshape(-1, 1) if Q.ndim == 1 and model.nq == 1 else Q
     if t.ndim != 1 or not 1 <= len(t) <= MAX_SAMPLES:
         raise InputError(f"playback of {model.name!r}: t must be 1-D with 1 to {MAX_SAMPLES} samples, "
                          f"got shape {t.shape}")
-    if Q.shape != (len(t), model.nv):
-        raise InputError(f"playback of {model.name!r}: q has shape {Q.shape}, expected ({len(t)}, {model.nv})")
+    if Q.shape != (len(t), model.nq):
+        raise InputError(f"playback of {model.name!r}: q has shape {Q.shape}, expected ({len(t)}, {model.nq})")
     if not np.all(np.isfinite(t)):
         raise InputError(f"playback of {model.name!r}: t has non-finite values (first at sample "
                          f"{int(np.argmin(np.isfinite(t)))})")
@@ -208,7 +209,7 @@ def check_trajectory(model, t, Q):
 
 def max_frames(model) -> int:
     """Frame cap of a model's animation: MAX_FRAMES, fewer when frames × bodies would pass MAX_KEYS."""
-    return max(2, min(MAX_FRAMES, MAX_KEYS // max(model.nv, 1)))
+    return max(2, min(MAX_FRAMES, MAX_KEYS // max(model.nq, 1)))
 
 
 def frame_times(span, fps, cap):
@@ -238,7 +239,9 @@ def animate(sc: Scene, t, Q, fps=30.0):
     if note:
         sc.notes.append(note)
         warnings.warn(f"playback of {sc.model.name!r}: {note}", PlaybackWarning, stacklevel=2)
-    Qf = np.column_stack([np.interp(times, t - t[0], Q[:, i]) for i in range(sc.model.nv)])
+    Qf = np.column_stack([np.interp(times, t - t[0], Q[:, i]) for i in range(sc.model.nq)])
+    if sc.model.floating:                                    # a free flyer's quaternion: normalised lerp
+        Qf = normalize(sc.model, Qf)
     R, p = forward_kinematics(sc.model, Qf)
     anim = Animation(default_framerate=fps)
     gaps = _closure_gaps(sc.model, Qf)
