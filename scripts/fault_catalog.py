@@ -38,6 +38,7 @@ AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "inte
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
+_ABA = "tests/crosscheck/test_aba.py"
 _CRBA = "tests/crosscheck/test_crba.py"
 _FLOATBASE = "tests/crosscheck/test_floating_base.py"
 _RNEA = "tests/crosscheck/test_rnea_kernel.py"
@@ -60,7 +61,7 @@ AREA_TESTS = {
     "rnea": ("tests/crosscheck/test_rnea_kernel.py", "tests/unit/test_analytic_spatial.py"),
     "lagrange": ("tests/crosscheck/test_crba.py", "tests/unit/test_analytic_spatial.py", _FLOAT,
                  "tests/batch/test_kernels_vs_readable.py"),
-    "aba": ("tests/batch/test_fast_paths.py", "tests/crosscheck/test_floating_base.py"),
+    "aba": (_ABA, "tests/batch/test_fast_paths.py", "tests/crosscheck/test_floating_base.py"),
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
     "integrators": ("tests/unit/test_symplectic_euler.py",),
     "validation": ("tests/crosscheck/test_single_joint.py",),
@@ -202,6 +203,19 @@ FAULTS = (
           "x += Y[r, k1] * t[r]",
           "x -= Y[r, k1] * t[r]",
           (_PROPS, _FLOATBASE), "ABA: pᵃ = pᴬ + Iᵃ c − U D⁻¹ u"),
+    Fault("aba-inertia-shift-sign", "aba", "manipdyn/dynamics/aba.py",
+          "hx, hy, hz = py * z - pz * y, pz * x - px * z, px * y - py * x",
+          "hx, hy, hz = pz * y - py * z, px * z - pz * x, py * x - px * y",
+          (_ABA,), "ABA pass 2: I^A_λ += Xᵀ Iᵃ X with the P B'ᵀ − B' P terms of the shift negated"),
+    Fault("aba-cholesky-upper-triangle", "aba", "manipdyn/dynamics/aba.py",
+          "y -= L[m, r] * x[m]",
+          "y -= L[r, m] * x[m]",
+          (_ABA, _FLOATBASE), "ABA pass 3: back substitution reads D's upper triangle instead of Lᵀ (joints with "
+                              "several velocities only: the free flyer)"),
+    Fault("aba-fext-world-rotation", "aba", "manipdyn/dynamics/aba.py",
+          "t[a] = Rw[b, 0, a] * w[k, 0] + Rw[b, 1, a] * w[k, 1] + Rw[b, 2, a] * w[k, 2]",
+          "t[a] = Rw[b, a, 0] * w[k, 0] + Rw[b, a, 1] * w[k, 1] + Rw[b, a, 2] * w[k, 2]",
+          (_ABA, _PROPS), "ABA: a world-axes external force turned into body axes by Rw instead of Rwᵀ"),
     # ---------------------------------------------------------------- constraints (constraints/*)
     Fault("closure-orientation-bias-offset", "constraints", "manipdyn/constraints/closures.py",
           "bias[row] = gyro + acc",
