@@ -21,7 +21,8 @@ With (R, p) body i's placement in its parent λ (x_λ = R x_i + p, ``core``):
 Gravity enters as the base acceleration a_0 = −a_g = [−g; 0] (RBDA §5.3, DESIGN §6).
 
 External wrenches enter inside the kernel (Table 7.1: p^A_i = v_i ×* I_i v_i − f^x_i, f^x_i in body
-coordinates): see ``applied_wrenches`` for the form the kernel takes them in.
+coordinates), as ``state.wrench_rows`` lays them out: one row per named frame (body, the frame's origin in
+it, [force; moment about that origin] in body axes, or in world axes which the kernel turns into the body's).
 
 ``forward_dynamics(..., method="cholesky")``: the M⁻¹ route, Cholesky of M (CRBA) with the right-hand side
 τ − rnea(q, q̇, 0) from the Newton–Euler code.
@@ -36,7 +37,8 @@ from ..joints import joint_placement
 from .core import kernel_arrays, unpack
 from .lagrange import mass_matrix
 from .rnea import rnea
-from .state import (as_batch, check_f_ext, check_output, fast_shape, quiet, raise_kernel_error, unbatch)
+from .state import (as_batch, check_f_ext, check_output, fast_shape, quiet, raise_kernel_error, unbatch,
+                    wrench_rows)
 
 
 # -- spatial algebra on 6-vectors [linear; angular], inlined into the kernel ------------------------------
@@ -231,9 +233,9 @@ def first_nonfinite(X, s):
 
 
 @njit(cache=True)
-def aba_kernel(I, F, Q, V, Tau, XI, XF, W, world, out):
-    """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches (XI, XF,
-    W (N, K, 6), world: ``applied_wrenches``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
+def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
+    """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
+    on body (K,) about point (K, 3), in world axes if ``world`` (``state.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
     -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
     (state.raise_kernel_error)."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
@@ -276,19 +278,17 @@ def aba_kernel(I, F, Q, V, Tau, XI, XF, W, world, out):
                             Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
 
     def subtract_applied_wrenches(w):
-        """p^A_i −= f^x_i (Table 7.1, pass 1): wrench k acts on body XI[k] at the frame XF[k] = [R; pᵀ]
-        (frame in body); w[k] = [force; moment about the frame origin] in the frame's axes, or the world's
-        with ``world``. In body axes: f = E w_f, n = E w_n + p × f (E = R, or Rwᵀ of the body)."""
-        for k in range(XI.shape[0]):
-            b = XI[k]
+        """p^A_i −= f^x_i (Table 7.1, pass 1): w[k] = [force; moment about point[k]] on body[k], in body
+        axes (or world axes with ``world``: turned by Rwᵀ first); about the body origin: n + p × f."""
+        for k in range(body.shape[0]):
+            b = body[k]
             for a in range(3):
                 if world:
                     t[a] = Rw[b, 0, a] * w[k, 0] + Rw[b, 1, a] * w[k, 1] + Rw[b, 2, a] * w[k, 2]
                     t[3 + a] = Rw[b, 0, a] * w[k, 3] + Rw[b, 1, a] * w[k, 4] + Rw[b, 2, a] * w[k, 5]
                 else:
-                    t[a] = XF[k, a, 0] * w[k, 0] + XF[k, a, 1] * w[k, 1] + XF[k, a, 2] * w[k, 2]
-                    t[3 + a] = XF[k, a, 0] * w[k, 3] + XF[k, a, 1] * w[k, 4] + XF[k, a, 2] * w[k, 5]
-            px, py, pz = XF[k, 3, 0], XF[k, 3, 1], XF[k, 3, 2]
+                    t[a], t[3 + a] = w[k, a], w[k, 3 + a]
+            px, py, pz = point[k, 0], point[k, 1], point[k, 2]
             t[3] += py * t[2] - pz * t[1]
             t[4] += pz * t[0] - px * t[2]
             t[5] += px * t[1] - py * t[0]
@@ -380,7 +380,7 @@ def aba_kernel(I, F, Q, V, Tau, XI, XF, W, world, out):
         if k >= 0:
             return N * (nq + nv) + s * nv + k
         velocities_and_biases(Q[s], V[s])                          # pass 1
-        subtract_applied_wrenches(W[s])
+        subtract_applied_wrenches(X[s])
         code = articulated_inertias(Tau[s], out[s])                # pass 2
         if code <= -2 - nb:
             return code - s * nv
@@ -393,35 +393,17 @@ def aba_kernel(I, F, Q, V, Tau, XI, XF, W, world, out):
     return -1
 
 
-_NO_XI, _NO_XF, _NO_W = np.empty(0, np.int64), np.empty((0, 4, 3)), np.empty((1, 0, 6))   # no wrenches
+_NO_X, _NO_BODY, _NO_POINT = np.empty((1, 0, 6)), np.empty(0, np.int64), np.empty((0, 3))   # no wrenches
 
 
 @njit(cache=True)
 def aba_one(I, F, q, v, tau, out):
     """One state (nq,), (nv,) without external wrenches: aba_kernel on views, no Python-side reshapes."""
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_XI, _NO_XF, _NO_W,
+    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_BODY, _NO_POINT,
                       False, out[np.newaxis, :])
 
 
 # -- Python entry points ----------------------------------------------------------------------------------
-
-def applied_wrenches(model, f_ext, f_ext_frame, N):
-    """f_ext = {link or frame name: (force, moment)} in the kernel's form, one entry per named frame:
-      XI (K,) int   the body each frame is attached to (frames of the fixed base moving no joint are dropped)
-      XF (K, 4, 3)  the frame in its body: rows 0–2 its axes R (x_body = R x_frame + p), row 3 its origin p
-      W (N, K, 6)   [force; moment about the frame origin], in the frame's axes, or the world's
-      world (bool)  f_ext_frame == "world": the kernel rotates by the body's world orientation.
-    A per-body array (N, nb, 6) [force; moment about the body origin] in body axes is the case XI = 0…nb−1,
-    XF = [1; 0]. Per frame rather than summed per body: world-axes wrenches on two frames of one body
-    cannot be summed before the body's orientation is known (their lever arms p differ)."""
-    wrenches = [(fr, f, m) for fr, f, m in check_f_ext(model, f_ext, f_ext_frame, N) or () if fr.body >= 0]
-    K = len(wrenches)
-    XI, XF, W = np.empty(K, np.int64), np.empty((K, 4, 3)), np.empty((N, K, 6))
-    for k, (fr, f, m) in enumerate(wrenches):
-        XI[k], XF[k, :3], XF[k, 3] = fr.body, fr.R, fr.p
-        W[:, k, :3], W[:, k, 3:] = f, m
-    return XI, XF, W, f_ext_frame == "world"
-
 
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
@@ -447,15 +429,15 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     else:
         if nd == 2:
             (Q, V, T), single = (q, v, tau), False
-            ext = applied_wrenches(model, None, "local", Q.shape[0])
+            ext = wrench_rows(model, None, "local", Q.shape[0])
         else:                                                   # checked and converted first
             (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
-            ext = applied_wrenches(model, f_ext, f_ext_frame, Q.shape[0])
+            ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
             if model.njoints == 0:
                 return unbatch(np.zeros(V.shape), single)
         Q, V, T = (np.ascontiguousarray(x) for x in (Q, V, T))   # one compiled layout
         qdd = np.empty(V.shape)
-        code = aba_kernel(*kernel_arrays(model), Q, V, T, *ext, qdd)
+        code = aba_kernel(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world", qdd)
         qdd = unbatch(qdd, single)
         Q, V, T = (unbatch(x, single) for x in (Q, V, T))
     if code != -1:
