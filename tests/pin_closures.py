@@ -17,6 +17,7 @@ from manipdyn.validation.reference import pin
 
 
 def _perp(e):
+    """n1, n2 completing e to a right-handed basis: n1 = e × (the unit axis least aligned with e)."""
     t = np.zeros(3)
     t[np.argmin(np.abs(e))] = 1.0
     n1 = np.cross(e, t)

@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 from conftest import ROOT, assert_close, err
 from free_flyer import integrate, random_floating_states, with_free_flyer
-from pin_closures import PinClosures
+from pin_closures import PinClosures, _perp
 
 import manipdyn as md
 from manipdyn.constraints import (closure_terms, complete_state, constrained_forward_dynamics,
@@ -51,15 +51,6 @@ FD_STEP = 1e-6
 
 
 # ------------------------------------------------------------------ Pinocchio-based closure rows
-def _perp(e):
-    """n1, n2 completing e to a right-handed basis: n1 = e × (the unit axis least aligned with e)."""
-    t = np.zeros(3)
-    t[np.argmin(np.abs(e))] = 1.0
-    n1 = np.cross(e, t)
-    n1 /= np.linalg.norm(n1)
-    return n1, np.cross(e, n1)
-
-
 def _vec(el, key, default):
     return np.array([float(x) for x in (default if el is None else el.get(key, default)).split()])
 
