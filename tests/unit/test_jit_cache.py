@@ -20,18 +20,19 @@ from conftest import ROOT, assert_close
 
 from manipdyn import _jit
 
-# frame_kernel (dynamics/kinematics.py) and closure_kernel (constraints/closures.py), both inlining
-# joints.joint_placement through core.fk_pass, on one fixed state of the spherical parallel manipulator.
+# frame_kernel (dynamics/kinematics.py), closure_kernel (constraints/closures.py) and rnea_kernel
+# (dynamics/rnea.py), all inlining joints.joint_placement through core.fk_pass, on one fixed state of the
+# spherical parallel manipulator.
 PROBE = f"""
 import json, numpy as np, manipdyn as md
 from manipdyn.constraints import closure_terms
 m = md.load_urdf({str(ROOT / "urdf" / "spm.urdf")!r})
 rng = np.random.default_rng(3)
-q, v = rng.uniform(-3, 3, m.nq), rng.normal(0, 2, m.nv)
+q, v, a = rng.uniform(-3, 3, m.nq), rng.normal(0, 2, m.nv), rng.normal(0, 2, m.nv)
 phi, jac, bias = closure_terms(m, q, v)
 import os; assert md.__file__.startswith(os.getcwd()), md.__file__    # the copy, not the checkout
 print(json.dumps(dict(J=md.frame_jacobian(m, q, "platform").tolist(), phi=phi.tolist(), jac=jac.tolist(),
-                      bias=bias.tolist())))
+                      bias=bias.tolist(), tau=md.rnea(m, q, v, a).tolist())))
 """
 
 
@@ -76,7 +77,7 @@ def test_callee_edit_reaches_every_compiled_caller(tmp_path):
     truth = _run(fresh, MANIPDYN_NOJIT="1")
     for k in before:
         assert np.max(np.abs(before[k] - truth[k])) > 1e-3, f"the planted edit does not change {k}"
-        # compiled vs uncompiled: the same arithmetic (measured 0 on all four; 1e-13 allows operation reordering)
+        # compiled vs uncompiled: the same arithmetic (measured 0 on all five; 1e-13 allows operation reordering)
         assert_close(after[k], truth[k], 1e-13, f"{k} after editing a callee (stale compiled cache?)")
 
 
