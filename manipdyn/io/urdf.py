@@ -146,6 +146,7 @@ def _check_policy(zero_mass_inertia, mimic, source):
         raise InputError(f"{source}: mimic={mimic!r}; expected True or False")
 
 
+_WHAT = {"mimic": "joint", "version": "", "unknown_element": ""}
 _WARNING = {"triangle": InertiaWarning, "zero_mass_inertia": InertiaWarning, "free_root": FloatingBaseWarning}
 
 
@@ -155,12 +156,12 @@ def _warn(model, source):
         these = [q for q in model.quirks if q.kind == kind]
         if not these:
             continue
+        what = _WHAT.get(kind, "link")
         if kind == "free_root":
             text = these[0].detail
-        elif len(these) == 1:
-            text = f"{kind}: {these[0].name!r}: {these[0].detail}"
         else:
-            text = f"{kind} ({len(these)}): " + "; ".join(f"{q.name!r}: {q.detail}" for q in these[:50])
+            text = f"{kind} ({len(these)}): " + "; ".join(
+                f"{what} {q.name!r}: {q.detail}" if what else q.detail for q in these[:50])
         warnings.warn(f"{source}: {text}", _WARNING.get(kind, QuirkWarning), stacklevel=4)
 
 
@@ -556,7 +557,7 @@ def _free_root_shape(root, joints, frames, parts, gravity):
         pw.append(pb + Rb @ p)
         top.append(i if b < 0 else top[b])
     pts = [(top[f.body], pw[f.body] + Rw[f.body] @ f.p) for f in frames.values() if f.body >= 0]
-    extent = max(np.linalg.norm(x) for _, x in pts)
+    extent = max(np.linalg.norm(x) for x in [x for _, x in pts] + [f.p for f in frames.values() if f.body < 0])
     low = {}
     for t, x in pts:
         low[t] = max(low.get(t, -np.inf), float(x @ down))       # depth below the root, along gravity
@@ -728,7 +729,7 @@ def _constraints(root, model, source):
         if not name or name in seen:
             raise URDFError(f"{source}: a <{e.tag}> has no name or a duplicate name ({name!r})")
         seen.add(name)
-        out.append(_CLOSURE_READERS[e.tag](e, name, f"<{e.tag}> {name!r}", model, source))
+        out.append(_CLOSURE_READERS[e.tag](e, name, f"{e.tag} {name!r}", model, source))
     return tuple(out)
 
 
