@@ -14,9 +14,9 @@ from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_place
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics.rnea import rnea, rnea_terms
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
-                     ManipdynError, ModelError, NumericalError, SingularError, URDFError)
+                     ManipdynError, ModelError, NumericalError, QuirkWarning, SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
-from .model import FREEFLYER, PRISMATIC, REVOLUTE, Frame, Model
+from .model import FREEFLYER, PRISMATIC, REVOLUTE, Frame, MimicModel, Model, Quirk
 from .reduce import reduce
 from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
                           constrained_inverse_dynamics, project)
@@ -34,6 +34,7 @@ def dh_to_urdf(*args, **kwargs):
 __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "project", "assemble",
            "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
+           "MimicModel", "Quirk", "QuirkWarning",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning",
            "FloatingBaseWarning", "FREEFLYER", "neutral", "integrate", "difference", "random_configuration",

@@ -46,6 +46,7 @@ def _validate(args) -> int:
     from tqdm import tqdm
 
     from .validation import format_report, validate
+    from .validation.mimic import validate_mimic
 
     runs = _validation_runs(args)     # every model and reference loads before the first state runs
     print(f"manipdyn validate: {len(runs)} model(s), {args.states} random states each, seed {args.seed}, "
@@ -56,8 +57,8 @@ def _validate(args) -> int:
         for model, ref, notes in runs:
             for note in notes:
                 bar.write(f"warning: {note}", file=sys.stderr)
-            rep = validate(model, ref, n_states=args.states, seed=args.seed, tol=args.tol,
-                           progress=bar.update)
+            check = validate_mimic if args.mimic else validate
+            rep = check(model, ref, n_states=args.states, seed=args.seed, tol=args.tol, progress=bar.update)
             reports.append(rep)
             bar.write(format_report(rep))
     failed = [r.name for r in reports if not r.passed]
@@ -83,6 +84,7 @@ def _validate_paths(args) -> list[tuple]:
 def _validation_runs(args) -> list:
     """(model, reference URDF, loader warnings) per model, each model and its Pinocchio reference built."""
     from .io.urdf import load_urdf
+    from .validation.mimic import MimicReference
     from .validation.reference import Reference
 
     if args.reference:                    # our loader first: its message is one line, urdfdom's is not
@@ -94,10 +96,10 @@ def _validation_runs(args) -> list:
         _check_input_file(path, "URDF")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            model = load_urdf(path, root_joint=root_joint, **reduction(args))
+            model = load_urdf(path, root_joint=root_joint, mimic=args.mimic, **reduction(args))
         ref = Path(args.reference) if args.reference else path
         try:
-            Reference(model, ref)
+            (MimicReference if args.mimic else Reference)(model, ref)
         except ManipdynError:
             raise
         except Exception as exc:          # Pinocchio's parser raises bare ValueError/RuntimeError
@@ -141,16 +143,61 @@ def reduction(args) -> dict:
     return dict(locked=locked or None, root=args.root, tips=args.tips, prune=args.prune)
 
 
+def add_mimic_option(p):
+    """--mimic: honour <mimic> joints (load_urdf mimic=True)."""
+    p.add_argument("--mimic", action="store_true",
+                   help="honour <mimic> joints: they follow their targets and carry no coordinate (load_urdf "
+                        "mimic=True; Pinocchio's buildModelFromUrdf(path, mimic=True)); default: independent joints")
+
+
 def _inspect(args) -> int:
     from .io.urdf import load_urdf
+    from .model import QUIRK_KINDS
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = load_urdf(args.urdf, root_joint=args.root_joint, **reduction(args))
+        model = load_urdf(args.urdf, root_joint=args.root_joint, mimic=args.mimic, **reduction(args))
+    messages = [str(w.message) for w in caught]
+    if args.json is not None:
+        text = json.dumps(inspect_dict(model, messages), indent=1, ensure_ascii=False)
+        if args.json == "-":
+            print(text)
+        else:
+            Path(args.json).write_text(text + "\n", encoding="utf-8")
+        return 0
     print(model.summary())
-    for w in caught:
-        print(f"warning: {w.message}")
+    kinds = [k for k in QUIRK_KINDS if any(q.kind == k for q in model.quirks)]
+    if kinds:
+        print("quirks (Model.quirks: what the loader noticed), per kind:")
+    for kind in kinds:
+        these = [q for q in model.quirks if q.kind == kind]
+        print(f"  {kind} ({len(these)}): {QUIRK_KINDS[kind]}")
+        for q in these[:50]:
+            print(f"    {q.name}: {q.detail}")
+        if len(these) > 50:
+            print(f"    ... {len(these) - 50} more (--json lists all)")
+    for m in messages:
+        print(f"warning: {m}")
     return 0
+
+
+def inspect_dict(model, warnings_seen=()) -> dict:
+    """What ``inspect --json`` writes: sizes, joints in q order, closures, mimic map, quirks, notes, summary."""
+    from .model import MimicModel
+    full = model.full if isinstance(model, MimicModel) else model
+    out = dict(name=full.name, source=str(full.source), root_link=full.root_link, nq=model.nq, nv=model.nv,
+               floating=full.floating, joints=list(model.joint_names), v_names=list(full.v_names),
+               gravity=full.gravity.tolist(), actuated=list(full.actuated), locked=dict(full.locked),
+               constraints=[dict(name=c.name, type=c.type, rows=c.n_rows, source=c.source, parent_link=c.parent_link,
+                                 child_link=c.child_link, **({"ratio": c.ratio} if c.type == "coupling" else {}))
+                            for c in full.constraints],
+               mimic=[dict(joint=j, target=t, multiplier=m, offset=o) for j, t, m, o in full.mimic],
+               mimic_honoured=isinstance(model, MimicModel),
+               quirks=[q.as_dict() for q in model.quirks], notes=list(full.notes), warnings=list(warnings_seen),
+               summary=model.summary())
+    if isinstance(model, MimicModel):
+        out["full_joints"] = list(full.joint_names)
+    return out
 
 
 def _play(args) -> int:
@@ -232,11 +279,16 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_mimic_option(v)
     add_root_joint_option(v)
     add_reduction_options(v)
     v.set_defaults(func=_validate)
     i = sub.add_parser("inspect", help="show what the loader built from a URDF")
     i.add_argument("urdf")
+    i.add_argument("--json", nargs="?", const="-", metavar="FILE",
+                   help="write what the loader built as JSON (quirks, closures, mimic map, summary) to FILE, "
+                        "or to stdout without FILE")
+    add_mimic_option(i)
     add_root_joint_option(i)
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
@@ -355,7 +407,7 @@ def _preflight(args):
     if getattr(args, "reference", None):
         _check_input_file(args.reference, "--reference URDF")
     for option in ("json", "html"):
-        if getattr(args, option, None):
+        if getattr(args, option, None) and not (args.command == "inspect" and getattr(args, option) == "-"):
             _check_output_file(getattr(args, option), f"--{option}")
     if getattr(args, "out", None) is not None:
         _check_output_dir(args.out, "--out")

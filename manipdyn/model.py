@@ -278,7 +278,9 @@ class MimicModel:
 
     The one linear map (``manipdyn.dynamics.mimic`` applies it): q_full = Gq q + q_off, v_full = G v,
     a_full = G a, τ = Gᵀ τ_full, M = Gᵀ M_full G. Independent coordinates keep the full model's q order with
-    the mimic joints' entries removed (Pinocchio's order).
+    the mimic joints' entries removed (Pinocchio's order). The public ``rnea``, ``mass_matrix``,
+    ``gravity_torques``, ``aba`` and ``forward_dynamics`` take it in place of a Model; for every other function
+    (kinematics, playback) use ``full`` at ``full_state(q, v, a)``.
     """
     full: Model            # the tree with every joint moving (mimic joints as independent joints)
     G: np.ndarray          # (full.nv, nv) v_full = G v
@@ -307,9 +309,19 @@ class MimicModel:
     def quirks(self) -> tuple:
         return self.full.quirks
 
+    @property
+    def source(self) -> str:
+        return self.full.source
+
+    def full_state(self, q, v=None, a=None):
+        """(q_full, v_full, a_full) of ``full`` from independent coordinates (None stays None)."""
+        from .dynamics.mimic import full_state
+        return full_state(self, q, v, a)
+
     def summary(self) -> str:
-        lines = [self.full.summary(), f"mimic joints honoured: nq = {self.nq}, nv = {self.nv} independent "
-                                      f"coordinates ({', '.join(self.joint_names)})"]
+        full = self.full.summary().replace(") loaded as an independent joint", ") honoured: no coordinate of its own")
+        lines = [full, f"mimic joints honoured: nq = {self.nq}, nv = {self.nv} independent "
+                       f"coordinates ({', '.join(self.joint_names)})"]
         return "\n".join(lines)
 
     def __repr__(self) -> str:

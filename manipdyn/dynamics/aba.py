@@ -34,10 +34,11 @@ import numpy as np
 from .._jit import njit
 from ..errors import InputError, NumericalError, SingularError
 from ..joints import joint_placement
+from ..model import MimicModel
 from .core import kernel_arrays, unpack
 from .lagrange import mass_matrix
 from .rnea import rnea
-from .state import (as_batch, check_f_ext, check_output, fast_shape, quiet, raise_kernel_error, unbatch,
+from .state import (as_batch, check_f_ext, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch,
                     wrench_rows)
 
 
@@ -430,6 +431,8 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         if nd == 2:
             (Q, V, T), single = (q, v, tau), False
             ext = wrench_rows(model, None, "local", Q.shape[0])
+        elif type(model) is MimicModel:                         # q̈ = M⁻¹ (τ − Gᵀ h_full) (dynamics/mimic.py)
+            return mimic_call("aba", model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
         else:                                                   # checked and converted first
             (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
             ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
@@ -448,6 +451,8 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
+    if type(model) is MimicModel:
+        return mimic_call("forward_dynamics", model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, method=method)
     if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if method != "cholesky":

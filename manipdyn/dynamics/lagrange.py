@@ -18,10 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..model import MimicModel
 from ..spatial import skew
 from .crba import crba
 from .kinematics import com_jacobians, supports
-from .state import as_batch, check_output, quiet, unbatch
+from .state import as_batch, check_output, mimic_call, quiet, unbatch
 
 
 def mass_matrix(model, q, method="crba"):
@@ -32,6 +33,8 @@ def mass_matrix(model, q, method="crba"):
     method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
     (costly, as the chapter warns).
     """
+    if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
+        return mimic_call("mass_matrix", model, q, method)
     if method == "crba":
         return crba(model, q)
     (Q,), single = as_batch(model, q=q)
@@ -51,6 +54,8 @@ def _lagrange_mass_matrix(model, J, Iw):
 @quiet
 def gravity_torques(model, q):
     """g(q) = ∂V/∂q with V = −Σ_b m_b gᵀ c_b(q): g = −Σ_b m_b J_vbᵀ g (nv,) or (N, nv)."""
+    if type(model) is MimicModel:                   # g = Gᵀ g_full (dynamics/mimic.py)
+        return mimic_call("gravity_torques", model, q)
     (Q,), single = as_batch(model, q=q)
     J = com_jacobians(model, Q)[1]
     g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)

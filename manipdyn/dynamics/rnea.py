@@ -31,8 +31,10 @@ import numpy as np
 
 from .._jit import njit
 from ..joints import joint_force, joint_placement, joint_velocity
+from ..model import MimicModel
 from .core import kernel_arrays, unpack
-from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch, wrench_rows
+from .state import (as_batch, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch,
+                    wrench_rows)
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -59,6 +61,8 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     elif nd == 2:
         tau = np.empty(v.shape)
         code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, _NO_T)
+    elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
+        return mimic_call("rnea", model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
     else:                                                       # checked and converted first
         (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
         return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea")[0], single)

@@ -19,15 +19,26 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import InputError, NumericalError, SingularError
-from ..model import Model
+from ..model import MimicModel, Model
 
 _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
 
 
 def check_model(model):
     """Refuse anything but a Model (a path or a Pinocchio model are common mistakes)."""
+    if isinstance(model, MimicModel):
+        raise InputError(f"{model!r}: a MimicModel (load_urdf(..., mimic=True)) is taken by rnea, mass_matrix, "
+                         f"gravity_torques, aba and forward_dynamics; for other functions use model.full at "
+                         f"model.full_state(q, v, a)")
     if not isinstance(model, Model):
         raise InputError(f"model must be a manipdyn Model (from load_urdf), not {type(model).__name__}")
+
+
+def mimic_call(name, model, *args, **kw):
+    """A MimicModel given to the public function ``name`` goes to dynamics/mimic.py's ``name``: the one place the
+    mimic map (q_full = Gq q + offset, τ = Gᵀ τ_full, M = Gᵀ M_full G) is applied."""
+    from . import mimic
+    return getattr(mimic, name)(model, *args, **kw)
 
 
 def as_real(name, x):
