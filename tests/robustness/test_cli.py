@@ -250,3 +250,69 @@ def test_output_check_leaves_no_file(files, capsys):
     assert main(["validate", str(AAU), "--json", str(target), "--lock", "nojoint=0"]) == 2
     assert not target.exists()
     capsys.readouterr()
+
+
+# ---- inspect --json, the quirks, --mimic -------------------------------------------------------------------
+
+def _zoo(rel):
+    from manipdyn.validation.zoo import robots_dir
+    return robots_dir() / rel
+
+
+PANDA, PR2, ROMEO = (_zoo(r) for r in ("panda_description/urdf/panda.urdf", "pr2_description/urdf/pr2.urdf",
+                                       "romeo_description/urdf/romeo.urdf"))
+
+
+def test_inspect_json_carries_the_quirks_and_the_summary():
+    import json
+    import warnings
+
+    from manipdyn import load_urdf
+    r = run_cli("inspect", PANDA, "--mimic", "--json")
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    d = json.loads(r.stdout)                     # stdout is the JSON document and nothing else
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mm = load_urdf(PANDA, mimic=True)
+    assert d["quirks"] == [q.as_dict() for q in mm.quirks] and d["quirks"][0]["kind"] == "mimic"
+    assert d["summary"] == mm.summary() and d["nq"] == d["nv"] == 8 and d["mimic_honoured"]
+    assert d["mimic"] == [dict(joint="panda_finger_joint2", target="panda_finger_joint1", multiplier=1.0, offset=0.0)]
+    assert len(d["full_joints"]) == 9 and d["warnings"]
+
+
+def test_inspect_json_to_a_file_and_closures(files, capsys):
+    import json
+    out = files / "fourbar.json"
+    assert main(["inspect", str(FOURBAR), "--json", str(out)]) == 0
+    assert capsys.readouterr().out == ""
+    d = json.loads(out.read_text())
+    assert d["constraints"] == [dict(name="loop", type="revolute", rows=5, source="constraint", parent_link="coupler",
+                                     child_link="rocker")] and d["actuated"] == ["j1_crank"] and d["quirks"] == []
+    assert_refused(main(["inspect", str(FOURBAR), "--json", str(files / "nowhere" / "x.json")]),
+                   capsys.readouterr().err, "inspect", "does not exist")
+
+
+def test_inspect_text_lists_quirks_per_kind_naming_links(capsys):
+    assert main(["inspect", str(PR2)]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    k = lines.index("quirks (Model.quirks: what the loader noticed), per kind:")
+    kinds = [ln.split()[0] for ln in lines[k + 1:] if ln.startswith("  ") and not ln.startswith("    ")]
+    assert kinds == ["triangle", "mimic"], kinds                  # QUIRK_KINDS order
+    assert "    sensor_mount_link: principal moments" in out and "    double_stereo_link: principal moments" in out
+    assert "    l_gripper_r_finger_joint: = 1 * l_gripper_l_finger_joint + 0" in out
+
+
+def test_validate_mimic_exit_codes(files, capsys):
+    assert main(["validate", str(PANDA), "--mimic", "--states", "2", "--quiet"]) == 0
+    assert "1/1 models pass every term" in capsys.readouterr().out
+    text = PANDA.read_text()                      # the finger mimic with multiplier 0.5 against the file's 1
+    bad = files / "panda_half.urdf"
+    bad.write_text(text.replace('<mimic joint="panda_finger_joint1"', '<mimic multiplier="0.5" joint="panda_finger_joint1"'))
+    assert 'multiplier="0.5"' in bad.read_text()
+    assert main(["validate", str(bad), "--reference", str(PANDA), "--mimic", "--states", "2", "--quiet"]) == 1
+    assert "FAIL" in capsys.readouterr().out
+    code = main(["validate", str(ROMEO), "--mimic", "--states", "2", "--quiet"])   # Pinocchio refuses the file
+    assert_refused(code, capsys.readouterr().err, "validate", "Pinocchio cannot build a reference model")
+    code = main(["inspect", str(PANDA), "--mimic", "--lock", "panda_joint1=0"])
+    assert_refused(code, capsys.readouterr().err, "inspect", "cannot yet be combined with mimic=True")
