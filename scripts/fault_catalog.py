@@ -51,6 +51,9 @@ _CLOSED_KERNELS = "tests/batch/test_kernels_vs_readable.py::test_closed_chain_ke
 _FLOAT = "tests/crosscheck/test_free_flyer_kinematics.py"
 _SPM = "tests/unit/test_spm_chapter.py"
 _DH = "tests/unit/test_dh.py"
+_QUIRKS = "tests/unit/test_quirks.py"
+_MIMIC = "tests/crosscheck/test_mimic.py"
+_URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -319,6 +322,52 @@ FAULTS = (
           "Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])",
           "Ri, pi = _fixed_placement(model, i, 0.0)",
           ("tests/crosscheck/test_reduce.py",), "a locked joint is frozen at 0 whatever value it was locked at"),
+    # ---------------------------------------------------------------- loader quirks, URDF+, mimic (io/urdf.py ...)
+    Fault("coupling-row-successor-sign", "constraints", "manipdyn/constraints/closures.py",
+          "Jrow[iv[B]] -= 1.0", "Jrow[iv[B]] += 1.0",
+          (_QUIRKS + "::test_coupling_rows_are_the_gear_equation",
+           _QUIRKS + "::test_coupling_dynamics_equal_pinocchios_mimic_model"),
+          "a coupling's Jacobian row adds the successor's joints instead of subtracting them (Φ keeps its sign)"),
+    Fault("coupling-row-ratio-dropped", "constraints", "manipdyn/constraints/closures.py",
+          "phi += ratio * q[iq[A]]", "phi += q[iq[A]]",
+          (_QUIRKS + "::test_coupling_rows_are_the_gear_equation",),
+          "a coupling's gap Φ forgets the ratio (its Jacobian row keeps it): projection and assembly go wrong"),
+    Fault("mimic-map-multiplier-dropped", "loader", "manipdyn/io/urdf.py",
+          "G[model.idx_v[i], k + shift_v] = mult", "G[model.idx_v[i], k + shift_v] = 1.0",
+          (_MIMIC, _QUIRKS + "::test_mimic_model_matches_pinocchio"),
+          "the mimic velocity map G ignores the multiplier (a mimic joint moves at its target's rate)"),
+    Fault("mimic-map-offset-dropped", "loader", "manipdyn/io/urdf.py",
+          "off[model.idx_q[i]] = c", "off[model.idx_q[i]] = 0.0",
+          (_MIMIC,), "the mimic map's q offset is dropped: q_mimic = multiplier · q_target"),
+    Fault("free-root-hang-threshold", "loader", "manipdyn/io/urdf.py",
+          "HANG = 0.6 ", "HANG = 0.8 ",
+          (_QUIRKS + "::test_free_root_flags_the_legged_robots_and_drones_not_the_arms",),
+          "a subtree must hang 0.8 (not 0.6) of the robot's extent below the root: short-legged robots pass as arms"),
+    Fault("free-root-mass-share", "loader", "manipdyn/io/urdf.py",
+          "if hanging == 1 and m_root >= 0.5 * m_all:", "if hanging == 1 and m_root >= 0.8 * m_all:",
+          (_QUIRKS + "::test_free_root_flags_the_legged_robots_and_drones_not_the_arms",),
+          "a heavy body with one hanging appendage needs 80 % (not 50 %) of the mass: flying arms pass as fixed"),
+    Fault("triangle-quirks-first-link-only", "loader", "manipdyn/io/urdf.py",
+          'quirks += [Quirk("triangle", name, msg) for name, msg in bad]',
+          'quirks += [Quirk("triangle", name, msg) for name, msg in bad[:1]]',
+          (_QUIRKS + "::test_triangle_names_every_link_and_non_psd_lists_all",),
+          "only the first link violating the triangle inequality is reported (Model.quirks, the warning)"),
+    Fault("non-psd-lists-first-only", "loader", "manipdyn/io/urdf.py",
+          'f"{what[i]}: eigenvalues {lam[i].tolist()}" for i in bad[:50]',
+          'f"{what[i]}: eigenvalues {lam[i].tolist()}" for i in bad[:1]',
+          (_QUIRKS + "::test_triangle_names_every_link_and_non_psd_lists_all",),
+          "the non-PSD refusal names only the first bad inertia instead of all"),
+    Fault("zero-mass-inertia-policy-inverted", "loader", "manipdyn/io/urdf.py",
+          'if m == 0.0 and zero_mass_inertia == "drop":', 'if m == 0.0 and zero_mass_inertia == "keep":',
+          (_QUIRKS + "::test_zero_mass_inertia_keep_is_pinocchios_model_and_drop_is_the_massless_link",),
+          "zero_mass_inertia 'keep' drops the rotational inertia of a massless link and 'drop' keeps it"),
+    Fault("urdfplus-loop-axis-not-rotated", "loader", "manipdyn/io/urdf.py",
+          "sides.append(_side(model, el, org, R @ axis, where, role, source))",
+          "sides.append(_side(model, el, org, axis, where, role, source))",
+          (_URDFPLUS,), "a URDF+ <loop>'s axis is read in the link frame, not turned by the side's <origin rpy>"),
+    Fault("urdfplus-loop-origin-dropped", "loader", "manipdyn/io/urdf.py",
+          'org = None if el is None else el.find("origin")', "org = None",
+          (_URDFPLUS,), "a URDF+ <loop>'s <predecessor>/<successor> <origin> is ignored (the closure at the link origin)"),
 )
 
 

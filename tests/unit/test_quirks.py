@@ -204,6 +204,20 @@ COUPLING = '<coupling name="gear" type="rolling"><predecessor link="link"/><succ
 MIMIC = '<mimic joint="j1" multiplier="6.0" offset="0"/>'
 
 
+def test_coupling_rows_are_the_gear_equation():
+    """Φ = ratio · Σ q (common ancestor -> predecessor) − Σ q (-> successor), Φ_q its coefficients, Φ̇_q q̇ = 0:
+    checked against the equation written out, for a one-joint and a two-joint predecessor path."""
+    two = COUPLING.replace('name="gear"', 'name="gear2"').replace('link="link"', 'link="tip"').replace("6.0", "-2.5")
+    model = load_urdf_string(ROTOR.replace("</robot>", COUPLING + two + "</robot>"))
+    assert model.joint_names == ("j1", "j2", "j1r") and [c.ratio for c in model.constraints] == [6.0, -2.5]
+    rng = np.random.default_rng(4)
+    Q, V = rng.uniform(-3, 3, (5, 3)), rng.normal(0, 2, (5, 3))
+    Phi, Jc, bias = closure_terms(model, Q, V)
+    want = np.stack([6.0 * Q[:, 0] - Q[:, 2], -2.5 * (Q[:, 0] + Q[:, 1]) - Q[:, 2]], axis=1)
+    assert error(Phi, want) < 1e-15                                  # exact up to one rounding
+    assert np.array_equal(Jc[0], [[6.0, 0.0, -1.0], [-2.5, -2.5, -1.0]]) and not np.any(bias)
+
+
 def test_coupling_dynamics_equal_pinocchios_mimic_model():
     """A gear (URDF+ <coupling>, ratio 6: q̇_rotor = 6 q̇_link) as a closure row, against Pinocchio's mimic joint
     (the same gear as rotor = 6 · link): q̈ of the independent joints."""
