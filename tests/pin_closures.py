@@ -10,6 +10,9 @@ with a, b the direction pairs written out again here from the row convention (cl
 revolute (n1, e_B), (n2, e_B) with n1 = e_A × (the unit axis least aligned with e_A), n2 = e_A × n1;
 fixed (y_A, z_B), (z_A, x_B), (x_A, y_B); spherical none. The closure data (bodies, points, axes, frames) are
 read from the Model; Pinocchio's joint k + 1 is our body k (checked by name).
+A coupling (gear; Pinocchio has no such constraint) is written from Pinocchio's tree instead: the joints from the
+two bodies' common ancestor (walked on ``pm.parents``) down to each body, Φ = ratio Σ q_A − Σ q_B, Φ_q its
+coefficients at Pinocchio's idx_v, Φ̇_q q̇ = 0 (constant coefficients).
 """
 import numpy as np
 
@@ -60,6 +63,12 @@ class PinClosures:
         P.updateFramePlacements(pm, pd)
         phi, jac, bias = [], [], []
         for c, (fa, fb) in self.sides:
+            if c.type == "coupling":
+                row = self._coupling(c, q)
+                phi.append(row @ self._angles(q))
+                jac.append(row)
+                bias.append(0.0)
+                continue
             (RA, pA), (RB, pB) = ((pd.oMf[f].rotation, pd.oMf[f].translation) for f in (fa, fb))
             JA, JB = (np.reshape(P.getFrameJacobian(pm, pd, f, P.LOCAL_WORLD_ALIGNED), (6, pm.nv)) for f in (fa, fb))
             dJA, dJB = (np.reshape(P.getFrameJacobianTimeVariation(pm, pd, f, P.LOCAL_WORLD_ALIGNED), (6, pm.nv))
@@ -77,3 +86,26 @@ class PinClosures:
                 bias.append(daxb @ (wA - wB) + axb @ ((dJA[3:] - dJB[3:]) @ v))
         nv = pm.nv
         return np.array(phi), np.array(jac).reshape(-1, nv), np.array(bias)
+
+    def _angles(self, q):
+        """One coordinate per velocity of 1-dof joints: q itself, or atan2(sin, cos) of a continuous joint."""
+        pm, out = self.pm, np.zeros(self.pm.nv)
+        for j in range(1, pm.njoints):
+            jm = pm.joints[j]
+            if jm.nv == 1:
+                out[jm.idx_v] = np.arctan2(q[jm.idx_q + 1], q[jm.idx_q]) if jm.nq == 2 else q[jm.idx_q]
+        return out
+
+    def _coupling(self, c, q):
+        """Φ_q of a coupling (nv,): +ratio on the joints down to the parent body, −1 down to the child body."""
+        pm, row = self.pm, np.zeros(self.pm.nv)
+        up = lambda j: [j] + up(pm.parents[j]) if j > 0 else []   # noqa: E731  joint ids up to the universe
+        a, b = up(c.parent + 1), up(c.child + 1)
+        common = set(a) & set(b)
+        for j in a:
+            if j not in common:
+                row[pm.joints[j].idx_v] += c.ratio
+        for j in b:
+            if j not in common:
+                row[pm.joints[j].idx_v] -= 1.0
+        return row
