@@ -3,6 +3,8 @@
 Public API (names follow Pinocchio's where the meaning is the same). Every dynamics function takes one
 state — q (nq,), q̇, q̈, τ (nv,) — or a batch (N, nq), (N, nv), and returns the matching shape; nq = nv but
 for a free-flyer root (``load_urdf(path, root_joint="free_flyer")``), whose q moves by ``integrate``.
+A tree with <mimic> joints honoured (``load_urdf(path, mimic=True)`` -> MimicModel) goes to rnea, mass_matrix,
+gravity_torques, aba and forward_dynamics in its independent coordinates (``manipdyn.dynamics.mimic``).
 Pinocchio is never imported here.
 """
 from __future__ import annotations
@@ -12,6 +14,7 @@ from .dynamics.aba import aba, forward_dynamics
 from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
+from .dynamics import mimic as _mimic  # noqa: F401  (registers the MimicModel versions of rnea, aba, ...)
 from .dynamics.rnea import rnea, rnea_terms
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
                      ManipdynError, ModelError, NumericalError, QuirkWarning, SingularError, URDFError)

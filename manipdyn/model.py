@@ -314,9 +314,30 @@ class MimicModel:
         return self.full.source
 
     def full_state(self, q, v=None, a=None):
-        """(q_full, v_full, a_full) of ``full`` from independent coordinates (None stays None)."""
-        from .dynamics.mimic import full_state
-        return full_state(self, q, v, a)
+        """(q_full, v_full, a_full) = (Gq q + q_offset, G v, G a) of ``full`` from independent coordinates, each
+        (n,) or (N, n); v, a None stay None. InputError names a wrong shape or a non-finite entry."""
+        q = self.check("q", q, self.nq)
+        out = [q @ self.Gq.T + self.q_offset]
+        for name, x in (("v", v), ("a", a)):
+            if x is not None and (np.ndim(x) != q.ndim or np.shape(x)[:-1] != q.shape[:-1]):
+                raise InputError(f"{name} has shape {np.shape(x)}; q has {q.shape}: one state or the same batch")
+            out.append(None if x is None else self.check(name, x, self.nv) @ self.G.T)
+        return tuple(out)
+
+    def check(self, name, x, n) -> np.ndarray:
+        """x as float (n,) or (N, n), finite; InputError naming ``name`` otherwise."""
+        if x is None:
+            raise InputError(f"{name} is None; expected an array of real numbers")
+        try:
+            x = np.asarray(x, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{name} must be real numbers, not {x!r}") from None
+        if x.ndim not in (1, 2) or x.shape[-1] != n:
+            raise InputError(f"{name} has shape {x.shape}; expected ({n},) or (N, {n}) for {self.name!r} "
+                             f"(independent coordinates: {', '.join(self.joint_names)})")
+        if not np.all(np.isfinite(x)):
+            raise InputError(f"{name} has non-finite entries")
+        return x
 
     def summary(self) -> str:
         full = self.full.summary().replace(") loaded as an independent joint", ") honoured: no coordinate of its own")

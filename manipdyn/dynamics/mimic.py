@@ -16,6 +16,7 @@ from ..errors import InputError, SingularError
 from ..model import MimicModel
 from .lagrange import mass_matrix as _mass_matrix
 from .rnea import rnea as _rnea
+from .state import MIMIC
 
 __all__ = ["full_state", "rnea", "crba", "mass_matrix", "gravity_torques", "aba", "forward_dynamics"]
 
@@ -23,29 +24,13 @@ __all__ = ["full_state", "rnea", "crba", "mass_matrix", "gravity_torques", "aba"
 def _check(mm, name, x, n):
     if not isinstance(mm, MimicModel):
         raise InputError(f"expected a MimicModel (load_urdf(..., mimic=True)), not {type(mm).__name__}")
-    if x is None:
-        raise InputError(f"{name} is None; expected an array of real numbers")
-    try:
-        x = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be real numbers, not {x!r}") from None
-    if x.ndim not in (1, 2) or x.shape[-1] != n:
-        raise InputError(f"{name} has shape {x.shape}; expected ({n},) or (N, {n}) for {mm.name!r} "
-                         f"(independent coordinates: {', '.join(mm.joint_names)})")
-    if not np.all(np.isfinite(x)):
-        raise InputError(f"{name} has non-finite entries")
-    return x
+    return mm.check(name, x, n)
 
 
 def full_state(mm, q, v=None, a=None):
-    """(q_full, v_full, a_full) of the full tree from independent coordinates (v, a None stay None)."""
-    q = _check(mm, "q", q, mm.nq)
-    out = [q @ mm.Gq.T + mm.q_offset]
-    for name, x in (("v", v), ("a", a)):
-        if x is not None and (np.ndim(x) != q.ndim or np.shape(x)[:-1] != q.shape[:-1]):
-            raise InputError(f"{name} has shape {np.shape(x)}; q has {q.shape}: one state or the same batch")
-        out.append(None if x is None else _check(mm, name, x, mm.nv) @ mm.G.T)
-    return tuple(out)
+    """(q_full, v_full, a_full) of the full tree from independent coordinates (MimicModel.full_state)."""
+    _check(mm, "q", q, mm.nq)
+    return mm.full_state(q, v, a)
 
 
 def rnea(mm, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -96,3 +81,7 @@ def forward_dynamics(mm, q, v, tau, *, f_ext=None, f_ext_frame="local", method="
     if not (isinstance(method, str) and method in ("aba", "cholesky")):
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
     return aba(mm, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+
+
+MIMIC.update(rnea=rnea, mass_matrix=mass_matrix, gravity_torques=gravity_torques, aba=aba,
+             forward_dynamics=forward_dynamics)   # the public functions send a MimicModel here (state.mimic_call)

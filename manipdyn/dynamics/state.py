@@ -34,11 +34,16 @@ def check_model(model):
         raise InputError(f"model must be a manipdyn Model (from load_urdf), not {type(model).__name__}")
 
 
+MIMIC = {}   # public function name -> its MimicModel version; dynamics/mimic.py fills it when imported
+
+
 def mimic_call(name, model, *args, **kw):
     """A MimicModel given to the public function ``name`` goes to dynamics/mimic.py's ``name``: the one place the
-    mimic map (q_full = Gq q + offset, τ = Gᵀ τ_full, M = Gᵀ M_full G) is applied."""
-    from . import mimic
-    return getattr(mimic, name)(model, *args, **kw)
+    mimic map (q_full = Gq q + offset, τ = Gᵀ τ_full, M = Gᵀ M_full G) is applied. (mimic.py registers its
+    functions in MIMIC: it imports the public functions, so they cannot import it.)"""
+    if name not in MIMIC:
+        raise InputError(f"{name} does not take a MimicModel yet (import manipdyn.dynamics.mimic first)")
+    return MIMIC[name](model, *args, **kw)
 
 
 def as_real(name, x):
