@@ -183,7 +183,7 @@ def _inspect(args) -> int:
 
 def inspect_dict(model, warnings_seen=()) -> dict:
     """What ``inspect --json`` writes: sizes, joints in q order, closures, mimic map, quirks, notes, summary."""
-    from .model import MimicModel
+    from .model import QUIRK_KINDS, MimicModel
     full = model.full if isinstance(model, MimicModel) else model
     out = dict(name=full.name, source=str(full.source), root_link=full.root_link, nq=model.nq, nv=model.nv,
                floating=full.floating, joints=list(model.joint_names), v_names=list(full.v_names),
@@ -193,7 +193,9 @@ def inspect_dict(model, warnings_seen=()) -> dict:
                             for c in full.constraints],
                mimic=[dict(joint=j, target=t, multiplier=m, offset=o) for j, t, m, o in full.mimic],
                mimic_honoured=isinstance(model, MimicModel),
-               quirks=[q.as_dict() for q in model.quirks], notes=list(full.notes), warnings=list(warnings_seen),
+               quirks=[q.as_dict() for q in model.quirks],
+               quirk_kinds={k: QUIRK_KINDS[k] for k in dict.fromkeys(q.kind for q in model.quirks)},
+               notes=list(full.notes), warnings=list(warnings_seen),
                summary=model.summary())
     if isinstance(model, MimicModel):
         out["full_joints"] = list(full.joint_names)

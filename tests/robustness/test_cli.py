@@ -275,6 +275,7 @@ def test_inspect_json_carries_the_quirks_and_the_summary():
         warnings.simplefilter("ignore")
         mm = load_urdf(PANDA, mimic=True)
     assert d["quirks"] == [q.as_dict() for q in mm.quirks] and d["quirks"][0]["kind"] == "mimic"
+    assert list(d["quirk_kinds"]) == ["mimic"] and "<mimic>" in d["quirk_kinds"]["mimic"]
     assert d["summary"] == mm.summary() and d["nq"] == d["nv"] == 8 and d["mimic_honoured"]
     assert d["mimic"] == [dict(joint="panda_finger_joint2", target="panda_finger_joint1", multiplier=1.0, offset=0.0)]
     assert len(d["full_joints"]) == 9 and d["warnings"]
