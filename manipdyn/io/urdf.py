@@ -81,15 +81,13 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     free body, as Pinocchio's ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``; see the module
     docstring); gravity (3,) in the base frame; strict=True refuses inertias that violate the triangle
     inequality instead of warning; locked / root / tips / prune as in ``manipdyn.reduce`` (model only what
-    the scene needs); max_bytes: larger files are refused unread.
+    the scene needs; with root_joint="free_flyer", locked={"root_joint": pose (7,)} fixes the root link at
+    that pose, and ``root`` fixes it at the neutral pose); max_bytes: larger files are refused unread.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
     for a root_joint other than None or "free_flyer".
     """
     path = os.fspath(path)
     _check_root_joint(root_joint, path)
-    if root_joint is not None and (locked or root or tips or prune):   # reduce() takes 1-dof joints only
-        raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with root_joint="
-                         f"{root_joint!r} (reducing a floating-base model is not supported)")
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:
