@@ -35,6 +35,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import logging
 import math
 import re
 import tempfile
@@ -313,6 +314,10 @@ class DrakeAdapter(Adapter):
         from pydrake.multibody.tree import MultibodyForces
         self.Forces = MultibodyForces
         plant = MultibodyPlant(0.0)
+        heard = _Heard()                         # Drake's parser warns through Python logging ("drake")
+        log, propagate = logging.getLogger("drake"), logging.getLogger("drake").propagate
+        log.addHandler(heard)
+        log.propagate = False                    # kept in the notes instead of printed
         try:
             Parser(plant).AddModelsFromString(stripped_urdf(path), "urdf")
             if model.root_link != "world":
@@ -320,6 +325,10 @@ class DrakeAdapter(Adapter):
             plant.Finalize()
         except Exception as exc:
             raise EngineRefused(f"drake: {_one_line(exc)}") from exc
+        finally:
+            log.removeHandler(heard)
+            log.propagate = propagate
+        self.notes += [f"drake warned: {_one_line(w, 600)}" for w in heard.messages[:5]]
         self.plant, self.ctx = plant, plant.CreateDefaultContext()
         plant.mutable_gravity_field().set_gravity_vector(model.gravity)
         names, starts = [], []
@@ -401,6 +410,17 @@ def _import(module):
         raise EngineMissing(f"{module} is not installed") from exc
 
 
+class _Heard(logging.Handler):
+    """Keeps the warnings an engine logs while it parses."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
 def _quat_matrix(qwxyz):
     w, x, y, z = (float(t) for t in qwxyz)
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
@@ -408,8 +428,8 @@ def _quat_matrix(qwxyz):
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-def _one_line(exc) -> str:
-    return " | ".join(s.strip() for s in str(exc).splitlines() if s.strip())[:300] or type(exc).__name__
+def _one_line(exc, limit=300) -> str:
+    return " | ".join(s.strip() for s in str(exc).splitlines() if s.strip())[:limit] or type(exc).__name__
 
 
 
