@@ -207,10 +207,9 @@ class MujocoAdapter(Adapter):
         names = [m.joint(j).name for j in range(m.njnt) if m.jnt_type[j] in (2, 3)]   # hinge, slide
         if any(m.jnt_type[j] not in (2, 3) for j in range(m.njnt)):
             raise EngineRefused("mujoco: the model has ball or free joints")
-        self.iq = np.array([m.jnt_qposadr[m.joint(n).id] for n in model.joint_names]) if \
-            set(model.joint_names) <= set(names) else self._perm(names, "joint names")
-        self.iv = np.array([m.jnt_dofadr[m.joint(n).id] for n in model.joint_names])
-        self._perm(names, "joint names")
+        self._perm(names, "joint names")          # refuses unless the moving joints are ours
+        self.iq = np.array([m.jnt_qposadr[m.joint(n).id] for n in model.joint_names], int)
+        self.iv = np.array([m.jnt_dofadr[m.joint(n).id] for n in model.joint_names], int)
         self.armature, self.damping = m.dof_armature[self.iv].copy(), m.dof_damping[self.iv].copy()
         for b in range(1, m.nbody):
             R = _quat_matrix(m.body_iquat[b])
@@ -441,6 +440,13 @@ def _differs(x, y, floor=1e-12) -> bool:
     return bool(np.max(np.abs(x - y)) > 1e-9 * max(np.max(np.abs(x)), np.max(np.abs(y))) + floor)
 
 
+def _same_moments(I, J) -> bool:
+    """Same principal moments to 1e-9 (relative to the largest) and close axes (matrices within 1e-5)."""
+    scale = max(np.max(np.abs(J)), 1e-300)
+    return bool(np.max(np.abs(np.linalg.eigvalsh(I) - np.linalg.eigvalsh(J))) <= 1e-9 * scale
+                and np.max(np.abs(I - J)) <= 1e-5 * scale)
+
+
 def _triangle_broken(I) -> bool:
     lam = np.linalg.eigvalsh(I)
     return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))
@@ -522,6 +528,23 @@ def precision_causes(model, adapter, inertials, floor=1e-13, k=3) -> list:
                  f"(principal axes), not a modelling difference") for rel, n in sorted(worst, reverse=True)[:k]]
 
 
+def refusal_causes(reason, inertials) -> list:
+    """The links an engine's refusal names (quoted in its message), with what is unusual in their <inertial>."""
+    out = []
+    for name in dict.fromkeys(re.findall(r"'([^']+)'", reason)):
+        f = inertials.get(name)
+        if f is None:
+            continue
+        quirks = _file_quirks(f, name)
+        lam = np.linalg.eigvalsh(f.inertia)
+        if f.present and lam[0] <= 0:
+            quirks.append(f"link {name!r}'s inertia has a principal moment ≤ 0 (eigenvalues {lam.tolist()})")
+        if f.present and f.mass == 0 and not np.any(f.inertia):
+            quirks.append(f"link {name!r} has zero mass and zero inertia")
+        out += [dict(link=name, kind="refused", text=q) for q in quirks]
+    return out
+
+
 def _file_quirks(f, name) -> list:
     """What is unusual in a link's <inertial> (short phrases)."""
     out = []
@@ -556,11 +579,12 @@ def _link_causes(e, name, f, m, c, I) -> list:
     elif dI and f.rotated and not _differs(I, f.raw, 1e-15):
         out.append(dict(link=name, kind="rotated inertial frame", text=f"link {name!r}'s inertial frame is "
                         f"rotated: {e} ignores the rotation (holds the inertia as written, unrotated)"))
-    elif dI and not (dm or dc) and np.max(np.abs(I - f.inertia)) < 1e-6 * np.max(np.abs(f.inertia)):
+    elif dI and not (dm or dc) and _same_moments(I, f.inertia):
         rel = np.max(np.abs(I - f.inertia)) / np.max(np.abs(f.inertia))
         out.append(dict(link=name, kind="precision", text=f"link {name!r}: {e} holds the inertia to {rel:.1e} "
-                        f"(relative) of the file's: round-off of its principal-axes re-expression (an iterative "
-                        f"diagonalisation), not a modelling difference"))
+                        f"(relative) of the file's, its principal moments to round-off: the principal axes of "
+                        f"its re-expression (an iterative diagonalisation that stops at a tolerance) are off, "
+                        f"not a modelling difference"))
     else:
         what = [w for w, d in (("mass", dm), ("CoM", dc), ("inertia", dI)) if d]
         out.append(dict(link=name, kind=" and ".join(what), text=f"link {name!r}: {e}'s {' and '.join(what)} "
@@ -656,7 +680,7 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
             rep.engines.append(EngineResult(name, "missing", str(exc)))
             continue
         except EngineRefused as exc:
-            rep.engines.append(EngineResult(name, "refused", str(exc)))
+            rep.engines.append(EngineResult(name, "refused", str(exc), causes=refusal_causes(str(exc), inertials)))
             continue
         res = EngineResult(name, "ok", precision=ad.precision)
         with _quiet():

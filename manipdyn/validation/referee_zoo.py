@@ -78,16 +78,16 @@ def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None) -> list[di
                 model = load_urdf(path)
             row["nv"] = model.nv
         except ManipdynError as exc:
-            row["manipdyn"] = _one_line(exc)
+            row["manipdyn"] = _one_line(exc, 600).replace(f"{root}/", "")
             for e in engines:
                 ok = engine_loads(e, path)
                 row["engines"][e] = {"status": "missing" if ok is None else "loaded only" if ok[0] else "refused",
-                                     "reason": "" if ok is None or ok[0] else ok[1]}
+                                     "reason": "" if ok is None or ok[0] else ok[1].replace(f"{root}/", "")}
             rows.append(row)
             continue
         rep = referee(model, path, engines, n_states=n_states, seed=seed)
         for r in rep.engines:
-            row["engines"][r.engine] = {"status": r.status, "reason": r.reason, "err": r.err,
+            row["engines"][r.engine] = {"status": r.status, "reason": r.reason.replace(f"{root}/", ""), "err": r.err,
                                         "neutral": r.neutral, "worst": r.worst, "worst_neutral": r.worst_neutral,
                                         "causes": r.causes, "notes": r.notes, "explained": r.explained}
         row["notes"] = rep.notes
@@ -109,19 +109,21 @@ def markdown(rows, engines, n_states, seed) -> str:
            "(inverse dynamics), M and q̈ (forward dynamics, err/cond(M)), worst over the states; 'neutralised': "
            "the same after rebuilding manipdyn's model with the engine's own read-back masses, CoMs, inertias, "
            "armature and damping. A disagreement above 1e-9 must carry a named cause.", "", "## Summary", "",
-           "| engine | loaded | refused | worst error | worst neutralised | files > 1e-9 | all explained |",
-           "|---|---|---|---|---|---|---|"]
+           "| engine | loaded | refused | worst τ | worst M | worst q̈/κ | worst neutralised (τ, M, q̈/κ) "
+           "| files > 1e-9 | all explained |",
+           "|---|---|---|---|---|---|---|---|---|"]
     loaded_by_us = [r for r in rows if r["manipdyn"] == "loaded"]
     for e in engines:
         res = [r["engines"].get(e, {}) for r in rows]
         ok = [x for x in res if x.get("status") == "ok"]
         refused = [x for x in res if x.get("status") == "refused"]
-        worst = max((x["worst"] for x in ok if x.get("worst") is not None), default=None)
+        w = {k: max((x["err"][k] for x in ok if x["err"].get(k) is not None), default=None)
+             for k in ("tau", "M", "qdd")}
         wn = max((x["worst_neutral"] for x in ok if x.get("worst_neutral") is not None), default=None)
         above = sum(1 for x in ok if (x.get("worst") or 0) > 1e-9)
         expl = all(x.get("explained") for x in ok)
         out.append(f"| {e} | {len(ok) + sum(1 for x in res if x.get('status') == 'loaded only')} | {len(refused)} "
-                   f"| {_e(worst)} | {_e(wn)} | {above} | {'yes' if expl else 'NO'} |")
+                   f"| {_e(w['tau'])} | {_e(w['M'])} | {_e(w['qdd'])} | {_e(wn)} | {above} | {'yes' if expl else 'NO'} |")
     out += ["", f"manipdyn loads {len(loaded_by_us)} of {len(rows)} files."]
     refused_us = [r for r in rows if r["manipdyn"] != "loaded"]
     for r in refused_us:
@@ -155,7 +157,9 @@ def markdown(rows, engines, n_states, seed) -> str:
     for r in rows:
         for e, x in r["engines"].items():
             if x.get("status") == "refused":
-                refusals.setdefault(e, []).append(f"`{Path(r['file']).name}`: {x['reason'][:200]}")
+                why = "; ".join(c["text"] for c in x.get("causes", [])[:2])
+                refusals.setdefault(e, []).append(f"`{Path(r['file']).name}`: {x['reason'][:200]}"
+                                                  + (f" — the file: {why}" if why else ""))
     if refusals:
         out += ["", "## Refusals", ""]
         for e, items in refusals.items():
