@@ -163,9 +163,7 @@ class PinocchioAdapter(Adapter):
         from .reference import Reference
         try:
             self.ref = Reference(model, path)
-        except ManipdynError:
-            raise
-        except Exception as exc:                 # Pinocchio's parser raises bare errors
+        except Exception as exc:                 # bare parser errors, or a joint order unlike ours
             raise EngineRefused(f"pinocchio: {_one_line(exc)}") from exc
         pm = self.ref.pm
         self.armature = np.asarray(pm.armature, float).copy()
@@ -178,7 +176,9 @@ class PinocchioAdapter(Adapter):
         return P.rnea(self.ref.pm, self.ref.pd, self.ref.to_pin_q(q), v, a).copy()
 
     def mass(self, q):
-        return self.ref.dynamics(q, np.zeros(self.model.nv), np.zeros(self.model.nv))["M"]
+        P = _import("pinocchio")
+        M = P.crba(self.ref.pm, self.ref.pd, self.ref.to_pin_q(q)).copy()
+        return np.triu(M) + np.triu(M, 1).T      # crba fills the upper triangle (whatever the binding does)
 
     def qdd(self, q, v, tau):
         P = _import("pinocchio")

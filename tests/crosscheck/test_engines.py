@@ -136,15 +136,20 @@ def test_triangle_violation_pinocchio_keeps_it():
 
 
 @pytest.mark.parametrize("engine", E.ENGINES)
-def test_rotated_inertial_frame_every_engine_rotates_it(engine):
+@pytest.mark.parametrize("quirk, link", [("rotated_inertial", "link1"), ("fixed_child", "tool")])
+def test_rotated_inertial_frame_every_engine_rotates_it(engine, quirk, link):
+    # fixed_child: a massive tool on a rotated fixed joint with a rotated inertial frame, which we merge into
+    # link2's body and the engines keep as a link of its own (MuJoCo with fusestatic off)
     need(engine)
-    _, ad = adapter(QUIRKS / "rotated_inertial.urdf", engine)
-    _, res = run(QUIRKS / "rotated_inertial.urdf", engine)
+    path = QUIRKS / f"{quirk}.urdf"
+    _, ad = adapter(path, engine)
+    _, res = run(path, engine)
     assert [c for c in res.causes if c["kind"] != "precision"] == []
     assert res.worst <= (RAW_PB if engine == "pybullet" else RAW)     # measured 2.1e-14 / 2.5e-15
+    assert res.worst_neutral <= NEUTRAL                                # measured 2.4e-15
     if engine != "pinocchio":            # the link's inertia in its frame is the file's R I Rᵀ, not the raw I
-        f = E.urdf_inertials(QUIRKS / "rotated_inertial.urdf")["link1"]
-        assert np.max(np.abs(ad.links["link1"][2] - f.inertia)) < 1e-10 < np.max(np.abs(f.raw - f.inertia))
+        f = E.urdf_inertials(path)[link]
+        assert np.max(np.abs(ad.links[link][2] - f.inertia)) < 1e-10 < np.max(np.abs(f.raw - f.inertia))
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "drake"])
@@ -163,6 +168,26 @@ def test_damping_is_not_in_pybullets_queries():
     _, res = run(QUIRKS / "damping.urdf", "pybullet")
     assert res.causes == [] and res.worst <= RAW_PB           # measured 1.8e-14
     assert any("acts only when stepping" in n for n in res.notes)
+
+
+def test_armature_drake_reflected_rotor_inertia():
+    # <drake:rotor_inertia> 0.002 with <drake:gear_ratio> 10 on j1's transmission: Drake adds ρ = I_r n² = 0.2
+    # to M's diagonal; the other engines ignore the drake: tags (no engine adds armature by default)
+    need("drake")
+    path = QUIRKS / "armature.urdf"
+    _, ad = adapter(path, "drake")
+    assert np.allclose(ad.armature, [0.2, 0.0], rtol=0, atol=1e-15)
+    _, res = run(path, "drake")
+    assert res.err["M"] > 0.1                     # measured 0.2: the armature itself
+    assert [(c["kind"], c["link"]) for c in res.causes] == [("armature", "j1")]
+    assert res.explained and res.worst_neutral <= NEUTRAL     # measured 4.7e-16
+
+
+@pytest.mark.parametrize("engine", ["pinocchio", "mujoco", "pybullet"])
+def test_armature_tags_of_drake_ignored_by_the_others(engine):
+    need(engine)
+    _, res = run(QUIRKS / "armature.urdf", engine)
+    assert res.causes == [] and res.worst <= (RAW_PB if engine == "pybullet" else RAW)   # measured ≤ 1.8e-14
 
 
 def test_pybullet_precision_named_on_products_of_inertia():
