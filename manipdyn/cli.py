@@ -83,6 +83,8 @@ def _referee(args) -> int:
     if args.root_joint or args.reference or args.lock or args.root or args.tips or args.prune:
         raise InputError("--against compares the file as written, fixed base: --root-joint, --reference and "
                          "the reduction options do not apply")
+    if args.markdown and not args.zoo:
+        raise InputError("--markdown writes the --zoo --against summary: add --zoo")
     if args.zoo:
         if args.urdf:
             raise InputError("--zoo --against runs over every example-robot-data URDF: give no URDF files")

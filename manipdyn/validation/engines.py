@@ -669,6 +669,9 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
     if model.nv == 0:
         rep.notes.append("no moving joint: nothing to compare")
         return rep
+    if model.constraints:
+        rep.notes.append(f"{len(model.constraints)} loop closure(s) (<constraint>) not compared: the engines "
+                         "load the open tree, and so do the terms here")
     if ours["qdd"] is None:
         rep.notes.append(f"manipdyn forward dynamics: {ours['why']} (q̈ not compared)")
     for name in engines:
