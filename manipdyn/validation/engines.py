@@ -32,6 +32,7 @@ Engines are imported here only, lazily, inside the adapters: ``import manipdyn``
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib
 import importlib.util
@@ -145,6 +146,10 @@ class Adapter:
         self.damping = np.zeros(model.nv)        # viscous: the engine's τ includes + d q̇
         self.damping_in_id = True                # whether ID (as well as FD) includes the damping
 
+    def session(self):
+        """A context for a run of queries (MuJoCo: its warnings collected into the notes)."""
+        return contextlib.nullcontext()
+
     def _perm(self, names, where):
         """Index in the engine's dof vector of each of our joints (by name)."""
         pos = {n: i for i, n in enumerate(names)}
@@ -197,10 +202,15 @@ class MujocoAdapter(Adapter):
             self.notes.append("the file carries its own <mujoco> element: removed, ours used")
             text = re.sub(r"<mujoco\b.*?</mujoco\s*>", "", text, flags=re.S)
         text = re.sub(r"</robot\s*>\s*$", MUJOCO_COMPILER + "</robot>", text.rstrip())
+        heard, before = [], mj.get_mju_user_warning()
+        mj.set_mju_user_warning(heard.append)    # else MuJoCo appends its warnings to ./MUJOCO_LOG.TXT
         try:
             m = mj.MjModel.from_xml_string(text)
         except Exception as exc:
             raise EngineRefused(f"mujoco: {_one_line(exc)}") from exc
+        finally:
+            mj.set_mju_user_warning(before)
+        self.notes += [f"mujoco warned: {_one_line(w)}" for w in list(dict.fromkeys(heard))[:5]]
         self.m, self.d = m, mj.MjData(m)
         m.opt.disableflags |= int(mj.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mj.mjtDisableBit.mjDSBL_CONTACT)
         m.opt.gravity[:] = model.gravity
@@ -215,6 +225,16 @@ class MujocoAdapter(Adapter):
             R = _quat_matrix(m.body_iquat[b])
             self.links[m.body(b).name] = (float(m.body_mass[b]), m.body_ipos[b].copy(),
                                           R @ np.diag(m.body_inertia[b]) @ R.T)
+
+    @contextlib.contextmanager
+    def session(self):
+        heard, before = [], self.mj.get_mju_user_warning()
+        self.mj.set_mju_user_warning(heard.append)          # not ./MUJOCO_LOG.TXT
+        try:
+            yield
+        finally:
+            self.mj.set_mju_user_warning(before)
+            self.notes += [f"mujoco warned: {_one_line(w)}" for w in list(dict.fromkeys(heard))[:5]]
 
     def _set(self, q, v):
         self.d.qpos[self.iq], self.d.qvel[self.iv] = q, v
@@ -722,6 +742,11 @@ def _our_terms(model, Q, V, A, T, arm, damp, damp_in_id=True):
 
 
 def _engine_terms(ad, Q, V, A, T):
+    with ad.session():
+        return _engine_queries(ad, Q, V, A, T)
+
+
+def _engine_queries(ad, Q, V, A, T):
     out = dict(tau=np.array([ad.tau(q, v, a) for q, v, a in zip(Q, V, A)]),
                M=np.array([ad.mass(q) for q in Q]), qdd=None, why="")
     try:

@@ -45,7 +45,12 @@ def _load_only(name, path):
         import mujoco
         from .engines import MUJOCO_COMPILER
         text = re.sub(r"<mujoco\b.*?</mujoco\s*>", "", text, flags=re.S)
-        mujoco.MjModel.from_xml_string(re.sub(r"</robot\s*>\s*$", MUJOCO_COMPILER + "</robot>", text.rstrip()))
+        before = mujoco.get_mju_user_warning()
+        mujoco.set_mju_user_warning(lambda msg: None)      # no ./MUJOCO_LOG.TXT
+        try:
+            mujoco.MjModel.from_xml_string(re.sub(r"</robot\s*>\s*$", MUJOCO_COMPILER + "</robot>", text.rstrip()))
+        finally:
+            mujoco.set_mju_user_warning(before)
     elif name == "pybullet":
         import pybullet as p
         cid = p.connect(p.DIRECT)
