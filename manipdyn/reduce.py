@@ -131,9 +131,12 @@ def _move_frame(f, new_of, base):
 
 
 def _move_constraint(c, new_of, base):
+    if c.type == "coupling":           # its row sums joint coordinates along a path that locking changes
+        raise ModelError(f"closure {c.name!r} (a coupling between joint coordinates) cannot yet be kept by "
+                         f"reduce(): locking joints changes the coordinates it relates")
     (a, Ra, pa), (b, Rb, pb) = new_of.get(c.parent, base), new_of.get(c.child, base)
     if a == b:
         raise ModelError(f"closure {c.name!r} cannot be kept: locking makes {c.parent_link!r} and "
                          f"{c.child_link!r} one rigid body (unlock a joint of the loop or drop the closure)")
     return Constraint(c.name, c.type, a, c.parent_link, Ra @ c.Rp, pa + Ra @ c.pp, Ra @ c.axis_p,
-                      b, c.child_link, Rb @ c.Rc, pb + Rb @ c.pc, Rb @ c.axis_c)
+                      b, c.child_link, Rb @ c.Rc, pb + Rb @ c.pc, Rb @ c.axis_c, source=c.source)

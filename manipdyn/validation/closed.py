@@ -13,7 +13,7 @@ import numpy as np
 
 from ..constraints import closure_terms, constrained_forward_dynamics, project, rank_report
 from ..dynamics.lagrange import mass_matrix
-from ..errors import ConstraintError
+from ..errors import ConstraintError, ModelError
 from .measure import error
 from .reference import pin
 
@@ -29,6 +29,9 @@ class ClosedReference:
         self.ref, self.models, self.datas = ref, P.StdVec_RigidConstraintModel(), P.StdVec_RigidConstraintData()
         self.points = []          # (body_a, point_a, body_b, point_b) of each 3-D point, our frames
         for c in ref.model.constraints:
+            if c.type == "coupling":
+                raise ModelError(f"closure {c.name!r}: Pinocchio has no coupling (gear) constraint model; a "
+                                 f"coupling is checked against Pinocchio's mimic joints instead")
             if c.type == "fixed":
                 self._add(P.ContactType.CONTACT_6D, c.parent, P.SE3(c.Rp, c.pp), c.child, P.SE3(c.Rc, c.pc))
                 continue
@@ -108,7 +111,7 @@ def _point_rows(model, phi):
     """The position rows (p_A − p_B at each closure origin) of Φ, in closure order: (k, 3)."""
     rows, k = [], 0
     for c in model.constraints:
-        if c.type != "fixed":
+        if c.type not in ("fixed", "coupling"):
             rows.append(phi[k:k + 3])
         k += c.n_rows
     return np.array(rows).reshape(-1, 3)

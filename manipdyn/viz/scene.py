@@ -272,7 +272,7 @@ def _closure_gaps(model, Q):
     Phi = closure_terms(model, Q)[0]
     out, k = [], 0
     for c in model.constraints:
-        out.append(np.linalg.norm(Phi[:, k:k + 3], axis=1))
+        out.append(np.abs(Phi[:, k]) if c.type == "coupling" else np.linalg.norm(Phi[:, k:k + 3], axis=1))
         k += c.n_rows
     return out
 
