@@ -43,10 +43,16 @@ def bundled_models() -> list[Path]:
 
 
 def _validate(args) -> int:
+    if args.against is not None:
+        return _referee(args)
+    if args.markdown:
+        raise InputError("--markdown needs --against (the engines referee)")
     from tqdm import tqdm
 
     from .validation import format_report, validate
 
+    if args.states is None:
+        args.states = 1000
     runs = _validation_runs(args)     # every model and reference loads before the first state runs
     print(f"manipdyn validate: {len(runs)} model(s), {args.states} random states each, seed {args.seed}, "
           f"tolerance {args.tol:g} (err = max|x - y| / max(max|y|, 1))")
@@ -66,6 +72,62 @@ def _validate(args) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1))
     return 1 if failed else 0
+
+
+def _referee(args) -> int:
+    """validate --against ENGINES: τ, M, q̈ of each engine against manipdyn, disagreements explained."""
+    from .validation.engines import format_referee, parse_engines, referee
+
+    engines = parse_engines(args.against)
+    states = args.states if args.states is not None else 100
+    if args.root_joint or args.reference or args.lock or args.root or args.tips or args.prune:
+        raise InputError("--against compares the file as written, fixed base: --root-joint, --reference and "
+                         "the reduction options do not apply")
+    if args.markdown and not args.zoo:
+        raise InputError("--markdown writes the --zoo --against summary: add --zoo")
+    if args.zoo:
+        if args.urdf:
+            raise InputError("--zoo --against runs over every example-robot-data URDF: give no URDF files")
+        return _referee_zoo(args, engines, states)
+    from .io.urdf import load_urdf
+    reports = []
+    for path in [Path(p) for p in args.urdf] or bundled_models():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = load_urdf(path)
+        rep = referee(model, path, engines, n_states=states, seed=args.seed)
+        reports.append(rep)
+        print(format_referee(rep))
+    if args.json:
+        Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1, default=_jsonable))
+    return 0 if all(r.explained for r in reports) else 1
+
+
+def _referee_zoo(args, engines, states) -> int:
+    """validate --zoo --against: the sweep over example-robot-data, its summary (and --markdown)."""
+    from .validation.referee_zoo import markdown, sweep
+
+    def show(row):
+        cells = ", ".join(f"{e} {x.get('status')}" + (f" {x['worst']:.1e}->{x['worst_neutral']:.1e}"
+                                                      if x.get("worst") is not None and x.get("worst_neutral")
+                                                      is not None else "")
+                          for e, x in row["engines"].items())
+        print(f"{row['file']}: manipdyn {'loaded' if row['manipdyn'] == 'loaded' else 'refused'}; {cells}",
+              flush=True)
+    rows = sweep(engines, n_states=states, seed=args.seed, progress=show)
+    md = markdown(rows, engines, states, args.seed)
+    print(md.split("## Causes named")[0])
+    if args.markdown:
+        Path(args.markdown).write_text(md, encoding="utf-8")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1, default=_jsonable))
+    ok = all(x.get("explained", True) for r in rows for x in r["engines"].values())
+    return 0 if ok else 1
+
+
+def _jsonable(x):
+    """numpy scalars in JSON."""
+    return float(x) if hasattr(x, "__float__") else str(x)
 
 
 def _validate_paths(args) -> list[tuple]:
@@ -226,13 +288,19 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--zoo", action="store_true",
                    help="also validate example-robot-data's arms (fixed base) and its legged robots, humanoids "
                         "and drones (free-flyer root, whatever --root-joint says)")
-    v.add_argument("--states", type=_int_in(1, MAX_STATES), default=1000,
-                   help=f"random states per model, 1..{MAX_STATES} (default 1000)")
+    v.add_argument("--states", type=_int_in(1, MAX_STATES), default=None,
+                   help=f"random states per model, 1..{MAX_STATES} (default 1000; 100 with --against)")
     v.add_argument("--seed", type=_int_in(0, MAX_SEED), default=0, help=f"0..{MAX_SEED} (default 0)")
     v.add_argument("--tol", type=_positive_finite, default=1e-12,
                    help="largest error measure that passes, finite and > 0 (default 1e-12)")
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
+    v.add_argument("--against", metavar="ENGINES",
+                   help="compare τ (inverse dynamics), M and q̈ (forward dynamics) with other engines instead, "
+                        "comma-separated: pinocchio,mujoco,pybullet,drake (pip install manipdyn[engines]); a "
+                        "missing engine is skipped with a note; each disagreement above 1e-9 is explained by "
+                        "the engine's read-back link parameters and checked again with them (exit 1 if not)")
+    v.add_argument("--markdown", help="with --zoo --against: write the summary as markdown to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
     add_root_joint_option(v)
     add_reduction_options(v)
@@ -356,7 +424,7 @@ def _preflight(args):
         _check_input_file(path, "URDF")
     if getattr(args, "reference", None):
         _check_input_file(args.reference, "--reference URDF")
-    for option in ("json", "html"):
+    for option in ("json", "html", "markdown"):
         if getattr(args, option, None):
             _check_output_file(getattr(args, option), f"--{option}")
     if getattr(args, "out", None) is not None:

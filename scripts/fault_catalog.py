@@ -38,6 +38,7 @@ AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "inte
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
+_ENGINES = "tests/crosscheck/test_engines.py"
 _ABA = "tests/crosscheck/test_aba.py"
 _CRBA = "tests/crosscheck/test_crba.py"
 _FLOATBASE = "tests/crosscheck/test_floating_base.py"
@@ -300,6 +301,23 @@ FAULTS = (
           'theirs.update(M_crba=theirs["M"], M_lagrange=ours["M_crba"][s],',
           ("tests/crosscheck/test_planted_fault.py",),
           "validate compares the Lagrange-route M with our own CRBA instead of Pinocchio's"),
+    # ---------------------------------------------------------------- other engines (validation/engines.py)
+    Fault("engines-link-inertia-not-rotated-into-body", "validation", "manipdyn/validation/engines.py",
+          "parts[fr.body].append((m, fr.p + fr.R @ c, fr.R @ I @ fr.R.T))",
+          "parts[fr.body].append((m, fr.p + fr.R @ c, I))",
+          (_ENGINES,), "an engine's link inertia merged into our body without the fixed joint's rotation"),
+    Fault("engines-mujoco-iquat-conjugated", "validation", "manipdyn/validation/engines.py",
+          "w, x, y, z = (float(t) for t in qwxyz)", "w, x, y, z = (-float(t) if i == 0 else float(t) "
+          "for i, t in enumerate(qwxyz))",
+          (_ENGINES,), "MuJoCo's body_iquat read as its inverse: principal axes of every read-back inertia turned"),
+    Fault("engines-damping-sign", "validation", "manipdyn/validation/engines.py",
+          "tau = rnea(model, Q, V, A) + arm * A + (damp * V if damp_in_id else 0.0)",
+          "tau = rnea(model, Q, V, A) + arm * A - (damp * V if damp_in_id else 0.0)",
+          (_ENGINES,), "neutralised τ with the engine's joint damping subtracted instead of added"),
+    Fault("engines-triangle-test-inverted", "validation", "manipdyn/validation/engines.py",
+          "return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
+          "return bool(lam[0] + lam[1] > lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
+          (_ENGINES,), "the referee's triangle-inequality test inverted: the cause is misnamed"),
     # ---------------------------------------------------------------- floating base (joints.py, configuration.py)
     Fault("ff-log6-coefficient-cancels", "integrators", "manipdyn/joints.py",
           "return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2",
