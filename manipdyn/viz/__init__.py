@@ -195,8 +195,9 @@ def demo_motion(model, urdf_path) -> dict:
     The AAU arm follows the chapter's path over t ∈ [0, 2π] s with the torques of the 5 kg payload (Figs.
     3–4); the SPM runs the Fig. 7 scenario over its singularity-free span (validation/fig7.SPAN) at 240
     fps with the actuator torques of the generic route (external moment included) and the time at which
-    a leg becomes singular marked; any other model swings every joint smoothly (at most ±0.8 rad around
-    the middle of its range) for 4 s, except that a closed chain's actuated joints free to turn a full turn
+    a leg becomes singular marked; any other model swings every joint smoothly for 4 s (a serial arm ±0.5 rad
+    around a pose that keeps it above its base, see _upright_centre; other trees ±0.8 rad around the middle
+    of the ranges), except that a closed chain's actuated joints free to turn a full turn
     (a crank) turn once; a closed chain's passive joints are completed by assembly."""
     name = Path(urdf_path).name if urdf_path else ""
     if name == "aau_arm.urdf":
@@ -208,7 +209,10 @@ def demo_motion(model, urdf_path) -> dict:
     t = np.linspace(0.0, 4.0, 121)
     lo, hi = _ranges(model)
     mid, amp = 0.5 * (lo + hi), np.minimum(0.4 * (hi - lo), 0.8)
-    swing = mid + amp * np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.njoints)))
+    wave = np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.njoints)))
+    if not model.floating and not model.constraints:
+        mid, amp = _upright_centre(model, lo, hi, wave)
+    swing = mid + amp * wave
     if model.floating:                      # the free flyer stays at the origin; the other joints swing
         from ..configuration import neutral
         Q = np.tile(neutral(model), (len(t), 1))
@@ -221,6 +225,24 @@ def demo_motion(model, urdf_path) -> dict:
         Q[:, [i for i in range(model.nv) if model.joint_names[i] not in model.actuated]] = np.nan
         return dict(t=t, Q=complete(model, Q))
     return dict(t=t, Q=Q)
+
+
+def _upright_centre(model, lo, hi, wave, tries=48):
+    """(centre (nv,), amplitude (nv,)) of a serial arm's demo swing: ±0.5 rad (less for short ranges)
+    around the pose, among the middle of the ranges and ``tries`` seeded random poses within them, whose
+    motion stays above the base best and, after that, is the most compact (it frames best)."""
+    from ..dynamics.core import forward_kinematics
+    amp = np.minimum(0.3 * (hi - lo), 0.5)
+    rng = np.random.default_rng(0)
+    cands = [0.5 * (lo + hi)] + [lo + amp + (hi - lo - 2 * amp) * rng.random(model.nv) for _ in range(tries)]
+    best = None
+    for c in cands:
+        p = forward_kinematics(model, c + amp * wave[::6])[1]              # (nb, F, 3) body origins
+        below = min(float(p[..., 2].min()), 0.0)
+        score = 10.0 * below - float(np.linalg.norm(p.reshape(-1, 3).max(0) - p.reshape(-1, 3).min(0)))
+        if best is None or score > best[0]:
+            best = (score, c)
+    return best[1], amp
 
 
 def _spm_demo(model):

@@ -100,7 +100,7 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
     sc.nodes = body_nodes(model)
     visuals = load_visuals(urdf_path, package_dirs) if urdf_path is not None else []
     visuals = [v for v in visuals if v.link in model.frames]      # links a reduction removed are not drawn
-    drawn = {v.link for v in visuals}
+    drawn = {model.frame(v.link).body for v in visuals}          # bodies with a visual (merged links too)
     rt, rj = _radii(model, Q)
     parts = []                                                    # (node path, geometry, 4×4 in the body, rgba)
     for k, v in enumerate(visuals):
@@ -110,12 +110,12 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
     parts += _mechanism(g, model, sc.nodes, drawn, rt, rj)
     placed = [(model.frame(v.link).body, _corners(v.geometry, _T(model.frame(v.link).R, model.frame(v.link).p)
                                                   @ v.placement)) for v in visuals]
-    sc.view = view(model, Q, placed, rt, rj, base_drawn=model.root_link in drawn,
-                   base_low=_base_low(model, visuals, rj))
-    if not model.floating and model.root_link not in drawn and sc.view["pedestal"] > 1e-9:
-        h = sc.view["pedestal"]                                   # the base stands on a column to the ground
-        parts.append((f"{sc.nodes[-1]}/pedestal", g.Cylinder(float(h), float(1.6 * rj)),
-                      _T(_Y_TO_Z, [0, 0, -0.5 * h - 0.6 * rj]), BASE_RGBA))
+    base_low = _base_low(model, visuals, rj)
+    sc.view = view(model, Q, placed, rt, rj, base_low=base_low)
+    if sc.view["pedestal"] > 1e-9:                  # the base stands on a column down to the ground
+        h = sc.view["pedestal"]
+        parts.append((f"{sc.nodes[-1]}/pedestal", g.Cylinder(float(h), float(1.3 * rj)),
+                      _T(_Y_TO_Z, [0, 0, base_low - 0.5 * h]), BASE_RGBA))
     for path, geom, T, rgba in parts:
         _add(sc, path, geom, T, rgba)
     for c in model.constraints:                     # shown only when the loop is open (gap > CLOSURE_TOL)
@@ -153,8 +153,8 @@ def _radii(model, Q):
     lengths = [float(np.linalg.norm(p)) for p in model.p0 if np.linalg.norm(p) > 1e-9]
     lengths += [float(np.linalg.norm(f.p)) for f in model.frames.values() if np.linalg.norm(f.p) > 1e-9]
     typical = float(np.median(lengths)) if lengths else size
-    rj = min(float(os.environ.get('MD_RJ', 0.055)) * size, 0.35 * typical)
-    return float(os.environ.get('MD_RT', 0.7)) * rj, rj
+    rj = min(0.06 * size, 0.35 * typical)
+    return 0.75 * rj, rj
 
 
 def _axis_frame(axis):
@@ -171,15 +171,14 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
     closure point it carries, a pin at each closure; the base: a plate and tubes to its children."""
     parts = []
     for b in range(-1, model.njoints):
-        if (model.root_link if b < 0 else model.body_names[b]) in drawn:
+        if b in drawn:
             continue
         ends = [model.p0[c] for c in range(model.njoints) if model.parent[c] == b]
-        ends += [f.p for f in model.frames.values() if f.body == b and f.name not in drawn
-                 and not any(np.allclose(f.p, e) for e in ends)]
+        ends += [f.p for f in model.frames.values() if f.body == b and not any(np.allclose(f.p, e) for e in ends)]
         ends += [c.pp for c in model.constraints if c.parent == b] + [c.pc for c in model.constraints if c.child == b]
         if b < 0:
             if not model.floating:
-                parts.append((f"{nodes[-1]}/base_plate", g.Cylinder(float(1.2 * rj), float(2.4 * rj)),
+                parts.append((f"{nodes[-1]}/base_plate", g.Cylinder(float(1.2 * rj), float(1.8 * rj)),
                               _T(_Y_TO_Z, [0, 0, -0.6 * rj]), BASE_RGBA))
         elif model.kind[b] == REVOLUTE:
             parts.append((f"{nodes[b]}/joint", g.Cylinder(float(2.6 * rj), float(rj)), _T(_axis_frame(model.axis[b]),
@@ -225,8 +224,8 @@ def _base_low(model, visuals, rj):
         fr = model.frame(v.link)
         if fr.body < 0:
             lows.append(float(_corners(v.geometry, _T(fr.R, fr.p) @ v.placement)[:, 2].min()))
-    if model.root_link not in {v.link for v in visuals}:
-        lows.append(-1.2 * rj)
+    if all(model.frame(v.link).body >= 0 for v in visuals):
+        lows.append(-1.2 * rj)                       # the base plate drawn by _mechanism
     return min(lows)
 
 
@@ -259,8 +258,8 @@ def _size(model, Q):
     return max(float(np.linalg.norm(pts.max(0) - pts.min(0))), 0.05)
 
 
-ELEVATION = math.radians(float(os.environ.get("MD_EL", 24.0)))   # the camera looks down this much
-AZIMUTH = math.radians(float(os.environ.get("MD_AZ", 35.0)))     # and this far round from the broad side of the motion
+ELEVATION = math.radians(24.0)   # the camera looks down this much
+AZIMUTH = math.radians(35.0)     # and this far round from the broad side of the motion
 FOV = 40.0                       # vertical field of view, degrees (meshcat's 75 distorts a near robot)
 ASPECT_LIVE = 1.6                # width / height assumed for the live viewer (the page refits to its pane)
 ASPECT_PAGE = 1.3                # width / height of the page's 3-D pane, typically (to choose the direction)
@@ -268,15 +267,15 @@ MARGIN = 1.06                    # distance added so the drawing does not touch 
 FIT_FRAMES = 60                  # motion samples used to fit the camera
 
 
-def view(model, Q, visuals, rt, rj, base_drawn=False, base_low=0.0) -> dict:
+def view(model, Q, visuals, rt, rj, base_low=0.0) -> dict:
     """Where the camera and the ground go for a motion Q (F, nq); visuals: [(body, corners (K, 3) in the
     body frame)], the boxes of the drawn primitives (a mesh: its origin).
 
     The camera aims at the centre of the bounding box of everything drawn over the whole motion (body
     origins, frames, closure points, the visuals' boxes; ``pad`` covers the rest), from the broad side of that box,
     turned AZIMUTH round and ELEVATION up; its distance fits the drawing (see fit_distance). The ground sits
-    under the base (fixed base: at the bottom of the base drawing, or below the lowest point of the motion
-    with a pedestal under a drawn-by-us base; free flyer: under the lowest point of the motion).
+    under the base (fixed base: at the bottom of the base drawing, or, when the motion reaches lower, below
+    its lowest point with a pedestal under the base; free flyer: under the lowest point of the motion).
     Returns a dict: centre (3,), back (3,) unit vector from centre to camera, points (K, 3) to fit relative
     to the centre, pad (m), ground_z, ground (half-size, cell, centre xy), pedestal (m), axes (m)."""
     Q = np.atleast_2d(Q)
@@ -292,9 +291,7 @@ def view(model, Q, visuals, rt, rj, base_drawn=False, base_low=0.0) -> dict:
     pedestal = 0.0
     if model.floating:
         ground_z = lowest
-    elif base_drawn:
-        ground_z = base_low
-    else:
+    else:                                           # a motion below the base: the base stands on a pedestal
         ground_z = min(base_low, lowest)
         pedestal = base_low - ground_z
         pts = np.vstack([pts, [[0.0, 0.0, ground_z]]])
