@@ -259,11 +259,12 @@ def _size(model, Q):
 
 
 ELEVATION = math.radians(24.0)   # the camera looks down this much
-AZIMUTH = math.radians(35.0)     # and this far round from the broad side of the motion
+AZIMUTH = math.radians(35.0)     # first azimuth tried (from +x towards +y; a three-quarter view)
+AZIMUTH_STEP = 15.0              # degrees between the azimuths tried
 FOV = 40.0                       # vertical field of view, degrees (meshcat's 75 distorts a near robot)
 ASPECT_LIVE = 1.6                # width / height assumed for the live viewer (the page refits to its pane)
 ASPECT_PAGE = 1.3                # width / height of the page's 3-D pane, typically (to choose the direction)
-MARGIN = 1.06                    # distance added so the drawing does not touch the border
+MARGIN = 1.03                    # distance added so the drawing does not touch the border
 FIT_FRAMES = 60                  # motion samples used to fit the camera
 
 
@@ -291,14 +292,22 @@ def view(model, Q, visuals, rt, rj, base_low=0.0) -> dict:
     pedestal = 0.0
     if model.floating:
         ground_z = lowest
-    else:                                           # a motion below the base: the base stands on a pedestal
-        ground_z = min(base_low, lowest)
-        pedestal = base_low - ground_z
+    elif lowest < base_low - pad:                   # a motion below the base: the base stands on a pedestal
+        ground_z, pedestal = lowest, base_low - lowest
         pts = np.vstack([pts, [[0.0, 0.0, ground_z]]])
+    else:
+        ground_z = base_low
     lo, hi = pts.min(0), pts.max(0)
     centre = 0.5 * (lo + hi)
     ext = hi - lo
-    back = _best_direction(model, Q, pts - centre, pad, ext)
+    base_pts = [c for body, c in visuals if body < 0]
+    front = None
+    if min(ext[0], ext[1]) < 0.25 * max(ext):       # planar: look from the side of the moving links
+        i = int(np.argmin(ext[:2]))
+        side = float(p[..., i].mean()) - (float(np.concatenate(base_pts)[:, i].mean()) if base_pts else 0.0)
+        if abs(side) > 1e-9:
+            front = np.sign(side) * np.eye(3)[i]
+    back = _best_direction(model, Q, pts - centre, pad, ext, front)
     half = 0.6 * max(ext[0], ext[1], 0.3 * ext[2], 4 * rj)
     cell = _nice(2 * half / 12)
     half = cell * math.ceil(half / cell)
@@ -307,28 +316,26 @@ def view(model, Q, visuals, rt, rj, base_low=0.0) -> dict:
                 pedestal=float(pedestal), axes=float(max(0.12 * max(ext), 2 * rj)))
 
 
-def _best_direction(model, Q, P, pad, ext):
-    """The camera direction (unit, centre to camera) that shows the robot largest: candidates look at the
-    broad side of the motion's box (either face, AZIMUTH round either way, ELEVATION up); each is scored
-    by the drawn length of the links (segments between joint origins, projected on the image plane) over
-    the frames, divided by the square of its fitted distance (coverage grows with both)."""
-    R, p = forward_kinematics(model, np.asarray(Q, float))
-    ends = [(p[model.parent[b]] if model.parent[b] >= 0 else np.zeros_like(p[b]), p[b]) for b in range(model.njoints)]
-    seg = np.concatenate([b_ - a for a, b_ in ends]) if ends else np.zeros((1, 3))
-    faces = [np.array([1.0, 0, 0]), np.array([-1.0, 0, 0])] if ext[0] <= ext[1] else \
-        [np.array([0, -1.0, 0]), np.array([0, 1.0, 0])]
+def _best_direction(model, Q, P, pad, ext, front=None):
+    """The camera direction (unit, centre to camera) that shows the robot largest: ELEVATION up (less for a
+    planar mechanism), all round in AZIMUTH_STEP steps; each is scored by the drawn length of the links
+    (segments between joint origins projected on the image plane) over its fitted distance squared
+    (coverage grows with both), averaged over the frames plus the worst frame. ``front``: only directions
+    on its side (a planar mechanism seen from the side of its moving links, not through its base)."""
+    _, p = forward_kinematics(model, np.asarray(Q, float))
+    seg = np.stack([p[b] - (p[model.parent[b]] if model.parent[b] >= 0 else 0.0) for b in range(model.njoints)])
     planar = min(ext[0], ext[1]) < 0.25 * max(ext)             # a planar mechanism: seen nearer face-on
-    azimuth, elevation = (0.5 * AZIMUTH, 0.6 * ELEVATION) if planar else (AZIMUTH, ELEVATION)
+    el = 0.6 * ELEVATION if planar else ELEVATION
     best = None
-    for face in faces:
-        side = np.cross([0, 0, 1.0], face)
-        for az in (azimuth, -azimuth):
-            horiz = math.cos(az) * face + math.sin(az) * side
-            back = math.cos(elevation) * horiz + np.array([0, 0, math.sin(elevation)])
-            d = fit_distance(P, back, pad, ASPECT_PAGE)
-            shown = np.linalg.norm(seg - np.outer(seg @ back, back), axis=1).sum() / d**2
-            if best is None or shown > best[0] * (1 + 1e-9):
-                best = (shown, back)
+    for az in np.radians(np.arange(0.0, 360.0, AZIMUTH_STEP)) + AZIMUTH:
+        back = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+        if front is not None and back @ front < 0.3:
+            continue
+        d = fit_distance(P, back, pad, ASPECT_PAGE)
+        shown = np.linalg.norm(seg - np.einsum("bfi,i->bf", seg, back)[..., None] * back, axis=2).sum(0) / d**2
+        score = float(shown.mean() + shown.min())
+        if best is None or score > best[0] * (1 + 1e-9):
+            best = (score, back)
     return best[1]
 
 
