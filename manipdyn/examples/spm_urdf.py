@@ -72,12 +72,14 @@ def _visuals_distal():
 
 
 def _visuals_platform():
-    """A plate through the three w_i* points and the housings of the top joints along w_i*."""
+    """A three-spoke plate through the w_i* points (the legs stay visible behind it), the housings of the
+    top joints along w_i*, and a stub along the platform normal (the tool side)."""
     w = [P.w_star(i) for i in range(3)]
     h = RHO_PLATFORM * w[0][2]
-    out = _cylinder([0, 0, h - 0.003], [0, 0, h + 0.003], RHO_PLATFORM * np.hypot(*w[0][:2]) + 0.006, GREEN, "green")
-    out += _cylinder([0, 0, h], [0, 0, h + 0.03], 0.01, GREEN, "green")        # the tool side (platform normal)
+    out = _cylinder([0, 0, h - 0.004], [0, 0, h + 0.004], 0.024, GREEN, "green")
+    out += _cylinder([0, 0, h], [0, 0, h + 0.03], 0.01, GREEN, "green")
     for wi in w:
+        out += _cylinder([0, 0, h], [RHO_PLATFORM * wi[0], RHO_PLATFORM * wi[1], h], 0.0075, GREEN, "green")
         out += _cylinder((RHO_DISTAL - 0.008) * wi, (RHO_PLATFORM + 0.006) * wi, PIN, PIN_RGBA, "pin")
     return out
 

@@ -134,6 +134,7 @@ PLAYER = r"""
         g.series[k].forEach(function (v) { if (v !== null) { lo = Math.min(lo, v); hi = Math.max(hi, v); } });
       });
       if (!(hi >= lo)) { lo = -1; hi = 1; }
+      if (g.key === "gap") { lo = 0; hi = Math.max(hi, D.closure_tol); }   // closed: a flat line at 0
       if (hi - lo < 1e-12 * Math.max(1, Math.abs(hi))) { lo -= 0.5; hi += 0.5; }
       var pad = 0.06 * (hi - lo); lo -= pad; hi += pad;
       function Y(v) { return T + (hi - v) / (hi - lo) * (H - T - B); }
