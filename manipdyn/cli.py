@@ -118,7 +118,8 @@ def add_root_joint_option(p):
 def add_reduction_options(p):
     """--lock / --root / --tips / --prune: model only what the scene needs (manipdyn.reduce)."""
     p.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
-                   help="hold a joint fixed at a value (repeatable)")
+                   help="hold a joint fixed at a value (repeatable); a free flyer at a pose: "
+                        "root_joint=x,y,z,qx,qy,qz,qw")
     p.add_argument("--root", help="keep only chains from this link ...")
     p.add_argument("--tips", nargs="+", metavar="LINK", help="... to these links (bodies beyond merge as payload)")
     p.add_argument("--prune", action="store_true", help="drop massless moving leaves")
@@ -131,10 +132,11 @@ def reduction(args) -> dict:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
             raise InputError(f"--lock {item!r}: expected JOINT=VALUE")
-        try:
-            v = float(value)
+        try:                                   # a number, or a free flyer's pose x,y,z,qx,qy,qz,qw
+            v = [float(x) for x in value.split(",")] if "," in value else float(value)
         except ValueError:
-            raise InputError(f"--lock {item!r}: expected JOINT=VALUE with a number") from None
+            raise InputError(f"--lock {item!r}: expected JOINT=VALUE with a number (a free flyer: "
+                             f"JOINT=x,y,z,qx,qy,qz,qw)") from None
         if name.strip() in locked:
             raise InputError(f"--lock {item!r}: joint {name.strip()!r} is locked twice")
         locked[name.strip()] = v

@@ -35,7 +35,11 @@ class DivergenceError(ManipdynError, ArithmeticError):
     """A simulation produced a non-finite state: names the time at which it happened."""
 
 
-class InertiaWarning(UserWarning):
+class QuirkWarning(UserWarning):
+    """Something the URDF loader noticed (Model.quirks): one warning per kind, naming every link or joint."""
+
+
+class InertiaWarning(QuirkWarning):
     """A link's inertia is physically inconsistent (triangle inequality) but loadable."""
 
 
@@ -43,6 +47,6 @@ class GeometryWarning(UserWarning):
     """A visual element is skipped (bad numbers, unknown format, or a mesh file outside the allowed roots)."""
 
 
-class FloatingBaseWarning(UserWarning):
-    """A URDF loaded with a fixed base has a root body that carries mass: if the robot is a free body
-    (legged robot, humanoid, drone), load it with root_joint="free_flyer"."""
+class FloatingBaseWarning(QuirkWarning):
+    """A URDF loaded with a fixed base has a root body that carries mass and the tree's shape of a free body
+    (legs, a heavy body with a hanging appendage, or no joint): load it with root_joint="free_flyer"."""

@@ -23,7 +23,10 @@ from types import MappingProxyType
 from .errors import InputError
 from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES
 
-__all__ = ["Model", "Frame", "Constraint", "check_gravity", "REVOLUTE", "PRISMATIC", "FREEFLYER"]
+__all__ = ["Model", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
+           "FREEFLYER", "QUAT_TOL"]
+
+QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's q (integrate's output: ~1e-16)
 
 
 def check_gravity(gravity, where="gravity") -> np.ndarray:
@@ -46,12 +49,42 @@ class Frame:
     p: np.ndarray          # (3,)   frame origin in the body frame
 
 
+# What the loader reports about a file (Model.quirks), one kind per engine difference or data flaw:
+QUIRK_KINDS = {
+    "zero_mass_inertia": "mass 0 but a nonzero rotational inertia (kept or dropped: load_urdf zero_mass_inertia=)",
+    "no_inertial": "a link carried by a moving joint has no <inertial> (a massless body unless fixed links add mass)",
+    "triangle": "principal moments violate the triangle inequality I1 + I2 >= I3",
+    "rotated_root_inertial": "the root link's <inertial><origin rpy> is not zero",
+    "free_root": "the root body carries mass and the tree's shape says it is a free body (legs, or a heavy body "
+                 "with a hanging appendage, or no joint at all): load with root_joint=\"free_flyer\"",
+    "mimic": "a <mimic> joint (honoured with mimic=True, else loaded as an independent joint)",
+    "version": "<robot version> that urdfdom 6 (Pinocchio 4.1's reader) refuses; manipdyn loads the file",
+    "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
+}
+
+
+@dataclass(frozen=True)
+class Quirk:
+    """One thing the loader noticed in a file: kind (a key of QUIRK_KINDS), the link, joint or element it
+    concerns, and a detail sentence."""
+    kind: str
+    name: str
+    detail: str
+
+    def as_dict(self) -> dict:
+        return {"kind": self.kind, "name": self.name, "detail": self.detail}
+
+
 @dataclass(frozen=True, eq=False)
 class Constraint:
-    """A loop closure between two bodies (URDF ``<constraint>``), frames given in each body's frame.
+    """A loop closure between two bodies (URDF ``<constraint>``, URDF+ ``<loop>``/``<coupling>``), frames given
+    in each body's frame.
 
     type "revolute": the frames share their origin and their axis (5 equations); "spherical": the origin
-    (3); "fixed": origin and orientation (6). Axes are unit vectors in the body frames.
+    (3); "fixed": origin and orientation (6). Axes are unit vectors in the body frames. "coupling" (URDF+
+    gear): 1 equation between joint coordinates, ratio · Σ q (joints from the bodies' common ancestor down to
+    the parent body) − Σ q (same, down to the child body) = 0 — the velocity ratio child/parent is ``ratio``
+    (generalized_rbda's rule); frames and axes are unused (identity, zeros).
     """
     name: str
     type: str
@@ -65,10 +98,12 @@ class Constraint:
     Rc: np.ndarray         # (3, 3) closure frame on the child, in the child body's frame
     pc: np.ndarray         # (3,)
     axis_c: np.ndarray     # (3,) closure axis in the child body's frame
+    ratio: float = 0.0     # coupling only: velocity ratio child / parent
+    source: str = "constraint"  # the URDF element it came from (constraint, loop, loop_constraint, coupling, ...)
 
     @property
     def n_rows(self) -> int:
-        return {"revolute": 5, "spherical": 3, "fixed": 6}[self.type]
+        return {"revolute": 5, "spherical": 3, "fixed": 6, "coupling": 1}[self.type]
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,7 +137,9 @@ class Model:
     notes: tuple = ()      # what the loader did that a user should know (warnings included)
     constraints: tuple = field(default=())  # (Constraint, ...) loop closures; empty for a tree
     actuated: tuple = field(default=())     # joint names with a URDF <transmission>, q order
-    locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q)
+    locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q): a float,
+    #                                             a free flyer's pose (x y z qx qy qz qw) as a tuple
+    quirks: tuple = field(default=())       # (Quirk, ...) what the loader noticed, in QUIRK_KINDS order
 
     def __post_init__(self):
         if not (isinstance(self.gravity, np.ndarray) and self.gravity.dtype == np.float64):
@@ -219,16 +256,68 @@ class Model:
         for j, src, mult, off in self.mimic:
             lines.append(f"mimic joint {j!r} (= {mult} * {src} + {off}) loaded as an independent joint")
         for c in self.constraints:
-            lines.append(f"closure {c.name!r} ({c.type}, {c.n_rows} equations): {c.parent_link} <-> {c.child_link}")
+            how = f", ratio {c.ratio:g}" if c.type == "coupling" else ""
+            lines.append(f"closure {c.name!r} ({c.type}{how}, {c.n_rows} equation(s), from <{c.source}>): "
+                         f"{c.parent_link} <-> {c.child_link}")
         if self.actuated:
             lines.append(f"actuated joints (<transmission>): {', '.join(self.actuated)}")
         if self.locked:
-            lines.append("locked joints: " + ", ".join(f"{j} = {v:g}" for j, v in self.locked.items()))
+            lines.append("locked joints: " + ", ".join(
+                f"{j} = {v:g}" if np.ndim(v) == 0 else f"{j} = {np.round(v, 6).tolist()}" for j, v in self.locked.items()))
         lines += [f"note: {n}" for n in self.notes]
+        for kind in QUIRK_KINDS:
+            names = [q.name for q in self.quirks if q.kind == kind]
+            if names:
+                lines.append(f"quirk {kind}: {', '.join(names[:50])}{' ...' if len(names) > 50 else ''}")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, nq={self.nq}, nv={self.nv}, joints={list(self.joint_names)})"
+
+
+@dataclass(frozen=True, eq=False)
+class MimicModel:
+    """A tree whose <mimic> joints follow their targets: q_mimic = multiplier · q_target + offset, no coordinate
+    of their own (``load_urdf(..., mimic=True)``; Pinocchio 4.1's ``buildModelFromUrdf(path, mimic=True)``).
+
+    The one linear map (``manipdyn.dynamics.mimic`` applies it): q_full = Gq q + q_off, v_full = G v,
+    a_full = G a, τ = Gᵀ τ_full, M = Gᵀ M_full G. Independent coordinates keep the full model's q order with
+    the mimic joints' entries removed (Pinocchio's order).
+    """
+    full: Model            # the tree with every joint moving (mimic joints as independent joints)
+    G: np.ndarray          # (full.nv, nv) v_full = G v
+    Gq: np.ndarray         # (full.nq, nq) q_full = Gq q + q_offset
+    q_offset: np.ndarray   # (full.nq,)
+    joint_names: tuple     # (k,) the independent joints, q order
+    mimic: tuple           # ((joint, target joint, multiplier, offset), ...) as in the URDF
+
+    def __post_init__(self):
+        for value in (self.G, self.Gq, self.q_offset):
+            value.setflags(write=False)
+
+    @property
+    def nq(self) -> int:
+        return self.Gq.shape[1]
+
+    @property
+    def nv(self) -> int:
+        return self.G.shape[1]
+
+    @property
+    def name(self) -> str:
+        return self.full.name
+
+    @property
+    def quirks(self) -> tuple:
+        return self.full.quirks
+
+    def summary(self) -> str:
+        lines = [self.full.summary(), f"mimic joints honoured: nq = {self.nq}, nv = {self.nv} independent "
+                                      f"coordinates ({', '.join(self.joint_names)})"]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"MimicModel({self.name!r}, nq={self.nq}, nv={self.nv}, mimic={[m[0] for m in self.mimic]})"
 
 
 def _frozen(x) -> np.ndarray:

@@ -339,6 +339,27 @@ FAULTS = (
           "    else:\n        ground_z = base_low", "    else:\n        ground_z = 0.0",
           ("tests/viz/test_play_page.py::test_ground_is_under_the_robot",),
           "the ground at the base frame's origin whatever lies below it (the SPM's base sinks into it)"),
+    Fault("reduce-locked-free-flyer-quaternion-conjugated", "reduce", "manipdyn/reduce.py",
+          "np.ascontiguousarray(np.atleast_1d(value), float), 0, R, p)",
+          "np.ascontiguousarray(np.atleast_1d(value) * np.r_[1, 1, 1, -1, -1, -1, 1][:np.size(value)], float), 0, R, p)",
+          ("tests/crosscheck/test_reduce.py",),
+          "a locked free flyer's orientation inverted (quaternion conjugated): the fixed base sits rotated the wrong way"),
+    Fault("reduce-root-keeps-its-joint", "reduce", "manipdyn/reduce.py",
+          "above = set(_ancestors(model, rb))",
+          "above = set(_ancestors(model, rb)[1:])",
+          ("tests/crosscheck/test_reduce.py",),
+          "root=: the joint carrying the root link keeps moving (a floating robot's free flyer is not locked)"),
+    # ---------------------------------------------------------------- closed chains on a free flyer
+    Fault("closure-dofs-q-index", "constraints", "manipdyn/constraints/dynamics.py",
+          "return [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]",
+          "return [int(model.idx_q[j]) + k for j in joints for k in range(int(model.nvs[j]))]",
+          ("tests/crosscheck/test_floating_closures.py",),
+          "q index for v index: behind a free flyer every joint's entry of v is read one place late"),
+    Fault("assembly-moves-the-base", "constraints", "manipdyn/constraints/dynamics.py",
+          "and (world or model.kind[j] != FREEFLYER)])",
+          "and (world or model.kind[j] != FREEFLYER or True)])",
+          ("tests/crosscheck/test_floating_closures.py",),
+          "assembly and projection move a floating base under closures internal to the robot"),
 )
 
 

@@ -13,6 +13,9 @@ For a closure between frame A (on the parent body) and frame B (on the child bod
   d(a × b)/dt = (ω_A × a) × b + a × (ω_B × b).
 J, J̇ are kinematics.point_jacobian(_dot) of the closure points (world-aligned, Pinocchio's
 LOCAL_WORLD_ALIGNED). Rows are labelled "<closure>.x|y|z" (position) and "<closure>.r1|r2|r3" (orientation).
+A coupling (URDF+ gear, model.Constraint) is one linear row on the joint coordinates, labelled "<closure>.c":
+  Φ = ratio Σ_{j ∈ path(A)} q_j − Σ_{j ∈ path(B)} q_j,   Φ_q = the same coefficients,   Φ̇_q q̇ = 0,
+path(X) = the joints from the common ancestor of bodies A and B down to X (generalized_rbda's K matrix).
 """
 from __future__ import annotations
 
@@ -52,6 +55,9 @@ def row_labels(model):
     if labels is None:
         labels = []
         for c in model.constraints:
+            if c.type == "coupling":
+                labels.append(f"{c.name}.c")
+                continue
             labels += [f"{c.name}.{k}" for k in ("x", "y", "z")]
             labels += [f"{c.name}.r{k + 1}" for k in range(len(_pairs(c)))]
         object.__setattr__(model, "_row_labels", tuple(labels))   # a cache, not model data (Model is frozen)
@@ -65,12 +71,16 @@ def n_rows(model) -> int:
 
 def closure_arrays(model):
     """Closures in kernel form, built once per model: ints CI (nc, 3) = [parent, child, n_pairs], floats
-    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, a in the parent's frame, b in the child's)."""
+    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, a in the parent's frame, b in the child's);
+    a coupling has n_pairs = −1 and CF[k, 0] = its ratio."""
     arr = model.__dict__.get("_closure_arrays")
     if arr is None:
         nc = len(model.constraints)
         ints, flts = np.zeros((nc, 3), np.int64), np.zeros((nc, 24))
         for k, c in enumerate(model.constraints):
+            if c.type == "coupling":
+                ints[k], flts[k, 0] = (c.parent, c.child, -1), c.ratio
+                continue
             pairs = _pairs(c)
             ints[k] = c.parent, c.child, len(pairs)
             flts[k, :3], flts[k, 3:6] = c.pp, c.pc
@@ -96,13 +106,19 @@ def closure_scratch(nb, nv):
 def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
     """Φ (m,), Φ_q (m, nv) and, when v has entries, Φ̇_q q̇ (m,) of one state q (nq,), v (nv,), rows in
     row_labels order (the module docstring gives them); W = closure_scratch(nb, nv)."""
-    parent, iv, nvj, S = I[:, 0], I[:, 3], I[:, 4], unpack(I, F)[5]
+    parent, iq, iv, nvj, S = I[:, 0], I[:, 2], I[:, 3], I[:, 4], unpack(I, F)[5]
     Rl, pl, Rw, pw, ww, vw, J, dJ, Rs, x, xd, eye, t = W
     a, b, axb, wA, wB, t1, t2, t3 = t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]
     nv, with_v = Jc.shape[1], v.shape[0] > 0
     fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
     row = 0
     for k in range(CI.shape[0]):
+        if CI[k, 2] < 0:                                      # coupling: one linear row, Φ̇_q q̇ = 0
+            Phi[row] = _coupling_row(parent, iq, iv, CI[k, 0], CI[k, 1], CF[k, 0], q, Jc[row])
+            if with_v:
+                bias[row] = 0.0
+            row += 1
+            continue
         for side in range(2):                                 # 0: A on the parent, 1: B on the child
             body = CI[k, side]
             body_point(body, Rw, pw, eye, CF[k, 3 * side:3 * side + 3], Rs[side], x[side])   # Rs: the body's axes
@@ -142,6 +158,25 @@ def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
                     gyro += (t2[c] + t3[c]) * (wA[c] - wB[c])
                 bias[row] = gyro + acc
             row += 1
+
+
+@njit(cache=True, inline="always")
+def _coupling_row(parent, iq, iv, A, B, ratio, q, Jrow):
+    """Φ = ratio Σ q_j (joints from the common ancestor down to body A) − Σ q_j (down to body B); Jrow (nv,)
+    gets the coefficients. Walks up from the deeper index (parent[i] < i) until the two meet."""
+    for r in range(Jrow.shape[0]):
+        Jrow[r] = 0.0
+    phi = 0.0
+    while A != B:
+        if A > B:
+            phi += ratio * q[iq[A]]
+            Jrow[iv[A]] += ratio
+            A = parent[A]
+        else:
+            phi -= q[iq[B]]
+            Jrow[iv[B]] -= 1.0
+            B = parent[B]
+    return phi
 
 
 @njit(cache=True, inline="always")

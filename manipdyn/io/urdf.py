@@ -46,8 +46,9 @@ import numpy as np
 import yourdfpy
 from lxml import etree
 
-from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, URDFError
-from ..model import FREEFLYER, PRISMATIC, REVOLUTE, Constraint, Frame, Model, check_gravity
+from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
+from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, MimicModel, Model, Quirk,
+                     check_gravity)
 from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
@@ -74,28 +75,36 @@ MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data'
 
 
 def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
-              root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES) -> Model:
+              root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep",
+              mimic: bool = False):
     """Read a URDF file into a Model (revolute, continuous, prismatic and fixed joints).
 
     Parameters: path to the .urdf file; root_joint None (fixed base) or "free_flyer" (the root link is a
     free body, as Pinocchio's ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``; see the module
     docstring); gravity (3,) in the base frame; strict=True refuses inertias that violate the triangle
-    inequality instead of warning; locked / root / tips / prune as in ``manipdyn.reduce`` (model only what
-    the scene needs); max_bytes: larger files are refused unread.
+    inequality instead of warning, and elements or a <robot version> it does not read; locked / root / tips
+    / prune as in ``manipdyn.reduce`` (model only what the scene needs; with root_joint="free_flyer",
+    locked={"root_joint": pose (7,)} fixes the root link at that pose, and ``root`` fixes it at the neutral
+    pose); max_bytes: larger files are refused unread; zero_mass_inertia "keep" (a link of mass 0 keeps its
+    rotational inertia, as Pinocchio 4.1 does: checked, ``model.inertias`` holds it with m = 0) or "drop"
+    (such a link is massless: no inertia at all); mimic=True honours <mimic> (returns a MimicModel: mimic
+    joints carry no coordinate, as Pinocchio 4.1's ``buildModelFromUrdf(path, mimic=True)``), mimic=False
+    loads them as independent joints.
+    What the loader noticed is in ``model.quirks`` (see model.QUIRK_KINDS) and warned about once per kind.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
-    for a root_joint other than None or "free_flyer".
+    for a root_joint other than None or "free_flyer" or a bad policy value.
     """
     path = os.fspath(path)
     _check_root_joint(root_joint, path)
-    if root_joint is not None and (locked or root or tips or prune):   # reduce() takes 1-dof joints only
-        raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with root_joint="
-                         f"{root_joint!r} (reducing a floating-base model is not supported)")
+    _check_policy(zero_mass_inertia, mimic, path)
+    if mimic and (locked or root or tips or prune):
+        raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with mimic=True")
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:
         data = fh.read(max_bytes + 1)        # never more than the limit, whatever the file claims
     model = load_urdf_string(data, source=path, root_joint=root_joint, gravity=gravity, strict=strict,
-                             max_bytes=max_bytes)
+                             max_bytes=max_bytes, zero_mass_inertia=zero_mass_inertia, mimic=mimic)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
@@ -103,25 +112,56 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
 
 
 def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 0.0, -9.81), strict=False,
-                     max_bytes: int = MAX_BYTES) -> Model:
+                     max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", mimic: bool = False):
     """Same as load_urdf for URDF text (str or bytes); ``source`` names it in messages."""
     _check_root_joint(root_joint, source)
+    _check_policy(zero_mass_inertia, mimic, source)
     data = text.encode() if isinstance(text, str) else bytes(text)
     if len(data) > max_bytes:
         raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
                         f"(pass max_bytes=... to load_urdf to raise it)")
     g = check_gravity(gravity, source)
     root = _parse_xml(data, source)
-    _check_xml(root, source)
-    model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer")
+    quirks = []
+    _check_xml(root, source, strict, quirks)
+    model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer",
+                   zero_mass_inertia=zero_mass_inertia, quirks=quirks)
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
-    for note in model.notes:
-        if "triangle inequality" in note:
-            warnings.warn(f"{source}: {note}", InertiaWarning, stacklevel=3)
-        if "no joint moves" in note:
-            warnings.warn(f"{source}: {note}", FloatingBaseWarning, stacklevel=3)
-    return model
+    quirks += [Quirk("mimic", j, f"= {mult:g} * {t} + {off:g}: " + ("honoured (mimic=True)" if mimic else
+                     "loaded as an independent joint (mimic=False)")) for j, t, mult, off in model.mimic]
+    order = list(QUIRK_KINDS)
+    model = dataclasses.replace(model, quirks=tuple(sorted(quirks, key=lambda q: order.index(q.kind))))
+    _warn(model, source)
+    return _mimic_model(model, source) if mimic else model
+
+
+def _check_policy(zero_mass_inertia, mimic, source):
+    """zero_mass_inertia is "keep" or "drop", mimic a bool; InputError naming the accepted values otherwise."""
+    if not (isinstance(zero_mass_inertia, str) and zero_mass_inertia in ("keep", "drop")):
+        raise InputError(f"{source}: zero_mass_inertia={zero_mass_inertia!r}; accepted values: 'keep' (Pinocchio's "
+                         f"behaviour: the rotational inertia of a mass-0 link is kept) or 'drop'")
+    if not isinstance(mimic, (bool, np.bool_)):
+        raise InputError(f"{source}: mimic={mimic!r}; expected True or False")
+
+
+_WHAT = {"mimic": "joint", "version": "", "unknown_element": ""}
+_WARNING = {"triangle": InertiaWarning, "zero_mass_inertia": InertiaWarning, "free_root": FloatingBaseWarning}
+
+
+def _warn(model, source):
+    """One warning per quirk kind, naming every link or joint of that kind."""
+    for kind in QUIRK_KINDS:
+        these = [q for q in model.quirks if q.kind == kind]
+        if not these:
+            continue
+        what = _WHAT.get(kind, "link")
+        if kind == "free_root":
+            text = these[0].detail
+        else:
+            text = f"{kind} ({len(these)}): " + "; ".join(
+                f"{what} {q.name!r}: {q.detail}" if what else q.detail for q in these[:50])
+        warnings.warn(f"{source}: {text}", _WARNING.get(kind, QuirkWarning), stacklevel=4)
 
 
 def _check_root_joint(root_joint, source):
@@ -213,13 +253,75 @@ def _check_origin(e, where, source):
     _numbers(e, "rpy", 3, where, source)
 
 
-def _check_xml(root, source):
-    """What urdfdom requires and yourdfpy silently defaults or misreads: names, links, numbers, bounds.
+# Elements the loader reads or knowingly leaves to other tools; anything else is an "unknown_element" quirk.
+ROBOT_CHILDREN = {"link", "joint", "material", "transmission", "gazebo", "ros2_control", "constraint", "loop",
+                  "loop_constraint", "coupling", "joint_constraint"}
+LINK_CHILDREN = {"inertial", "visual", "collision"}
+JOINT_CHILDREN = {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic", "calibration",
+                  "safety_controller"}
+INERTIAL_CHILDREN = {"origin", "mass", "inertia"}
+URDFDOM_VERSIONS = ((1, 0), (1, 2))   # urdfdom 6.0 (Pinocchio 4.1's reader) accepts "x.y" from 1.0 to 1.2
+
+
+def _check_version(root, source, strict, quirks):
+    """<robot version>: urdfdom 6.0 reads "x.y" (two non-negative integers, surrounding spaces allowed) and
+    accepts 1.0 to 1.2, refusing "0.0", "2.0", "1", "1.0.0", "foo" (checked with pin 4.1). No element manipdyn
+    reads changed meaning between those versions except 1.1's quat_xyzw origins, which are refused wherever
+    they appear. Any other version string is loaded with a "version" quirk (an error with strict=True)."""
+    text = root.get("version")
+    if text is None:
+        return
+    parts = text.strip().split(".")
+    ok = len(parts) == 2 and all(re.fullmatch(r"[0-9]+", x) for x in parts)
+    if ok and URDFDOM_VERSIONS[0] <= (int(parts[0]), int(parts[1])) <= URDFDOM_VERSIONS[1]:
+        return
+    why = ("not of the form 'x.y'" if not ok else "outside 1.0-1.2")
+    detail = (f"<robot version={_show(text)}>: {why}; urdfdom 6 (Pinocchio 4.1) refuses the file, manipdyn reads "
+              f"it as URDF 1.0")
+    if strict:
+        raise URDFError(f"{source}: {detail} (strict=True)")
+    quirks.append(Quirk("version", "robot", detail))
+
+
+def _check_unknown(root, source, strict, quirks):
+    """Every element the loader does not know is reported by its path (an error with strict=True)."""
+    def tag(e):
+        return e.tag if isinstance(e.tag, str) else None     # comments and processing instructions: skipped
+    found = []
+    for e in root:
+        t = tag(e)
+        if t is None:
+            continue
+        if t not in ROBOT_CHILDREN:
+            found.append((f"<{t}>", f"<{t} name={e.get('name')!r}> under <robot>"))
+            continue
+        known = {"link": LINK_CHILDREN, "joint": JOINT_CHILDREN}.get(t)
+        for c in (e if known else ()):
+            if tag(c) is not None and tag(c) not in known:
+                found.append((f"{t} {e.get('name')!r}/<{tag(c)}>", f"<{tag(c)}> in {t} {e.get('name')!r}"))
+            if tag(c) == "inertial":
+                found += [(f"{t} {e.get('name')!r}/inertial/<{tag(x)}>", f"<{tag(x)}> in the <inertial> of "
+                           f"{t} {e.get('name')!r}") for x in c if tag(x) is not None and tag(x) not in INERTIAL_CHILDREN]
+    for e in root.iter("origin"):
+        if e.get("quat_xyzw") is not None:
+            raise URDFError(f"{source}: an <origin quat_xyzw=...> (URDF 1.1) is not supported: use rpy")
+    if found and strict:
+        raise URDFError(f"{source}: elements manipdyn does not read (strict=True): "
+                        + ", ".join(w for _, w in found[:20]))
+    quirks += [Quirk("unknown_element", name, f"{where}: not read by manipdyn") for name, where in found]
+
+
+def _check_xml(root, source, strict=False, quirks=None):
+    """What urdfdom requires and yourdfpy silently defaults or misreads: names, links, numbers, bounds;
+    the version and unknown elements go to ``quirks`` (errors with strict=True).
 
     Visual and collision elements are not checked: the dynamics never read them (see _read_elements).
     """
     if not root.get("name"):
         raise URDFError(f"{source}: <robot> has no name attribute")
+    quirks = [] if quirks is None else quirks
+    _check_version(root, source, strict, quirks)
+    _check_unknown(root, source, strict, quirks)
     joints, links = root.findall("joint"), root.findall("link")
     _check_names(joints, links, source)
     names = {j.get("name") for j in joints}
@@ -364,10 +466,12 @@ def _walk(children, root):
         stack.extend((c, c.child) for c in reversed(children[link]))
 
 
-def _build(robot, source, gravity, strict, free=False) -> Model:
+def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep", quirks=None) -> Model:
     """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links.
 
-    free: the root link is body 0, carried by a free flyer (joint 0, parent −1); else the fixed base −1."""
+    free: the root link is body 0, carried by a free flyer (joint 0, parent −1); else the fixed base −1.
+    Inertial quirks (and the free-root one) are appended to ``quirks``."""
+    quirks = [] if quirks is None else quirks
     links, children, root = _tree(robot, source)
     joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
     if free:
@@ -390,16 +494,81 @@ def _build(robot, source, gravity, strict, free=False) -> Model:
                 body, R, p = len(joints) - 1, np.eye(3), np.zeros(3)
                 parts[body], merged[link] = [], []
         frames[link] = Frame(link, body, R, p)
-        parts[body].append(_link_inertia(links[link], R, p, source))
+        parts[body].append(_link_inertia(links[link], R, p, source, zero_mass_inertia))
     unreached = sorted(set(links) - set(frames))
     if unreached:                          # every link has one parent, yet some hang off no root: a cycle
         raise URDFError(f"{source}: links {', '.join(unreached[:20])} are not connected to the root link "
                         f"{root!r}: their joints form a cycle")
     link_I = [parts[f.body][k][2] for f, k in _part_index(frames, parts)]
-    notes.extend(_triangle(link_I, list(frames), source, strict))
+    quirks += _inertial_quirks(links, root, joints, free, zero_mass_inertia)
+    bad = _triangle(link_I, list(frames), source, strict)
+    quirks += [Quirk("triangle", name, msg) for name, msg in bad]
+    notes += [f"link {name!r}: {msg}" for name, msg in bad]
     if not free:
-        notes.extend(_fixed_base_note(root, merged[root], parts[-1]))
+        note = _fixed_base_note(root, merged[root], parts[-1])
+        notes += note
+        why = _free_root_shape(root, joints, frames, parts, gravity) if note else None
+        if why:
+            quirks.append(Quirk("free_root", root, f"{note[0]}; it looks free: {why}"))
     return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes)
+
+
+def _inertial_quirks(links, root, joints, free, policy):
+    """zero_mass_inertia, no_inertial and rotated_root_inertial quirks of the links (see model.QUIRK_KINDS)."""
+    out = []
+    for name, link in links.items():
+        x = link.inertial
+        if x is not None and x.mass is not None and float(x.mass) == 0.0 and np.any(np.asarray(x.inertia, float)):
+            what = ("kept (Pinocchio's behaviour: the body has rotational inertia without mass)" if policy == "keep"
+                    else "dropped (zero_mass_inertia='drop': the link is massless)")
+            out.append(Quirk("zero_mass_inertia", name, f"mass 0, inertia diagonal "
+                             f"{np.diag(np.asarray(x.inertia, float)).tolist()}: {what}"))
+    carried = [j.child for j, *_ in joints if j.type != "free_flyer"] + ([root] if free else [])
+    out += [Quirk("no_inertial", c, "no <inertial>: a massless link" + (" on a moving joint" if c != root else ""))
+            for c in carried if links[c].inertial is None]
+    x = links[root].inertial
+    if x is not None and x.origin is not None and not np.allclose(x.origin[:3, :3], np.eye(3), rtol=0, atol=1e-12):
+        out.append(Quirk("rotated_root_inertial", root, "the root link's <inertial><origin rpy> is not zero (its "
+                         "inertia is rotated into the link frame here, as Pinocchio does)"))
+    return out
+
+
+HANG = 0.6   # a subtree "hangs" when its lowest frame is below the root by >= HANG x the robot's extent
+
+
+def _free_root_shape(root, joints, frames, parts, gravity):
+    """Why a fixed-base tree whose root carries mass looks like a free body, or None (DESIGN: measured on the
+    zoo, at q = 0, "below" along gravity, extent = the largest distance of a link frame from the root):
+    - legs: two or more of the root's subtrees hang (lowest frame >= HANG extent below the root): every
+      legged robot and humanoid of example-robot-data (feet at 0.75-1.0 extent); no arm has two (at most one:
+      talos_left_arm, hanging from its shoulder);
+    - a heavy body with a hanging appendage: one subtree hangs and the root holds half the mass or more
+      (the flying arms borinot 0.91, hextilt 0.77; talos_left_arm's shoulder holds 0.15);
+    - nothing moves: no joint at all (a lone body: quadrotor, iris_simple)."""
+    if not joints:
+        return "no joint moves it (a lone body)"
+    down = np.asarray(gravity, float)
+    down = down / np.linalg.norm(down) if np.any(down) else np.array([0.0, 0.0, -1.0])
+    Rw, pw, top = [], [], []
+    for i, (_, b, R, p) in enumerate(joints):
+        Rb, pb = (np.eye(3), np.zeros(3)) if b < 0 else (Rw[b], pw[b])
+        Rw.append(Rb @ R)
+        pw.append(pb + Rb @ p)
+        top.append(i if b < 0 else top[b])
+    pts = [(top[f.body], pw[f.body] + Rw[f.body] @ f.p) for f in frames.values() if f.body >= 0]
+    extent = max(np.linalg.norm(x) for x in [x for _, x in pts] + [f.p for f in frames.values() if f.body < 0])
+    low = {}
+    for t, x in pts:
+        low[t] = max(low.get(t, -np.inf), float(x @ down))       # depth below the root, along gravity
+    hanging = sum(d >= HANG * extent for d in low.values()) if extent > 0 else 0
+    m_root = sum(mk for mk, _, _ in parts[-1])
+    m_all = m_root + sum(mk for b, ps in parts.items() if b >= 0 for mk, _, _ in ps)
+    if hanging >= 2:
+        return f"{hanging} of the root's {len(low)} subtrees hang below it (legs)"
+    if hanging == 1 and m_root >= 0.5 * m_all:
+        return (f"one subtree hangs below a root holding {m_root / m_all:.0%} of the mass (a heavy body with a "
+                f"hanging appendage)")
+    return None
 
 
 def _fixed_base_note(root, merged, parts):
@@ -484,14 +653,17 @@ def _limits(j):
     return lo, hi, get(L and L.effort, np.inf), get(L and L.velocity, np.inf)
 
 
-def _link_inertia(link, R, p, source):
-    """(m, c, I_c) of a URDF link in the frame where the link sits at (R, p); checks mass and moments."""
+def _link_inertia(link, R, p, source, zero_mass_inertia="keep"):
+    """(m, c, I_c) of a URDF link in the frame where the link sits at (R, p); checks mass and moments.
+    A link of mass 0 keeps its rotational inertia ("keep", Pinocchio) or has none ("drop")."""
     inertial = link.inertial
     if inertial is None or inertial.mass is None:
         return 0.0, p.copy(), np.zeros((3, 3))
     m = float(inertial.mass)
     if m < 0:
         raise URDFError(f"{source}: link {link.name!r}: negative mass {m}")
+    if m == 0.0 and zero_mass_inertia == "drop":
+        return 0.0, p.copy(), np.zeros((3, 3))
     To = inertial.origin if inertial.origin is not None else np.eye(4)
     I = To[:3, :3] @ np.asarray(inertial.inertia, float) @ To[:3, :3].T
     return m, p + R @ To[:3, 3], R @ I @ R.T
@@ -503,25 +675,26 @@ def _check_psd(Is, what, source):
     Is = np.asarray(Is, float).reshape(-1, 3, 3)
     lam = np.linalg.eigvalsh(Is)
     tr = np.maximum(np.trace(Is, axis1=1, axis2=2), 0.0)
-    for i in np.flatnonzero(lam[:, 0] < -1e-12 * tr - 1e-18)[:1]:
-        raise ModelError(f"{source}: {what[i]}: inertia is not positive semi-definite "
-                         f"(eigenvalues {lam[i].tolist()})")
+    bad = np.flatnonzero(lam[:, 0] < -1e-12 * tr - 1e-18)
+    if len(bad):
+        raise ModelError(f"{source}: {len(bad)} inertia(s) not positive semi-definite: "
+                         + "; ".join(f"{what[i]}: eigenvalues {lam[i].tolist()}" for i in bad[:50]))
 
 
 def _triangle(Is, links, source, strict):
-    """Principal moments of a physical body satisfy I1 + I2 >= I3: notes (or ModelError if strict).
+    """Principal moments of a physical body satisfy I1 + I2 >= I3: [(link, message)] for every link that
+    violates it (ModelError naming all of them if strict).
 
     Is (n, 3, 3) per link, links (n,) their names. Non-PSD inertias are reported per body, later."""
     lam = np.linalg.eigvalsh(np.asarray(Is, float).reshape(-1, 3, 3))       # ascending
     tol = 1e-9 * np.maximum(np.sum(np.abs(lam), axis=1), 1e-300)
-    notes = []
-    for i in np.flatnonzero((lam[:, 0] >= -tol) & (lam[:, 0] + lam[:, 1] < lam[:, 2] - tol)):
-        msg = (f"link {links[i]!r}: principal moments {lam[i].tolist()} violate the triangle inequality "
-               f"I1 + I2 >= I3 ({lam[i, 0] + lam[i, 1]:.6g} < {lam[i, 2]:.6g})")
-        if strict:
-            raise ModelError(f"{source}: {msg}")
-        notes.append(msg)
-    return notes
+    bad = [(links[i], f"principal moments {lam[i].tolist()} violate the triangle inequality I1 + I2 >= I3 "
+                      f"({lam[i, 0] + lam[i, 1]:.6g} < {lam[i, 2]:.6g})")
+           for i in np.flatnonzero((lam[:, 0] >= -tol) & (lam[:, 0] + lam[:, 1] < lam[:, 2] - tol))]
+    if bad and strict:
+        raise ModelError(f"{source}: {len(bad)} link(s) violate the triangle inequality: "
+                         + "; ".join(f"link {n!r}: {m}" for n, m in bad[:50]))
+    return bad
 
 
 def _vec(e, key, default, source, where, bound=np.inf):
@@ -534,38 +707,173 @@ def _vec(e, key, default, source, where, bound=np.inf):
 
 
 def _constraints(root, model, source):
-    """Loop closures from <constraint> elements (yourdfpy ignores them): frames mapped into body frames."""
+    """Loop closures (yourdfpy ignores them), all into the one closure model (model.Constraint), in file order:
+    - <constraint name type="revolute|spherical|fixed"> with <parent link>, <parent_origin>, <parent_axis>,
+      <child ...> (manipdyn's form; axes in the link frames);
+    - URDF+ (Chignoli et al., arXiv 2411.19753; generalized_rbda's models): <loop name type> with
+      <predecessor link><origin/></predecessor>, <successor link><origin/></successor> and one <axis xyz> in
+      the loop frame (default 1 0 0, as its urdfdom fork); type revolute or continuous -> "revolute", fixed,
+      spherical; prismatic and planar loops are refused (no such closure here);
+    - <loop_constraint name> with <parent link>, <parent_origin>, <child link>, <child_origin> (URDF+'s older
+      form): generalized_rbda enforces the two points' coincidence only -> "spherical";
+    - <coupling name> with <predecessor link>, <successor link>, <ratio value> (default 1), and the older
+      <joint_constraint> with <parent>, <child>, <gear_ratio value>: a gear between joint coordinates ->
+      "coupling" (see model.Constraint).
+    Frames are mapped into body frames. Names are unique across all kinds."""
     out, seen = [], set()
-    for e in root.findall("constraint"):
-        name, kind = e.get("name"), e.get("type")
-        where = f"constraint {name!r}"
+    for e in root:
+        if not isinstance(e.tag, str) or e.tag not in _CLOSURE_READERS:
+            continue
+        name = e.get("name")
         if not name or name in seen:
-            raise URDFError(f"{source}: a <constraint> has no name or a duplicate name ({name!r})")
+            raise URDFError(f"{source}: a <{e.tag}> has no name or a duplicate name ({name!r})")
         seen.add(name)
-        if kind not in ("revolute", "spherical", "fixed"):
-            raise URDFError(f"{source}: {where}: type {kind!r}; expected revolute, spherical or fixed")
-        sides = []
-        for side in ("parent", "child"):
-            link_el = e.find(side)
-            link = None if link_el is None else link_el.get("link")
-            if link not in model.frames:
-                raise URDFError(f"{source}: {where}: {side} link {link!r} is not defined")
-            fr, org = model.frames[link], e.find(f"{side}_origin")
-            R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
-            p = _vec(org, "xyz", (0, 0, 0), source, where, bound=MAX_LENGTH)
-            axis = _vec(e.find(f"{side}_axis"), "xyz", (0, 0, 1), source, where)
-            if not np.any(axis):
-                raise URDFError(f"{source}: {where}: {side}_axis has no direction")
-            axis = axis / np.max(np.abs(axis))           # scaled first: no overflow in the norm
-            sides += [fr.body, link, fr.R @ R, fr.p + fr.R @ p, fr.R @ axis / np.linalg.norm(axis)]
-        if sides[0] == sides[5]:
-            raise URDFError(f"{source}: {where}: parent and child are the same rigid body")
-        b = sides
-        out.append(Constraint(name, kind, b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8], b[9]))
+        out.append(_CLOSURE_READERS[e.tag](e, name, f"{e.tag} {name!r}", model, source))
     return tuple(out)
 
 
-def _actuated(root, model, source):  # noqa: ARG001
-    """Joints named in <transmission> elements, in q order."""
+def _side(model, link_el, org, axis, where, role, source):
+    """(body, link, R, p, axis) of one closure side in its body's frame: link_el names the link, org is its
+    <origin>-like element (xyz, rpy; absent = identity), axis (3,) in the link frame (or the origin frame if
+    the caller rotated it)."""
+    link = None if link_el is None else link_el.get("link")
+    if link not in model.frames:
+        raise URDFError(f"{source}: {where}: {role} link {link!r} is not defined")
+    fr = model.frames[link]
+    R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
+    p = _vec(org, "xyz", (0, 0, 0), source, where, bound=MAX_LENGTH)
+    return fr.body, link, fr.R @ R, fr.p + fr.R @ p, fr.R @ axis
+
+
+def _unit(axis, what, where, source):
+    """axis (3,) scaled to unit length (by its largest entry first: no overflow); URDFError if zero."""
+    if not np.any(axis):
+        raise URDFError(f"{source}: {where}: {what} has no direction")
+    axis = axis / np.max(np.abs(axis))
+    return axis / np.linalg.norm(axis)
+
+
+def _closure(name, kind, a, b, where, source, tag, ratio=0.0):
+    """The Constraint from two sides (body, link, R, p, axis); the sides must be different rigid bodies."""
+    if a[0] == b[0]:
+        raise URDFError(f"{source}: {where}: both sides are on the same rigid body ({a[1]!r}, {b[1]!r})")
+    return Constraint(name, kind, a[0], a[1], a[2], a[3], a[4], b[0], b[1], b[2], b[3], b[4], ratio=ratio, source=tag)
+
+
+def _read_constraint(e, name, where, model, source):
+    kind = e.get("type")
+    if kind not in ("revolute", "spherical", "fixed"):
+        raise URDFError(f"{source}: {where}: type {kind!r}; expected revolute, spherical or fixed")
+    sides = []
+    for role in ("parent", "child"):
+        axis = _unit(_vec(e.find(f"{role}_axis"), "xyz", (0, 0, 1), source, where), f"{role}_axis", where, source)
+        sides.append(_side(model, e.find(role), e.find(f"{role}_origin"), axis, where, role, source))
+    return _closure(name, kind, *sides, where, source, "constraint")
+
+
+_LOOP_TYPES = {"revolute": "revolute", "continuous": "revolute", "fixed": "fixed", "spherical": "spherical"}
+
+
+def _read_loop(e, name, where, model, source):
+    kind = e.get("type")
+    if kind not in _LOOP_TYPES:
+        why = "no such closure in manipdyn" if kind in ("prismatic", "planar") else "unknown type"
+        raise URDFError(f"{source}: {where}: type {kind!r}: {why}; expected revolute, continuous, fixed or spherical")
+    axis = _unit(_vec(e.find("axis"), "xyz", (1, 0, 0), source, where), "<axis>", where, source)
+    sides = []
+    for role in ("predecessor", "successor"):
+        el = e.find(role)
+        org = None if el is None else el.find("origin")
+        R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
+        sides.append(_side(model, el, org, R @ axis, where, role, source))   # the axis is in the loop frame
+    return _closure(name, _LOOP_TYPES[kind], *sides, where, source, "loop")
+
+
+def _read_loop_constraint(e, name, where, model, source):
+    sides = [_side(model, e.find(role), e.find(f"{role}_origin"), np.zeros(3), where, role, source)
+             for role in ("parent", "child")]
+    return _closure(name, "spherical", *sides, where, source, "loop_constraint")
+
+
+def _read_coupling(e, name, where, model, source, roles=("predecessor", "successor"), ratio_tag="ratio"):
+    sides = [_side(model, e.find(role), None, np.zeros(3), where, role, source) for role in roles]
+    r = e.find(ratio_tag)
+    ratio = 1.0 if r is None else _numbers(r, "value", 1, where, source)
+    if r is not None and ratio is None:
+        raise URDFError(f"{source}: {where}: <{ratio_tag}> has no value attribute")
+    ratio = 1.0 if r is None else _bounded(ratio, MAX_MASS, "ratio", r, "value", where, source)[0]
+    c = _closure(name, "coupling", *sides, where, source, e.tag, ratio=float(ratio))
+    for b in _path(model.parent, c.parent, c.child):
+        if model.kind[b] == FREEFLYER:
+            raise URDFError(f"{source}: {where}: the joints between {c.parent_link!r} and {c.child_link!r} include "
+                            f"the free flyer; a coupling relates 1-dof joints only")
+    return c
+
+
+def _path(parent, a, b):
+    """Bodies on the tree path between bodies a and b, below their common ancestor (parent[i] < i)."""
+    out = []
+    while a != b:
+        if a > b:
+            out.append(a)
+            a = parent[a]
+        else:
+            out.append(b)
+            b = parent[b]
+    return out
+
+
+_CLOSURE_READERS = {
+    "constraint": _read_constraint, "loop": _read_loop, "loop_constraint": _read_loop_constraint,
+    "coupling": _read_coupling,
+    "joint_constraint": lambda e, n, w, m, s: _read_coupling(e, n, w, m, s, ("parent", "child"), "gear_ratio"),
+}
+
+
+def _actuated(root, model, source):
+    """Joints named in <transmission> elements, and (URDF+) moving joints not marked independent="false" when
+    any joint carries the attribute (its default is true), in q order."""
     names = {j.get("name") for t in root.findall("transmission") for j in t.findall("joint")}
+    marked = {j.get("name"): j.get("independent") for j in root.findall("joint") if j.get("independent") is not None}
+    for name, value in marked.items():
+        if value not in ("true", "false"):
+            raise URDFError(f"{source}: joint {name!r}: independent={_show(value)}; expected \"true\" or \"false\"")
+    if marked:
+        names |= {j for j in model.joint_names if marked.get(j, "true") == "true" and j != ROOT_JOINT_NAME}
     return tuple(j for j in model.joint_names if j in names)   # others (fixed or absent) are ignored
+
+
+def _mimic_model(model, source):
+    """The MimicModel of a tree with <mimic> joints: q_m = multiplier q_t + offset, resolved through chains
+    (a mimic of a mimic); q order = the tree's with the mimic joints removed (Pinocchio 4.1's order)."""
+    rule = {j: (t, mult, off) for j, t, mult, off in model.mimic}
+    for j in rule:                                        # a mimic joint must be a moving joint of the tree
+        for n in (j, rule[j][0]):
+            if n not in model.joint_names:
+                raise URDFError(f"{source}: mimic joint {j!r}: {n!r} is not a moving joint of the tree")
+    idx = {n: i for i, n in enumerate(model.joint_names)}
+    free = [n for n in model.joint_names if n not in rule]
+    col = {n: k for k, n in enumerate(free)}
+    nv_full, nq_full = model.nv, model.nq
+    G, off = np.zeros((nv_full, len(free) + (model.nv - model.njoints))), np.zeros(nq_full)
+    Gq = np.zeros((nq_full, len(free) + (model.nq - model.njoints)))
+    ff = 1 if model.floating else 0                       # a free flyer (joint 0): 7 q, 6 v, identity blocks
+    if ff:
+        G[:6, :6], Gq[:7, :7] = np.eye(6), np.eye(7)
+    shift_v, shift_q = (5, 6) if ff else (0, 0)           # extra columns of the free flyer
+    for n in model.joint_names[ff:]:
+        seen, t, mult, c = {n}, n, 1.0, 0.0               # follow the chain: q_n = mult q_t + c
+        while t in rule:
+            t2, m2, o2 = rule[t]
+            if t2 in seen:
+                raise URDFError(f"{source}: mimic joints {sorted(seen)} mimic each other in a cycle")
+            seen.add(t2)
+            mult, c, t = mult * m2, c + mult * o2, t2
+        i, k = idx[n], col[t]
+        G[model.idx_v[i], k + shift_v] = mult
+        Gq[model.idx_q[i], k + shift_q] = mult
+        off[model.idx_q[i]] = c
+    notes = tuple(x for x in model.notes if "mimic joint(s) loaded as independent" not in x)
+    full = dataclasses.replace(model, notes=notes + (f"mimic joints honoured (mimic=True): "
+                                                     f"{', '.join(rule)}",))
+    return MimicModel(full, G, Gq, off, tuple(free), model.mimic)

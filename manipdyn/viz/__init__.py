@@ -45,18 +45,21 @@ def _to_model_order(model, names, q, source):
 
 
 def complete(model, Q, guess=None):
-    """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame: Q (T, nv).
+    """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame: Q (T, nq).
 
     Each frame starts from the previous one (the first from ``guess``, default the middle of the joint
-    ranges); a frame that does not assemble from there is retried from ASSEMBLY_STARTS guesses spread over
-    the joint ranges. Raises ConstraintError naming the frame and the actuated values when none assembles."""
+    ranges, a free flyer at its neutral pose); a frame that does not assemble from there is retried from
+    ASSEMBLY_STARTS guesses spread over the joint ranges. A free flyer whose columns are missing stays at
+    the guess's pose (closures inside the robot do not place it). Raises ConstraintError naming the frame
+    and the actuated values when none assembles."""
     Q = np.array(Q, dtype=float)
     if not np.isnan(Q).any():
         return Q
     known = ~np.isnan(Q[0])
     if np.any(np.isnan(Q[:, known])) or not np.all(np.isfinite(Q[~np.isnan(Q)])):
         raise InputError(f"complete({model.name!r}): the given coordinates must be finite in every frame")
-    fixed = [model.joint_names[i] for i in np.flatnonzero(known)]
+    fixed = [j for i, j in enumerate(model.joint_names)       # joints whose whole q block is given
+             if known[model.idx_q[i]:model.idx_q[i] + model.nqs[i]].all()]
     out = Q.copy()
     g = _mid_range(model) if guess is None else np.array(guess, dtype=float)
     for k in range(len(Q)):
@@ -65,13 +68,24 @@ def complete(model, Q, guess=None):
 
 
 def _mid_range(model):
-    """Middle of every joint's range (±π where a range is unbounded or wider than a turn): (nv,)."""
+    """Middle of every joint's range (±π where a range is unbounded or wider than a turn), a free flyer at
+    its neutral pose: (nq,)."""
     lo, hi = _ranges(model)
-    return 0.5 * (lo + hi)
+    return _one_dof_q(model, 0.5 * (lo + hi))
+
+
+def _one_dof_q(model, x):
+    """A configuration (nq,) with the 1-dof joints at x (njoints,) and a free flyer at its neutral pose."""
+    from ..configuration import neutral
+    q = neutral(model)
+    one = np.flatnonzero(model.nqs == 1)
+    q[model.idx_q[one]] = x[one]
+    return q
 
 
 def _ranges(model):
-    """(lo (nv,), hi (nv,)) joint ranges clipped to [−π, π] (a turn covers every revolute pose)."""
+    """(lo (njoints,), hi (njoints,)) joint ranges clipped to [−π, π] (a turn covers every revolute pose;
+    a free flyer's entry is unused)."""
     lo = np.clip(np.where(np.isfinite(model.lower), model.lower, -np.pi), -np.pi, np.pi)
     hi = np.clip(np.where(np.isfinite(model.upper), model.upper, np.pi), -np.pi, np.pi)
     return lo, np.maximum(hi, lo)
@@ -82,7 +96,8 @@ def _assemble_frame(model, q_known, known, fixed, g, k):
     from ..constraints import assemble
     lo, hi = _ranges(model)
     rng = np.random.default_rng(k)
-    starts = [g, _mid_range(model)] + [lo + (hi - lo) * rng.random(model.nv) for _ in range(ASSEMBLY_STARTS)]
+    starts = [g, _mid_range(model)] + [_one_dof_q(model, lo + (hi - lo) * rng.random(model.njoints))
+                                       for _ in range(ASSEMBLY_STARTS)]
     err = None
     for s in starts:
         s = np.array(s, dtype=float)
@@ -91,7 +106,7 @@ def _assemble_frame(model, q_known, known, fixed, g, k):
             return assemble(model, s, fixed=fixed).q
         except (ConstraintError, SingularError) as exc:
             err = exc
-    given = ", ".join(f"{n} = {v:.6g}" for n, v in zip(fixed, q_known[known]))
+    given = ", ".join(f"{model.q_names[i]} = {q_known[i]:.6g}" for i in np.flatnonzero(known))
     raise ConstraintError(f"{model.name!r}: the loop closures cannot be assembled at frame {k} ({given}) from "
                           f"{len(starts)} starting guesses; last: {err}")
 
@@ -213,16 +228,17 @@ def demo_motion(model, urdf_path) -> dict:
     if not model.floating and not model.constraints:
         mid, amp = _upright_centre(model, lo, hi, wave)
     swing = mid + amp * wave
+    if model.constraints:
+        turn = (hi - lo >= 2 * np.pi - 1e-9) & (model.kind == REVOLUTE)   # a crank turns once
+        swing[:, turn] = lo[turn] + np.pi + 2 * np.pi * t[:, None] / t[-1]
+    Q = swing
     if model.floating:                      # the free flyer stays at the origin; the other joints swing
         from ..configuration import neutral
         Q = np.tile(neutral(model), (len(t), 1))
         Q[:, model.idx_q[1:]] = swing[:, 1:]
-        return dict(t=t, Q=Q)
-    Q = swing
-    if model.constraints:
-        turn = (hi - lo >= 2 * np.pi - 1e-9) & (model.kind == REVOLUTE)   # a crank turns once
-        Q[:, turn] = lo[turn] + np.pi + 2 * np.pi * t[:, None] / t[-1]
-        Q[:, [i for i in range(model.nv) if model.joint_names[i] not in model.actuated]] = np.nan
+    if model.constraints:                   # passive 1-dof joints completed by assembly
+        passive = [i for i in range(model.njoints) if model.nqs[i] == 1 and model.joint_names[i] not in model.actuated]
+        Q[:, model.idx_q[passive]] = np.nan
         return dict(t=t, Q=complete(model, Q))
     return dict(t=t, Q=Q)
 

@@ -182,7 +182,8 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
         rt, rj = taper * rt0, taper * rj0
         ends = [model.p0[c] for c in range(model.njoints) if model.parent[c] == b]
         ends += [f.p for f in model.frames.values() if f.body == b and not any(np.allclose(f.p, e) for e in ends)]
-        ends += [c.pp for c in model.constraints if c.parent == b] + [c.pc for c in model.constraints if c.child == b]
+        loops = [c for c in model.constraints if c.type != "coupling"]    # a coupling has no place to draw
+        ends += [c.pp for c in loops if c.parent == b] + [c.pc for c in loops if c.child == b]
         if b < 0:
             if not model.floating:
                 parts.append((f"{nodes[-1]}/base_plate", g.Cylinder(float(1.2 * rj), float(1.8 * rj)),
@@ -198,7 +199,7 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
         for k, e in enumerate(e for e in ends if np.linalg.norm(e) > 1e-9):
             geom, T = _segment(g, np.zeros(3), np.asarray(e, float), (1.3 if b < 0 else 1.0) * rt)
             parts.append((f"{nodes[b]}/link{k}", geom, T, BASE_RGBA if b < 0 else LINK_RGBA))
-        for c in model.constraints:                 # the pin of a cut joint, drawn once (on the parent side)
+        for c in loops:                             # the pin of a cut joint, drawn once (on the parent side)
             if c.parent == b and c.type == "revolute":
                 parts.append((f"{nodes[b]}/{node_name(c.name)}_pin", g.Cylinder(float(2.2 * rj), float(0.8 * rj)),
                               _T(_axis_frame(c.axis_p), c.pp), CLOSURE_RGBA))
@@ -507,7 +508,7 @@ def _closure_gaps(model, Q):
     Phi = closure_terms(model, Q)[0]
     out, k = [], 0
     for c in model.constraints:
-        out.append(np.linalg.norm(Phi[:, k:k + 3], axis=1))
+        out.append(np.abs(Phi[:, k]) if c.type == "coupling" else np.linalg.norm(Phi[:, k:k + 3], axis=1))
         k += c.n_rows
     return out
 

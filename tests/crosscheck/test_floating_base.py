@@ -106,9 +106,16 @@ def test_root_joint_refuses_other_values(value, write_urdf):
             load()
 
 
-def test_root_joint_with_a_reduction_is_refused_before_reading():
-    with pytest.raises(InputError, match="cannot yet be combined with root_joint='free_flyer'"):
-        load_urdf("/no/such/file.urdf", root_joint="free_flyer", locked={"j": 0.0})
+def test_root_joint_with_a_reduction():
+    # the reduction itself is held to Pinocchio's buildReducedModel in test_reduce.py
+    path = robots_dir() / ROBOTS["solo12"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = load_urdf(path, root_joint="free_flyer", locked={"FL_HAA": 0.2}, tips=["FR_FOOT"])
+    assert model.joint_names == ("root_joint", "FR_HAA", "FR_HFE", "FR_KFE") and (model.nq, model.nv) == (10, 9)
+    assert model.locked["FL_HAA"] == 0.2 and model.locked["HL_KFE"] == 0.0
+    with pytest.raises(InputError, match="'root_joint' is 0.0: expected a pose"):
+        load_urdf(path, root_joint="free_flyer", locked={"root_joint": 0.0})
 
 
 def test_a_moving_joint_named_root_joint_is_refused():
@@ -116,13 +123,14 @@ def test_a_moving_joint_named_root_joint_is_refused():
                 [("root_joint", "revolute", "base", "l1", (0, 0, 0), (0, 0, 0), (0, 0, 1))])
     with pytest.raises(URDFError, match="'root_joint' exists already"):
         load_urdf_string(text, root_joint="free_flyer")
-    with pytest.warns(FloatingBaseWarning):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FloatingBaseWarning)   # a body beside the root, nothing hangs: no warning
         assert load_urdf_string(text).joint_names == ("root_joint",)     # without the free flyer: fine
 
 
 BODY = {"base": inertial_xml(2.5, com=(0.1, 0, 0), I=(0.1, 0.2, 0.3, 0, 0, 0)), "leg": inertial_xml(1.0, I=(1, 1, 1, 0, 0, 0)),
         "imu": inertial_xml(0.5, I=(0.01, 0.01, 0.01, 0, 0, 0))}
-BODY_JOINTS = [("hip", "revolute", "base", "leg", (0, 0, -0.1), (0, 0, 0), (0, 1, 0)),
+BODY_JOINTS = [("hip", "revolute", "base", "leg", (0, 0, -0.3), (0, 0, 0), (0, 1, 0)),   # hangs: 0.3 below
                ("imu_fixed", "fixed", "base", "imu", (0.2, 0, 0), (0, 0, 0), None)]
 
 
@@ -372,8 +380,14 @@ def test_cli_inspect_shows_the_free_flyer(capsys):
     assert "warning:" in capsys.readouterr().out
     assert main(["inspect", str(path), "--root-joint", "floating"]) == 2
     assert "choose from 'free_flyer'" in capsys.readouterr().err
-    assert main(["validate", str(path), "--root-joint", "free_flyer", "--lock", "FL_HAA=0"]) == 2
-    assert "cannot yet be combined" in capsys.readouterr().err
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "FL_HAA=0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "nq = 18, nv = 17" in out and "locked joints: FL_HAA = 0.5" in out
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "root_joint=0"]) == 2
+    assert "expected a pose" in capsys.readouterr().err
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "root_joint=1,2,3,0,0,0.6,0.8"]) == 0
+    out = capsys.readouterr().out
+    assert "nq = nv = 12" in out and "root_joint = [1.0, 2.0, 3.0, 0.0, 0.0, 0.6, 0.8]" in out
 
 
 def test_exports():

@@ -1,0 +1,260 @@
+"""Loader quirks (Model.quirks), the zero_mass_inertia policy, <robot version>, unknown elements, URDF+ closures
+and couplings, mimic joints honoured — each against Pinocchio 4.1 where Pinocchio is the reference."""
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from manipdyn import FloatingBaseWarning, InertiaWarning, ModelError, URDFError, load_urdf, load_urdf_string
+from manipdyn.constraints import closure_terms, constrained_forward_dynamics
+from manipdyn.dynamics import mimic as mim
+from manipdyn.dynamics.lagrange import mass_matrix
+from manipdyn.errors import QuirkWarning
+from manipdyn.validation.measure import error
+from manipdyn.validation.reference import pin
+from manipdyn.validation.zoo import ARMS, FLOATING, robots_dir
+
+ROOT = Path(__file__).resolve().parents[2]
+P = pin()
+
+
+def inertial(m, I=(0.1, 0.2, 0.25), xyz="0.1 0 0", rpy="0 0 0"):
+    return (f'<inertial><origin xyz="{xyz}" rpy="{rpy}"/><mass value="{m}"/><inertia ixx="{I[0]}" iyy="{I[1]}" '
+            f'izz="{I[2]}" ixy="0" ixz="0" iyz="0"/></inertial>')
+
+
+def robot(links, joints="", extra="", version=None):
+    v = "" if version is None else f' version="{version}"'
+    body = "".join(f'<link name="{n}">{x}</link>' for n, x in links.items())
+    return f'<robot name="r"{v}>{body}{joints}{extra}</robot>'
+
+
+def joint(name, parent, child, xyz="0 0 0", axis="0 0 1", kind="revolute", extra=""):
+    return (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}"/><axis xyz="{axis}"/><limit effort="1" velocity="1" lower="-3" upper="3"/>'
+            f'{extra}</joint>')
+
+
+CHAIN = lambda m2="0", I2=(0.1, 0.2, 0.25): robot(  # noqa: E731
+    {"base": "", "a": inertial(1.0), "b": inertial(m2, I2, xyz="0.1 0.2 0")},
+    joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0", axis="0 1 0"))
+
+
+def kinds(model):
+    return {(q.kind, q.name) for q in model.quirks}
+
+
+def load_quiet(text, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_urdf_string(text, **kw)
+
+
+# ---- zero_mass_inertia: keep (Pinocchio) and drop ----------------------------------------------------------
+
+def test_zero_mass_inertia_keep_is_pinocchios_model_and_drop_is_the_massless_link():
+    text = CHAIN()
+    with pytest.warns(InertiaWarning, match=r"zero_mass_inertia \(1\): link 'b': mass 0.*kept"):
+        keep = load_urdf_string(text)
+    assert ("zero_mass_inertia", "b") in kinds(keep)
+    drop = load_quiet(text, zero_mass_inertia="drop")
+    pm = P.buildModelFromXML(text)
+    assert pm.inertias[2].mass == 0.0 and np.allclose(pm.inertias[2].inertia, np.diag([0.1, 0.2, 0.25]))  # kept
+    pm_drop = P.buildModelFromXML(CHAIN(I2=(0, 0, 0)))          # the same file with the inertia zeroed
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        q = rng.uniform(-np.pi, np.pi, 2)
+        for model, ref in ((keep, pm), (drop, pm_drop)):
+            M = P.crba(ref, ref.createData(), q)
+            M = np.triu(M) + np.triu(M, 1).T
+            assert error(mass_matrix(model, q), M) < 1e-13     # round-off level (2 joints)
+    assert not np.allclose(mass_matrix(keep, [0.3, 0.2]), mass_matrix(drop, [0.3, 0.2]))   # the policy matters
+    with pytest.raises(Exception, match="zero_mass_inertia='lose'"):
+        load_urdf_string(text, zero_mass_inertia="lose")
+
+
+def test_no_inertial_and_rotated_root_inertial_are_reported():
+    text = robot({"base": inertial(2.0, rpy="0 0 0.3"), "a": "", "b": inertial(1.0)},
+                 joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0"))
+    with pytest.warns(QuirkWarning) as rec:
+        model = load_urdf_string(text)
+    assert {("no_inertial", "a"), ("rotated_root_inertial", "base")} <= kinds(model)
+    msgs = [str(w.message) for w in rec]
+    assert sum("no_inertial" in m for m in msgs) == 1 and sum("rotated_root_inertial" in m for m in msgs) == 1
+
+
+def test_triangle_names_every_link_and_non_psd_lists_all():
+    bad = (1.0, 1.0, 3.0)
+    text = robot({"base": "", "a": inertial(1.0, bad), "b": inertial(1.0, bad)},
+                 joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0"))
+    with pytest.warns(InertiaWarning) as rec:
+        model = load_urdf_string(text)
+    tri = [str(w.message) for w in rec if "triangle" in str(w.message)]
+    assert len(tri) == 1 and "link 'a'" in tri[0] and "link 'b'" in tri[0]          # one warning, both links
+    assert {("triangle", "a"), ("triangle", "b")} <= kinds(model)
+    with pytest.raises(ModelError, match=r"2 link\(s\).*link 'a'.*link 'b'"):
+        load_urdf_string(text, strict=True)
+    neg = (1.0, 1.0, -3.0)
+    text = robot({"base": "", "a": inertial(1.0, neg), "b": inertial(1.0, neg)},
+                 joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0"))
+    with pytest.raises(ModelError, match=r"2 inertia\(s\) not positive semi-definite.*'a'.*'b'"):
+        load_quiet(text)
+
+
+# ---- <robot version> and unknown elements ----------------------------------------------------------------
+
+@pytest.mark.parametrize("version, pin_loads", [("1.0", True), ("1.2", True), (" 1.0", True), ("0.0", False),
+                                                ("2.0", False), ("1", False), ("foo", False)])
+def test_version_is_tolerated_and_reported_where_urdfdom_refuses_it(version, pin_loads):
+    text = robot({"base": "", "a": inertial(1.0)}, joint("j1", "base", "a"), version=version)
+    try:                                  # urdfdom 6.0's rule, observed through pin 4.1
+        P.buildModelFromXML(text)
+        loads = True
+    except (RuntimeError, ValueError):
+        loads = False
+    assert loads == pin_loads
+    model = load_quiet(text)
+    assert model.nv == 1 and (("version", "robot") in kinds(model)) == (not pin_loads)
+    if not pin_loads:
+        with pytest.raises(URDFError, match="version"):
+            load_urdf_string(text, strict=True)
+
+
+def test_unknown_elements_are_reported_by_name_never_dropped():
+    text = robot({"base": "", "a": inertial(1.0) + "<contact/>"}, joint("j1", "base", "a", extra="<wobble/>"),
+                 extra='<sensor name="imu"/>')
+    with pytest.warns(QuirkWarning, match="unknown_element") as rec:
+        model = load_urdf_string(text)
+    names = {q.name for q in model.quirks if q.kind == "unknown_element"}
+    assert names == {"<sensor>", "link 'a'/<contact>", "joint 'j1'/<wobble>"}, names
+    assert sum("unknown_element" in str(w.message) for w in rec) == 1
+    with pytest.raises(URDFError, match="strict=True.*<sensor"):
+        load_urdf_string(text, strict=True)
+    with pytest.raises(URDFError, match="quat_xyzw"):
+        load_quiet(text.replace('<origin xyz="0 0 0"/>', '<origin xyz="0 0 0" quat_xyzw="0 0 0 1"/>'))
+
+
+# ---- free_root: the rule on the zoo ----------------------------------------------------------------------
+
+def test_free_root_flags_the_legged_robots_and_drones_not_the_arms():
+    root = robots_dir()
+    flagged = {}
+    for rel in list(ARMS) + list(FLOATING):
+        if (root / rel).is_file():
+            with warnings.catch_warnings(record=True) as rec:
+                warnings.simplefilter("always")
+                model = load_urdf(root / rel)
+            fr = [q for q in model.quirks if q.kind == "free_root"]
+            assert len(fr) == (sum(issubclass(w.category, FloatingBaseWarning) for w in rec))
+            flagged[rel] = bool(fr)
+    assert not any(flagged[r] for r in ARMS if r in flagged)
+    missed = sorted(r for r in FLOATING if r in flagged and not flagged[r])
+    assert missed == ["pr2_description/urdf/pr2.urdf"], missed    # a wheeled base: nothing in its shape says so
+
+
+# ---- URDF+ ---------------------------------------------------------------------------------------------------
+
+FOURBAR = (ROOT / "urdf" / "fourbar.urdf").read_text()
+LOOP = '''<loop name="loop" type="revolute">
+    <predecessor link="coupler"><origin xyz="0.35 0 0" rpy="0 0 0"/></predecessor>
+    <successor link="rocker"><origin xyz="0.3 0 0" rpy="0 0 0"/></successor>
+    <axis xyz="0 1 0"/>
+  </loop>'''
+
+
+def urdfplus_fourbar():
+    text = re.sub(r"<constraint name=.*?</constraint>", LOOP, FOURBAR, flags=re.S)
+    text = re.sub(r"<transmission name=.*?</transmission>", "", text, flags=re.S)
+    return (text.replace('name="j1_crank" type="revolute"', 'name="j1_crank" type="revolute" independent="true"')
+            .replace('name="j2_coupler" type="revolute"', 'name="j2_coupler" type="revolute" independent="false"')
+            .replace('name="j3_rocker" type="revolute"', 'name="j3_rocker" type="revolute" independent="false"'))
+
+
+def test_urdfplus_loop_is_the_same_closure_as_the_constraint_form():
+    a, b = load_urdf_string(FOURBAR), load_urdf_string(urdfplus_fourbar())
+    assert b.constraints[0].source == "loop" and b.actuated == a.actuated == ("j1_crank",)
+    rng = np.random.default_rng(5)
+    Q, V = rng.uniform(-np.pi, np.pi, (20, 3)), rng.normal(0, 2, (20, 3))
+    for x, y in zip(closure_terms(a, Q, V), closure_terms(b, Q, V)):
+        assert np.max(np.abs(x - y)) == 0.0                          # the same rows, bit for bit
+
+
+def test_loop_constraint_older_form_is_a_point_closure():
+    text = re.sub(r"<constraint name=.*?</constraint>", '''<loop_constraint name="c1"><parent link="coupler"/>
+        <parent_origin xyz="0.35 0 0"/><child link="rocker"/><child_origin xyz="0.3 0 0"/></loop_constraint>''',
+                  FOURBAR, flags=re.S)
+    c = load_urdf_string(text).constraints[0]
+    assert c.type == "spherical" and c.source == "loop_constraint" and np.allclose(c.pp, [0.35, 0, 0])
+
+
+def test_unread_loop_types_are_refused_by_name():
+    with pytest.raises(URDFError, match="loop 'loop': type 'prismatic'"):
+        load_urdf_string(urdfplus_fourbar().replace('type="revolute">\n    <predecessor', 'type="prismatic">\n    <predecessor'))
+    with pytest.raises(URDFError, match="independent='maybe'"):
+        load_urdf_string(urdfplus_fourbar().replace('independent="false"', 'independent="maybe"', 1))
+
+
+ROTOR = robot({"base": "", "link": inertial(1.0, (0.01, 0.02, 0.03)), "rotor": inertial(0.2, (1e-3, 1e-3, 2e-3), xyz="0 0 0"),
+               "tip": inertial(0.5, (0.01, 0.01, 0.01))},
+              joint("j1", "base", "link", axis="0 1 0") + joint("j1r", "base", "rotor", axis="0 1 0")
+              + joint("j2", "link", "tip", xyz="0.4 0 0", axis="0 1 0"))
+COUPLING = '<coupling name="gear" type="rolling"><predecessor link="link"/><successor link="rotor"/><ratio value="6.0"/></coupling>'
+MIMIC = '<mimic joint="j1" multiplier="6.0" offset="0"/>'
+
+
+def test_coupling_dynamics_equal_pinocchios_mimic_model():
+    """A gear (URDF+ <coupling>, ratio 6: q̇_rotor = 6 q̇_link) as a closure row, against Pinocchio's mimic joint
+    (the same gear as rotor = 6 · link): q̈ of the independent joints."""
+    ours = load_urdf_string(ROTOR.replace("</robot>", COUPLING + "</robot>"))
+    c = ours.constraints[0]
+    assert c.type == "coupling" and c.ratio == 6.0 and c.n_rows == 1
+    pin_text = ROTOR.replace('<child link="rotor"/>', '<child link="rotor"/>').replace(
+        '<limit effort="1" velocity="1" lower="-3" upper="3"/></joint><joint name="j2"',
+        '<limit effort="1" velocity="1" lower="-3" upper="3"/>' + MIMIC + '</joint><joint name="j2"')
+    pm = P.buildModelFromXML(pin_text, mimic=True)
+    pd = pm.createData()
+    names = [pm.names[i] for i in range(1, pm.njoints) if pm.joints[i].nv]
+    assert names == ["j1", "j2"] and ours.joint_names == ("j1", "j2", "j1r")   # depth-first
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for _ in range(20):
+        qi, vi, ti = rng.uniform(-3, 3, 2), rng.normal(0, 2, 2), rng.normal(0, 5, 2)
+        q, v = np.array([qi[0], qi[1], 6 * qi[0]]), np.array([vi[0], vi[1], 6 * vi[0]])
+        qdd, _ = constrained_forward_dynamics(ours, q, v, np.array([ti[0], ti[1], 0.0]))
+        M = P.crba(pm, pd, qi, P.Convention.WORLD)
+        M = np.triu(M) + np.triu(M, 1).T
+        ref = np.linalg.solve(M, ti - P.rnea(pm, pd, qi, vi, np.zeros(2)))
+        assert abs(qdd[2] - 6 * qdd[0]) < 1e-12 * max(1, abs(qdd[2]))
+        worst = max(worst, error(qdd[:2], ref) / np.linalg.cond(M))
+    assert worst < 1e-14, worst                     # measured 6.2e-17 (cond(M)-scaled)
+
+
+# ---- mimic=True against Pinocchio 4.1's mimic model --------------------------------------------------------
+
+@pytest.mark.parametrize("rel", ["panda_description/urdf/panda.urdf", "baxter_description/urdf/baxter.urdf"])
+def test_mimic_model_matches_pinocchio(rel):
+    path = robots_dir() / rel
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mm = load_urdf(path, mimic=True)
+    pm = P.buildModelFromUrdf(str(path), mimic=True)
+    pd = pm.createData()
+    assert mm.nq == pm.nq and mm.nv == pm.nv
+    assert mm.joint_names == tuple(pm.names[i] for i in range(1, pm.njoints) if pm.joints[i].nv)
+    rng = np.random.default_rng(11)
+    worst = [0.0, 0.0, 0.0]
+    for _ in range(20):
+        q, v, a = rng.uniform(-1, 1, mm.nq), rng.normal(0, 2, mm.nv), rng.normal(0, 5, mm.nv)
+        tau = P.rnea(pm, pd, q, v, a)
+        M = P.crba(pm, pd, q, P.Convention.WORLD)         # pin 4.1's aba refuses mimic joints; crba WORLD takes them
+        M = np.triu(M) + np.triu(M, 1).T
+        worst[0] = max(worst[0], error(mim.rnea(mm, q, v, a), tau))
+        worst[1] = max(worst[1], error(mim.crba(mm, q), M))
+        worst[2] = max(worst[2], error(mim.aba(mm, q, v, tau), a) / np.linalg.cond(M))
+    assert max(worst) < 1e-13, worst     # measured rnea 1.7e-15, crba 1.5e-15, aba 4.6e-17 (cond-scaled)
+    Qf, _, _ = mim.full_state(mm, q)
+    for j, t, mult, off in mm.mimic:                  # the mimicking joint follows its target
+        i, k = mm.full.joint_index(j), mm.full.joint_index(t)
+        assert Qf[i] == mult * Qf[k] + off
