@@ -232,13 +232,17 @@ def _play(args) -> int:
         warnings.simplefilter("always", viz.PlaybackWarning)
         if args.traj:
             t, Q = viz.read_trajectory(args.traj, model)
-            Q = viz.complete(model, Q) if model.constraints else Q
+            motion = dict(t=t, Q=viz.complete(model, Q) if model.constraints else Q)
         else:
-            t, Q = viz.demo(model, args.urdf)
-        sc = viz.scene_for(model, args.urdf, t, Q, show_frames=args.frames, package_dirs=package_dirs)
+            motion = viz.demo_motion(model, args.urdf)
+        t = motion.pop("t")
+        sc = viz.scene_for(model, args.urdf, t, motion.pop("Q"), show_frames=args.frames,
+                           package_dirs=package_dirs, **motion)
     for w in caught:
         print(f"{'note' if issubclass(w.category, viz.PlaybackWarning) else 'warning'}: {w.message}",
               file=sys.stderr)
+    for note in (sc.plots or {}).get("notes", []):
+        print(f"note: {note}", file=sys.stderr)
     if args.html:
         Path(args.html).write_text(viz.scene.html(sc), encoding="utf-8")
         print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:.4g} fps over {t[-1] - t[0]:.3g} s "

@@ -33,7 +33,7 @@ class Fault:
 
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
-         "validation", "reduce")
+         "validation", "reduce", "viz")
 
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
@@ -55,6 +55,7 @@ _DH = "tests/unit/test_dh.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
+    "viz": ("tests/viz/test_play_signals.py", "tests/viz/test_play_page.py"),
     "loader": ("tests/unit/test_q_order.py", "tests/crosscheck/test_single_joint.py",
                "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py",
                "tests/properties/test_random_trees.py"),
@@ -337,6 +338,25 @@ FAULTS = (
           "Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])",
           "Ri, pi = _fixed_placement(model, i, 0.0)",
           ("tests/crosscheck/test_reduce.py",), "a locked joint is frozen at 0 whatever value it was locked at"),
+    # ---------------------------------------------------------------- viz (playback plots and framing)
+    Fault("viz-rates-first-order", "viz", "manipdyn/viz/plots.py",
+          "V = np.gradient(Q, t, axis=0, edge_order=2 if T > 2 else 1)",
+          "V = np.vstack([np.diff(Q, axis=0) / np.diff(t)[:, None], (Q[-1:] - Q[-2:-1]) / (t[-1] - t[-2])])",
+          ("tests/viz/test_play_signals.py",), "a trajectory file's rates by one-sided first-order differences"),
+    Fault("viz-closed-chain-rates-not-completed", "viz", "manipdyn/viz/plots.py",
+          "            Q, V, A, _ = complete_state(model, Q, V[:, act], A[:, act])",
+          "            pass",
+          ("tests/viz/test_play_signals.py",),
+          "a closed chain's passive rates taken from finite differences instead of the closures"),
+    Fault("viz-slider-does-not-seek", "viz", "manipdyn/viz/page.py",
+          'slider.addEventListener("input", function () { pause(); seek(parseFloat(slider.value)); });',
+          'slider.addEventListener("input", function () { pause(); });',
+          ("tests/viz/test_play_page.py::test_slider_seeks_and_cursor_follows",),
+          "moving the time slider pauses but does not seek"),
+    Fault("viz-ground-at-base-origin", "viz", "manipdyn/viz/scene.py",
+          "    else:\n        ground_z = base_low", "    else:\n        ground_z = 0.0",
+          ("tests/viz/test_play_page.py::test_ground_is_under_the_robot",),
+          "the ground at the base frame's origin whatever lies below it (the SPM's base sinks into it)"),
     Fault("reduce-locked-free-flyer-quaternion-conjugated", "reduce", "manipdyn/reduce.py",
           "np.ascontiguousarray(np.atleast_1d(value), float), 0, R, p)",
           "np.ascontiguousarray(np.atleast_1d(value) * np.r_[1, 1, 1, -1, -1, -1, 1][:np.size(value)], float), 0, R, p)",
