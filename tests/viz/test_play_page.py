@@ -170,15 +170,18 @@ def test_joint_picker_and_plot_series(browser, tmp_path_factory):
     assert shown == ["joint2", "joint3", "joint4", "joint5"]
 
 
-def test_ur5_meshes_are_drawn(browser, tmp_path_factory):
-    out, sc = page("ur5", tmp_path_factory)
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_zoo_arm_meshes_are_drawn(name, browser, tmp_path_factory):
+    out, sc = page(name, tmp_path_factory)
     open_at(browser, out, 2.0)
-    shot = browser.shot(ART / "play_ur5.png")
+    shot = browser.shot(ART / f"play_{name}.png")
     cover = robot_pixels(browser, shot).mean()
     # every link's DAE mesh was parsed into triangles (thousands of vertices in all)
     vertices = browser.run("""var n = 0, meshes = 0;
         viewer.scene_tree.find(['manipdyn']).object.traverse(function (o) {
           if (o.isMesh && o.geometry && o.geometry.attributes.position) { meshes++; n += o.geometry.attributes.position.count; } });
         return [meshes, n];""")
-    print(f"\nur5: {vertices[0]} meshes, {vertices[1]} vertices; robot covers {cover:.1%} of the 3-D view")
+    has = browser.run("""return [!!document.querySelector('input[type=range]'), document.querySelectorAll('svg').length];""")
+    print(f"\n{name}: {vertices[0]} meshes, {vertices[1]} vertices; robot covers {cover:.1%} of the 3-D view")
     assert vertices[0] >= 7 and vertices[1] > 10_000 and cover > 0.10
+    assert has[0] and has[1] >= 3, has                       # the time slider and the q, q̇, τ plots
