@@ -43,11 +43,17 @@ def bundled_models() -> list[Path]:
 
 
 def _validate(args) -> int:
+    if args.against is not None:
+        return _referee(args)
+    if args.markdown:
+        raise InputError("--markdown needs --against (the engines referee)")
     from tqdm import tqdm
 
     from .validation import format_report, validate
     from .validation.mimic import validate_mimic
 
+    if args.states is None:
+        args.states = 1000
     runs = _validation_runs(args)     # every model and reference loads before the first state runs
     print(f"manipdyn validate: {len(runs)} model(s), {args.states} random states each, seed {args.seed}, "
           f"tolerance {args.tol:g} (err = max|x - y| / max(max|y|, 1))")
@@ -67,6 +73,62 @@ def _validate(args) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1))
     return 1 if failed else 0
+
+
+def _referee(args) -> int:
+    """validate --against ENGINES: τ, M, q̈ of each engine against manipdyn, disagreements explained."""
+    from .validation.engines import format_referee, parse_engines, referee
+
+    engines = parse_engines(args.against)
+    states = args.states if args.states is not None else 100
+    if args.root_joint or args.reference or args.lock or args.root or args.tips or args.prune or args.mimic:
+        raise InputError("--against compares the file as written, fixed base: --root-joint, --reference, --mimic "
+                         "and the reduction options do not apply")
+    if args.markdown and not args.zoo:
+        raise InputError("--markdown writes the --zoo --against summary: add --zoo")
+    if args.zoo:
+        if args.urdf:
+            raise InputError("--zoo --against runs over every example-robot-data URDF: give no URDF files")
+        return _referee_zoo(args, engines, states)
+    from .io.urdf import load_urdf
+    reports = []
+    for path in [Path(p) for p in args.urdf] or bundled_models():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = load_urdf(path)
+        rep = referee(model, path, engines, n_states=states, seed=args.seed)
+        reports.append(rep)
+        print(format_referee(rep))
+    if args.json:
+        Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1, default=_jsonable))
+    return 0 if all(r.explained for r in reports) else 1
+
+
+def _referee_zoo(args, engines, states) -> int:
+    """validate --zoo --against: the sweep over example-robot-data, its summary (and --markdown)."""
+    from .validation.referee_zoo import markdown, sweep
+
+    def show(row):
+        cells = ", ".join(f"{e} {x.get('status')}" + (f" {x['worst']:.1e}->{x['worst_neutral']:.1e}"
+                                                      if x.get("worst") is not None and x.get("worst_neutral")
+                                                      is not None else "")
+                          for e, x in row["engines"].items())
+        print(f"{row['file']}: manipdyn {'loaded' if row['manipdyn'] == 'loaded' else 'refused'}; {cells}",
+              flush=True)
+    rows = sweep(engines, n_states=states, seed=args.seed, progress=show)
+    md = markdown(rows, engines, states, args.seed)
+    print(md.split("## Causes named")[0])
+    if args.markdown:
+        Path(args.markdown).write_text(md, encoding="utf-8")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1, default=_jsonable))
+    ok = all(x.get("explained", True) for r in rows for x in r["engines"].values())
+    return 0 if ok else 1
+
+
+def _jsonable(x):
+    """numpy scalars in JSON."""
+    return float(x) if hasattr(x, "__float__") else str(x)
 
 
 def _validate_paths(args) -> list[tuple]:
@@ -120,7 +182,8 @@ def add_root_joint_option(p):
 def add_reduction_options(p):
     """--lock / --root / --tips / --prune: model only what the scene needs (manipdyn.reduce)."""
     p.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
-                   help="hold a joint fixed at a value (repeatable)")
+                   help="hold a joint fixed at a value (repeatable); a free flyer at a pose: "
+                        "root_joint=x,y,z,qx,qy,qz,qw")
     p.add_argument("--root", help="keep only chains from this link ...")
     p.add_argument("--tips", nargs="+", metavar="LINK", help="... to these links (bodies beyond merge as payload)")
     p.add_argument("--prune", action="store_true", help="drop massless moving leaves")
@@ -133,10 +196,11 @@ def reduction(args) -> dict:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
             raise InputError(f"--lock {item!r}: expected JOINT=VALUE")
-        try:
-            v = float(value)
+        try:                                   # a number, or a free flyer's pose x,y,z,qx,qy,qz,qw
+            v = [float(x) for x in value.split(",")] if "," in value else float(value)
         except ValueError:
-            raise InputError(f"--lock {item!r}: expected JOINT=VALUE with a number") from None
+            raise InputError(f"--lock {item!r}: expected JOINT=VALUE with a number (a free flyer: "
+                             f"JOINT=x,y,z,qx,qy,qz,qw)") from None
         if name.strip() in locked:
             raise InputError(f"--lock {item!r}: joint {name.strip()!r} is locked twice")
         locked[name.strip()] = v
@@ -217,13 +281,17 @@ def _play(args) -> int:
         warnings.simplefilter("always", viz.PlaybackWarning)
         if args.traj:
             t, Q = viz.read_trajectory(args.traj, model)
-            Q = viz.complete(model, Q) if model.constraints else Q
+            motion = dict(t=t, Q=viz.complete(model, Q) if model.constraints else Q)
         else:
-            t, Q = viz.demo(model, args.urdf)
-        sc = viz.scene_for(model, args.urdf, t, Q, show_frames=args.frames, package_dirs=package_dirs)
+            motion = viz.demo_motion(model, args.urdf)
+        t = motion.pop("t")
+        sc = viz.scene_for(model, args.urdf, t, motion.pop("Q"), show_frames=args.frames,
+                           package_dirs=package_dirs, **motion)
     for w in caught:
         print(f"{'note' if issubclass(w.category, viz.PlaybackWarning) else 'warning'}: {w.message}",
               file=sys.stderr)
+    for note in (sc.plots or {}).get("notes", []):
+        print(f"note: {note}", file=sys.stderr)
     if args.html:
         Path(args.html).write_text(viz.scene.html(sc), encoding="utf-8")
         print(f"wrote {args.html}: {len(sc.times)} frames at {sc.fps:.4g} fps over {t[-1] - t[0]:.3g} s "
@@ -273,13 +341,19 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--zoo", action="store_true",
                    help="also validate example-robot-data's arms (fixed base) and its legged robots, humanoids "
                         "and drones (free-flyer root, whatever --root-joint says)")
-    v.add_argument("--states", type=_int_in(1, MAX_STATES), default=1000,
-                   help=f"random states per model, 1..{MAX_STATES} (default 1000)")
+    v.add_argument("--states", type=_int_in(1, MAX_STATES), default=None,
+                   help=f"random states per model, 1..{MAX_STATES} (default 1000; 100 with --against)")
     v.add_argument("--seed", type=_int_in(0, MAX_SEED), default=0, help=f"0..{MAX_SEED} (default 0)")
     v.add_argument("--tol", type=_positive_finite, default=1e-12,
                    help="largest error measure that passes, finite and > 0 (default 1e-12)")
     v.add_argument("--reference", help="validate against Pinocchio's model of this URDF instead")
     v.add_argument("--json", help="write the report as JSON to this file")
+    v.add_argument("--against", metavar="ENGINES",
+                   help="compare τ (inverse dynamics), M and q̈ (forward dynamics) with other engines instead, "
+                        "comma-separated: pinocchio,mujoco,pybullet,drake (pip install manipdyn[engines]); a "
+                        "missing engine is skipped with a note; each disagreement above 1e-9 is explained by "
+                        "the engine's read-back link parameters and checked again with them (exit 1 if not)")
+    v.add_argument("--markdown", help="with --zoo --against: write the summary as markdown to this file")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
     add_mimic_option(v)
     add_root_joint_option(v)
@@ -408,7 +482,7 @@ def _preflight(args):
         _check_input_file(path, "URDF")
     if getattr(args, "reference", None):
         _check_input_file(args.reference, "--reference URDF")
-    for option in ("json", "html"):
+    for option in ("json", "html", "markdown"):
         if getattr(args, option, None) and not (args.command == "inspect" and getattr(args, option) == "-"):
             _check_output_file(getattr(args, option), f"--{option}")
     if getattr(args, "out", None) is not None:

@@ -21,10 +21,10 @@ import numpy as np
 from .errors import InputError
 from .joints import FREEFLYER, PRISMATIC, difference_kernel, integrate_kernel
 from .dynamics.state import as_batch, check_model, check_scalar, unbatch
+from .model import QUAT_TOL
 
 __all__ = ["neutral", "integrate", "difference", "random_configuration", "normalize", "QUAT_TOL"]
 
-QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a configuration (integrate's output: ~1e-16)
 REVOLUTE_RANGE = np.pi   # random_configuration: unbounded revolute joints in [−π, π] rad
 PRISMATIC_RANGE = 0.5    # ... unbounded prismatic joints in [−0.5, 0.5] m
 FREE_RANGE = 1.0         # ... a free flyer's position in [−1, 1]³ m

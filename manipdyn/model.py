@@ -24,7 +24,9 @@ from .errors import InputError
 from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES
 
 __all__ = ["Model", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
-           "FREEFLYER"]
+           "FREEFLYER", "QUAT_TOL"]
+
+QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's q (integrate's output: ~1e-16)
 
 
 def check_gravity(gravity, where="gravity") -> np.ndarray:
@@ -135,7 +137,8 @@ class Model:
     notes: tuple = ()      # what the loader did that a user should know (warnings included)
     constraints: tuple = field(default=())  # (Constraint, ...) loop closures; empty for a tree
     actuated: tuple = field(default=())     # joint names with a URDF <transmission>, q order
-    locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q)
+    locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q): a float,
+    #                                             a free flyer's pose (x y z qx qy qz qw) as a tuple
     quirks: tuple = field(default=())       # (Quirk, ...) what the loader noticed, in QUIRK_KINDS order
 
     def __post_init__(self):
@@ -259,7 +262,8 @@ class Model:
         if self.actuated:
             lines.append(f"actuated joints (<transmission>): {', '.join(self.actuated)}")
         if self.locked:
-            lines.append("locked joints: " + ", ".join(f"{j} = {v:g}" for j, v in self.locked.items()))
+            lines.append("locked joints: " + ", ".join(
+                f"{j} = {v:g}" if np.ndim(v) == 0 else f"{j} = {np.round(v, 6).tolist()}" for j, v in self.locked.items()))
         lines += [f"note: {n}" for n in self.notes]
         for kind in QUIRK_KINDS:
             names = [q.name for q in self.quirks if q.kind == kind]

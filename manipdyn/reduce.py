@@ -5,6 +5,13 @@ merges into its parent body (mass, CoM and inertia combined; frames kept, re-exp
 below it keep moving with the merged body as their parent. ``root``/``tips`` lock every joint that is not on
 a chain from the root link to one of the tip links — bodies beyond the tips merge into them as payload,
 side branches merge into the chain they hang from (or into the fixed base, where they no longer matter).
+
+A free-flyer root (``root_joint``) is a joint like the others here: locked, it takes a pose (7,) =
+[x y z qx qy qz qw] (default: the neutral pose, origin and identity) and the root link becomes the fixed base
+at that pose, as in Pinocchio, whose buildReducedModel places every locked joint by its own joint model at
+the reference configuration. ``root`` locks every joint above the root link *and the joint that carries
+it*, the free flyer included: the chains then start from a fixed link. Joints locked by ``root``/``tips``
+or ``prune`` are held at the neutral value (0; the free flyer at the neutral pose).
 """
 from __future__ import annotations
 
@@ -13,22 +20,51 @@ import dataclasses
 import numpy as np
 
 from .errors import InputError, ModelError
-from .model import REVOLUTE, Constraint, Frame
-from .spatial import axis_angle, combine_inertias
+from .joints import NQ, joint_placement
+from .model import FREEFLYER, QUAT_TOL, Constraint, Frame
+from .spatial import combine_inertias
 
 
 def reduce(model, *, locked=None, root=None, tips=None, prune=False):
     """A new Model with ``locked`` = {joint: value} fixed, only the root→tips chains moving (if given),
-    and, with prune=True, massless moving leaves dropped. Raises InputError naming unknown joints/links,
-    ModelError naming a closure whose two sides become one rigid body."""
-    values = dict(locked or {})
-    for j in values:
-        model.joint_index(j)
-    values.update({j: 0.0 for j in _off_chain(model, root, tips) if j not in values})
+    and, with prune=True, massless moving leaves dropped.
+
+    A value is a real number for a revolute (rad) or prismatic (m) joint, a pose (7,) [x y z qx qy qz qw]
+    with a unit quaternion for the free flyer (the root link is then fixed there), or None for the neutral
+    value. ``Model.locked`` of the result keeps them (floats; a tuple of 7 for the free flyer). Raises
+    InputError naming unknown joints/links or a bad value, ModelError naming a closure whose two sides
+    become one rigid body."""
+    values = {j: _lock_value(model, model.joint_index(j), v) for j, v in dict(locked or {}).items()}
+    values.update({j: _lock_value(model, model.joint_index(j), None)
+                   for j in _off_chain(model, root, tips) if j not in values})
     if prune:
-        values.update({j: 0.0 for j in _massless_leaves(model, values)})
+        values.update({j: _lock_value(model, model.joint_index(j), None) for j in _massless_leaves(model, values)})
     keep = [i for i, j in enumerate(model.joint_names) if j not in values]
     return _rebuild(model, keep, values)
+
+
+def _lock_value(model, i, value):
+    """The value joint i is locked at, as a q block (nq_i,) float array: None gives the neutral value (0;
+    a free flyer's neutral pose [0 0 0 0 0 0 1]). InputError names the joint and the value at fault."""
+    name, nq = model.joint_names[i], NQ[int(model.kind[i])]
+    if value is None:
+        return np.array([0.0] * 6 + [1.0]) if model.kind[i] == FREEFLYER else np.zeros(1)
+    try:
+        x = np.asarray(value)
+    except (TypeError, ValueError):
+        x = None
+    want = "a pose [x y z qx qy qz qw] (7,)" if nq == 7 else "a real number"
+    if x is None or x.dtype.kind not in "fiu" or x.size != nq or x.ndim > 1 or (nq == 7 and x.ndim != 1):
+        raise InputError(f"locked value of joint {name!r} is {value!r}: expected {want}")
+    x = x.astype(float).reshape(nq)
+    if not np.all(np.isfinite(x)):
+        raise InputError(f"locked value of joint {name!r} is {value!r}: must be finite")
+    if nq == 7 and abs(np.linalg.norm(x[3:]) - 1.0) > QUAT_TOL:
+        raise InputError(f"locked value of joint {name!r}: the quaternion (qx qy qz qw) = {x[3:].tolist()} "
+                         f"has norm {np.linalg.norm(x[3:]):.12g}, not 1 (within {QUAT_TOL:g})")
+    if nq == 7:                                    # a rotation exactly (the placement reads it as one)
+        x[3:] /= np.linalg.norm(x[3:])
+    return x
 
 
 def _off_chain(model, root, tips):
@@ -38,7 +74,7 @@ def _off_chain(model, root, tips):
         return []
     body_of = lambda link: model.frame(link).body  # noqa: E731
     has_child = set(model.parent.tolist())
-    tip_bodies = [body_of(t) for t in (tips or [])] or [i for i in range(model.nv)
+    tip_bodies = [body_of(t) for t in (tips or [])] or [i for i in range(model.njoints)
                                                         if i not in has_child]   # default: every leaf
     on_chain = set()
     for b in tip_bodies:
@@ -52,7 +88,7 @@ def _off_chain(model, root, tips):
         missing = [t for t, b in zip(tips or [], tip_bodies) if rb >= 0 and rb not in _ancestors(model, b)]
         if missing:
             raise InputError(f"tip link(s) {', '.join(missing)} do not hang below root link {root!r}")
-    return [model.joint_names[i] for i in range(model.nv) if i not in on_chain]
+    return [model.joint_names[i] for i in range(model.njoints) if i not in on_chain]
 
 
 def _ancestors(model, b):
@@ -67,8 +103,8 @@ def _ancestors(model, b):
 def _massless_leaves(model, values):
     """Moving joints whose whole subtree carries no mass and no inertia (repeatedly, leaves first)."""
     drop = set(values)
-    live_children = [0] * model.nv                 # children not dropped (children come after parents)
-    for i in reversed(range(model.nv)):
+    live_children = [0] * model.njoints           # children not dropped (children come after parents)
+    for i in reversed(range(model.njoints)):
         if not live_children[i] and model.mass[i] == 0.0 and not np.any(model.inertia[i]):
             drop.add(model.joint_names[i])
         if model.joint_names[i] not in drop and model.parent[i] >= 0:
@@ -82,7 +118,7 @@ def _rebuild(model, keep, values):
     parts, parent, R0, p0 = {-1: []}, [], [], []
     merged = {k: list(v) for k, v in model.merged.items()}
     base, kept = (-1, np.eye(3), np.zeros(3)), set(keep)
-    for i in range(model.nv):
+    for i in range(model.njoints):                 # bodies, not velocity entries (a free flyer has 6)
         nb, Rt, pt = new_of.get(model.parent[i], base)
         if i in kept:
             k = len(parent)
@@ -94,8 +130,10 @@ def _rebuild(model, keep, values):
             Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])
             new_of[i] = (nb, Rt @ Ri, pt + Rt @ pi)
             host = model.root_link if nb < 0 else model.body_names[keep[nb]]
-            merged.setdefault(host, []).extend([model.body_names[i]] + merged.pop(model.body_names[i], []))
-    for i in range(model.nv):
+            if host != model.body_names[i]:        # a locked free flyer: its body is the root link itself
+                moved = [model.body_names[i]] + merged.pop(model.body_names[i], [])
+                merged.setdefault(host, []).extend(moved)
+    for i in range(model.njoints):
         nb, Rt, pt = new_of[i]
         parts[nb].append((model.mass[i], pt + Rt @ model.com[i], Rt @ model.inertia[i] @ Rt.T))
     inert = [combine_inertias(parts[k]) for k in range(len(keep))]
@@ -113,16 +151,17 @@ def _rebuild(model, keep, values):
         mimic=tuple(m for m in model.mimic if m[0] in names and m[1] in names),
         constraints=tuple(_move_constraint(c, new_of, base) for c in model.constraints),
         actuated=tuple(j for j in model.actuated if j in names),
-        locked={**model.locked, **{j: float(v) for j, v in values.items()}})
+        locked={**model.locked, **{j: float(v[0]) if len(v) == 1 else tuple(map(float, v))
+                                   for j, v in values.items()}})
 
 
 def _fixed_placement(model, i, value):
-    """Placement of body i in its parent at joint value ``value`` (the joint turned into a fixed one)."""
-    if not np.isfinite(value):
-        raise InputError(f"locked value of joint {model.joint_names[i]!r} is {value}: must be finite")
-    if model.kind[i] == REVOLUTE:
-        return model.R0[i] @ axis_angle(model.axis[i], np.array([float(value)]))[0], model.p0[i].copy()
-    return model.R0[i].copy(), model.p0[i] + value * (model.R0[i] @ model.axis[i])
+    """(R, p) of body i in its parent with joint i held at ``value`` (its q block, (nq_i,)): the one joint
+    model's X = X0 X_J(q), whatever the joint type."""
+    R, p = np.empty((3, 3)), np.empty(3)
+    joint_placement(int(model.kind[i]), np.ascontiguousarray(model.axis[i], float), np.ascontiguousarray(model.R0[i], float),
+                    np.ascontiguousarray(model.p0[i], float), np.ascontiguousarray(np.atleast_1d(value), float), 0, R, p)
+    return R, p
 
 
 def _move_frame(f, new_of, base):

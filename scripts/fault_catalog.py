@@ -33,11 +33,12 @@ class Fault:
 
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
-         "validation", "reduce")
+         "validation", "reduce", "viz")
 
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
+_ENGINES = "tests/crosscheck/test_engines.py"
 _ABA = "tests/crosscheck/test_aba.py"
 _CRBA = "tests/crosscheck/test_crba.py"
 _FLOATBASE = "tests/crosscheck/test_floating_base.py"
@@ -57,6 +58,7 @@ _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
+    "viz": ("tests/viz/test_play_signals.py", "tests/viz/test_play_page.py"),
     "loader": ("tests/unit/test_q_order.py", "tests/crosscheck/test_single_joint.py",
                "tests/robustness/test_urdf_structure.py", "tests/robustness/test_fuzz_urdf.py",
                "tests/properties/test_random_trees.py"),
@@ -303,6 +305,23 @@ FAULTS = (
           'theirs.update(M_crba=theirs["M"], M_lagrange=ours["M_crba"][s],',
           ("tests/crosscheck/test_planted_fault.py",),
           "validate compares the Lagrange-route M with our own CRBA instead of Pinocchio's"),
+    # ---------------------------------------------------------------- other engines (validation/engines.py)
+    Fault("engines-link-inertia-not-rotated-into-body", "validation", "manipdyn/validation/engines.py",
+          "parts[fr.body].append((m, fr.p + fr.R @ c, fr.R @ I @ fr.R.T))",
+          "parts[fr.body].append((m, fr.p + fr.R @ c, I))",
+          (_ENGINES,), "an engine's link inertia merged into our body without the fixed joint's rotation"),
+    Fault("engines-mujoco-iquat-conjugated", "validation", "manipdyn/validation/engines.py",
+          "w, x, y, z = (float(t) for t in qwxyz)", "w, x, y, z = (-float(t) if i == 0 else float(t) "
+          "for i, t in enumerate(qwxyz))",
+          (_ENGINES,), "MuJoCo's body_iquat read as its inverse: principal axes of every read-back inertia turned"),
+    Fault("engines-damping-sign", "validation", "manipdyn/validation/engines.py",
+          "tau = rnea(model, Q, V, A) + arm * A + (damp * V if damp_in_id else 0.0)",
+          "tau = rnea(model, Q, V, A) + arm * A - (damp * V if damp_in_id else 0.0)",
+          (_ENGINES,), "neutralised τ with the engine's joint damping subtracted instead of added"),
+    Fault("engines-triangle-test-inverted", "validation", "manipdyn/validation/engines.py",
+          "return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
+          "return bool(lam[0] + lam[1] > lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
+          (_ENGINES,), "the referee's triangle-inequality test inverted: the cause is misnamed"),
     # ---------------------------------------------------------------- floating base (joints.py, configuration.py)
     Fault("ff-log6-coefficient-cancels", "integrators", "manipdyn/joints.py",
           "return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2",
@@ -322,6 +341,46 @@ FAULTS = (
           "Ri, pi = _fixed_placement(model, i, values[model.joint_names[i]])",
           "Ri, pi = _fixed_placement(model, i, 0.0)",
           ("tests/crosscheck/test_reduce.py",), "a locked joint is frozen at 0 whatever value it was locked at"),
+    # ---------------------------------------------------------------- viz (playback plots and framing)
+    Fault("viz-rates-first-order", "viz", "manipdyn/viz/plots.py",
+          "V = np.gradient(Q, t, axis=0, edge_order=2 if T > 2 else 1)",
+          "V = np.vstack([np.diff(Q, axis=0) / np.diff(t)[:, None], (Q[-1:] - Q[-2:-1]) / (t[-1] - t[-2])])",
+          ("tests/viz/test_play_signals.py",), "a trajectory file's rates by one-sided first-order differences"),
+    Fault("viz-closed-chain-rates-not-completed", "viz", "manipdyn/viz/plots.py",
+          "            Q, V, A, _ = complete_state(model, Q, V[:, act], A[:, act])",
+          "            pass",
+          ("tests/viz/test_play_signals.py",),
+          "a closed chain's passive rates taken from finite differences instead of the closures"),
+    Fault("viz-slider-does-not-seek", "viz", "manipdyn/viz/page.py",
+          'slider.addEventListener("input", function () { pause(); seek(parseFloat(slider.value)); });',
+          'slider.addEventListener("input", function () { pause(); });',
+          ("tests/viz/test_play_page.py::test_slider_seeks_and_cursor_follows",),
+          "moving the time slider pauses but does not seek"),
+    Fault("viz-ground-at-base-origin", "viz", "manipdyn/viz/scene.py",
+          "    else:\n        ground_z = base_low", "    else:\n        ground_z = 0.0",
+          ("tests/viz/test_play_page.py::test_ground_is_under_the_robot",),
+          "the ground at the base frame's origin whatever lies below it (the SPM's base sinks into it)"),
+    Fault("reduce-locked-free-flyer-quaternion-conjugated", "reduce", "manipdyn/reduce.py",
+          "np.ascontiguousarray(np.atleast_1d(value), float), 0, R, p)",
+          "np.ascontiguousarray(np.atleast_1d(value) * np.r_[1, 1, 1, -1, -1, -1, 1][:np.size(value)], float), 0, R, p)",
+          ("tests/crosscheck/test_reduce.py",),
+          "a locked free flyer's orientation inverted (quaternion conjugated): the fixed base sits rotated the wrong way"),
+    Fault("reduce-root-keeps-its-joint", "reduce", "manipdyn/reduce.py",
+          "above = set(_ancestors(model, rb))",
+          "above = set(_ancestors(model, rb)[1:])",
+          ("tests/crosscheck/test_reduce.py",),
+          "root=: the joint carrying the root link keeps moving (a floating robot's free flyer is not locked)"),
+    # ---------------------------------------------------------------- closed chains on a free flyer
+    Fault("closure-dofs-q-index", "constraints", "manipdyn/constraints/dynamics.py",
+          "return [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]",
+          "return [int(model.idx_q[j]) + k for j in joints for k in range(int(model.nvs[j]))]",
+          ("tests/crosscheck/test_floating_closures.py",),
+          "q index for v index: behind a free flyer every joint's entry of v is read one place late"),
+    Fault("assembly-moves-the-base", "constraints", "manipdyn/constraints/dynamics.py",
+          "and (world or model.kind[j] != FREEFLYER)])",
+          "and (world or model.kind[j] != FREEFLYER or True)])",
+          ("tests/crosscheck/test_floating_closures.py",),
+          "assembly and projection move a floating base under closures internal to the robot"),
     # ---------------------------------------------------------------- loader quirks, URDF+, mimic (io/urdf.py ...)
     Fault("coupling-row-successor-sign", "constraints", "manipdyn/constraints/closures.py",
           "Jrow[iv[B]] -= 1.0", "Jrow[iv[B]] += 1.0",

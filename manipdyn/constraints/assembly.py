@@ -3,6 +3,11 @@
 Singular configurations are detected from the condition number of the closure Jacobian restricted to the
 coordinates being solved for; they raise a clear error (or, with ``damping``, take damped least-squares
 steps and flag the result) — never a silent NaN.
+
+Every step is taken in the tangent space: Φ_q (m, nv) maps v-space steps δ, and q moves by q ⊕ δ
+(``configuration.integrate``), which on a free-flyer root is the SE(3) exponential (q + δ on 1-dof joints).
+A free flyer takes no part in the steps unless a closure ties a body to the world (``dynamics.moving_dofs``):
+closures inside the robot hold whatever the base pose, so the base stays where the caller put it.
 """
 from __future__ import annotations
 
@@ -10,18 +15,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..configuration import check_quaternions, integrate
 from ..dynamics.lagrange import mass_matrix
 from ..dynamics.state import as_batch, as_real, check_finite, check_output, check_scalar, quiet
 from ..errors import ConstraintError, InputError, SingularError
-from ..model import PRISMATIC
+from ..model import FREEFLYER, PRISMATIC
 from .closures import RANK_RTOL, _closure_terms, independent_rows, row_labels
-from .dynamics import actuation
+from .dynamics import actuation, dofs, moving_dofs
 
 
 @dataclass(frozen=True)
 class Assembly:
     """Result of ``assemble``: the assembled q and how it was reached."""
-    q: np.ndarray          # (nv,)
+    q: np.ndarray          # (nq,)
     iterations: int
     residual: float        # max |Φ(q)|
     cond: float            # condition number of the solved block of Φ_q at q
@@ -59,7 +65,9 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
     of a four-bar, or a basin without a root), it restarts from ``restarts`` seeded perturbations of the
     guess's free coordinates, of growing spread (0.3, 1 and π rad; a tenth of that in metres for prismatic
     joints), and returns the first that converges (``same_branch`` then says whether it kept the guess's
-    branch). A batch of guesses (N, nv) is assembled row by row and gives a list of N results.
+    branch). A batch of guesses (N, nq) is assembled row by row and gives a list of N results. Steps are
+    taken in v-space and applied by q ⊕ δ; a free-flyer root moves only if a closure ties the robot to the
+    world (``moving_dofs``), else it stays at the guess whatever ``fixed`` says.
 
     Raises ConstraintError naming the closures still violated and the smallest residual reached when no
     start converges; SingularError when the Jacobian block is singular (cond > max_cond) from the guess
@@ -71,16 +79,17 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
                 max_step=check_scalar("max_step", max_step, positive=True),
                 max_cond=check_scalar("max_cond", max_cond, positive=True),
                 damping=None if damping is None else check_scalar("damping", damping, positive=True))
+    check_quaternions(model, Q, "q_guess")
     restarts = check_scalar("restarts", restarts, nonnegative=True, integer=True)
     seed = check_scalar("seed", seed, integer=True)
     hold = actuation(model, fixed) if fixed is None or len(fixed) else []
-    free = [i for i in range(model.nv) if i not in hold]
+    free = moving_dofs(model, hold)                            # entries of v the Newton steps move
     out = [_assemble_one(model, q.copy(), free, opts, restarts, seed) for q in Q]
     return out[0] if single else out
 
 
 def _assemble_one(model, q, free, opts, restarts, seed):
-    """assemble for one guess q (nv,): Newton from the guess, then from seeded restarts."""
+    """assemble for one guess q (nq,): Newton from the guess, then from seeded restarts."""
     if not model.constraints or not free:
         Phi = _closure_terms(model, q[None])[0][0]
         if np.max(np.abs(Phi), initial=0.0) > opts["tol"]:
@@ -91,11 +100,12 @@ def _assemble_one(model, q, free, opts, restarts, seed):
     U0 = np.linalg.svd(G0)[0][:, :len(independent_rows(G0))]      # row space at the guess
     sign0 = _branch(model, q, free, U0)
     attempts, rng = [], np.random.default_rng(seed)
-    spread = np.where(model.kind[free] == PRISMATIC, 0.1, 1.0)
+    spread = _spread(model)[free]
     for k in range(restarts + 1):
         start = q.copy()
         if k:                                                       # growing spread: near the guess first
-            start[free] += rng.normal(0.0, (0.3, 1.0, np.pi)[3 * (k - 1) // restarts], len(free)) * spread
+            start = _step(model, q, free, rng.normal(0.0, (0.3, 1.0, np.pi)[3 * (k - 1) // restarts],
+                                                     len(free)) * spread)
         try:
             return _newton(model, start, free, U0, sign0, **opts)
         except (ConstraintError, SingularError) as exc:
@@ -107,6 +117,22 @@ def _assemble_one(model, q, free, opts, restarts, seed):
     raise ConstraintError(f"assembly of {model.name!r} did not converge in {opts['max_iter']} iterations from "
                           f"the guess{tried}: {_violated(model, best.phi, opts['tol'])} (smallest max|Φ| "
                           f"reached: {best.residual:.3g}; the closures may not be assemblable here)")
+
+
+def _spread(model):
+    """(nv,) scale of a restart's perturbation per entry of v: 1 rad for rotations, 0.1 m for translations
+    (prismatic joints, a free flyer's linear part)."""
+    out = np.where(model.kind[model.v_joint] == PRISMATIC, 0.1, 1.0)
+    for j in np.flatnonzero(model.kind == FREEFLYER):
+        out[model.idx_v[j]:model.idx_v[j] + 3] = 0.1
+    return out
+
+
+def _step(model, q, free, delta):
+    """q ⊕ δ for a step δ on the entries ``free`` of v (zero elsewhere): (nq,)."""
+    d = np.zeros(model.nv)
+    d[free] = delta
+    return integrate(model, q, d)
 
 
 def _violated(model, Phi, tol):
@@ -141,7 +167,7 @@ def _newton(model, q, free, U0, sign0, *, tol, max_iter, max_step, max_cond, dam
             damped = True                                       # redundant rows still carry Φ
         else:
             step = -np.linalg.lstsq(Gall, Phi, rcond=1e-10)[0]
-        q[free] += step * min(1.0, max_step / max(np.max(np.abs(step)), 1e-300))
+        q = _step(model, q, free, step * min(1.0, max_step / max(np.max(np.abs(step)), 1e-300)))
     exc = ConstraintError(f"assembly of {model.name!r} did not converge in {max_iter} iterations")
     exc.residual, exc.phi = best if best[1] is not None else (np.inf, np.full(len(row_labels(model)), np.inf))
     raise exc
@@ -149,12 +175,17 @@ def _newton(model, q, free, U0, sign0, *, tol, max_iter, max_step, max_cond, dam
 
 @quiet
 def project(model, q, v, *, tol=1e-12, max_iter=20):
-    """(q, v) returned to Φ = 0 (minimum-norm Newton steps) and Φ_q q̇ = 0 (kinetic-energy-minimal:
-    q̇ ← q̇ − M⁻¹Φ_qᵀ(Φ_q M⁻¹ Φ_qᵀ)⁻¹ Φ_q q̇). One state (nv,) or a batch (N, nv), row by row."""
+    """(q, v) returned to Φ = 0 (minimum-norm Newton steps q ← q ⊕ δ, δ on the entries of v that
+    ``moving_dofs`` gives: a free-flyer root stays put under closures internal to the robot) and
+    Φ_q q̇ = 0 (kinetic-energy-minimal, every entry of v, the base's too:
+    q̇ ← q̇ − M⁻¹Φ_qᵀ(Φ_q M⁻¹ Φ_qᵀ)⁻¹ Φ_q q̇). One state q (nq,), v (nv,) or a batch (N, nq), (N, nv),
+    row by row."""
     (Q, V), single = as_batch(model, q=q, v=v)
     tol = check_scalar("tol", tol, positive=True)
     max_iter = check_scalar("max_iter", max_iter, nonnegative=True, integer=True)
+    check_quaternions(model, Q)
     Q, V = Q.copy(), V.copy()
+    free = moving_dofs(model)
     for s in range(Q.shape[0]):
         for it in range(max_iter + 1):
             Phi, Jc = (x[0] for x in _closure_terms(model, Q[s:s + 1])[:2])
@@ -163,8 +194,8 @@ def project(model, q, v, *, tol=1e-12, max_iter=20):
             if it == max_iter or not np.all(np.isfinite(Phi)):
                 raise ConstraintError(f"projection of state {s} did not converge in {max_iter} iterations: "
                                       f"{_violated(model, Phi, tol)}")
-            Q[s] -= np.linalg.lstsq(Jc, Phi, rcond=1e-10)[0]   # all rows: off the manifold the
-            #                                                    "redundant" ones still carry Φ
+            Q[s] = _step(model, Q[s], free, -np.linalg.lstsq(Jc[:, free], Phi, rcond=1e-10)[0])   # all rows:
+            #                                           off the manifold the "redundant" ones still carry Φ
         G = Jc[independent_rows(Jc)]
         if G.shape[0]:
             Minv_Gt = np.linalg.solve(mass_matrix(model, Q[s]), G.T)
@@ -181,32 +212,38 @@ def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw
     """Full (q, q̇, q̈) from the actuated joints' rates and accelerations: assemble q (actuated coordinates
     held at the guess), then solve Φ_q q̇ = 0 and Φ_q q̈ = −Φ̇_q q̇ for the passive coordinates.
 
-    q_guess (nv,) with v_act, a_act (n_act,) gives q, q̇, q̈ (nv,) and one Assembly; a batch q_guess
-    (N, nv) with v_act, a_act (N, n_act) (or (n_act,) for every row) is completed row by row and gives
-    (N, nv) arrays and a list of N Assembly results."""
+    q_guess (nq,) with v_act, a_act (n_act,) gives q (nq,), q̇, q̈ (nv,) and one Assembly; a batch q_guess
+    (N, nq) with v_act, a_act (N, n_act) (or (n_act,) for every row) is completed row by row and gives
+    (N, nq), (N, nv) arrays and a list of N Assembly results. n_act counts entries of v: one per actuated
+    1-dof joint, six for a free flyer listed in ``actuated`` (its body-frame [linear; angular] rates).
+    A free-flyer root not listed stays at the guess and at rest (q̇ = q̈ = 0 on its entries): under
+    closures internal to the robot the passive rates do not depend on the base's."""
     (Q,), single = as_batch(model, q=q_guess)
-    idx = actuation(model, actuated)
+    joints = actuation(model, actuated)
+    idx = dofs(model, joints)
     rates = []
     for name, x in (("v_act", v_act), ("a_act", a_act)):
         x = as_real(name, x)
         if x.shape not in ((len(idx),), (Q.shape[0], len(idx))) or (single and x.ndim != 1):
             raise InputError(f"{name} has shape {x.shape}; expected ({len(idx)},)" + ("" if single else
-                             f" or ({Q.shape[0]}, {len(idx)})") + f": the actuated joints "
-                             f"{[model.joint_names[i] for i in idx]}")
+                             f" or ({Q.shape[0]}, {len(idx)})") + f": the actuated joints' entries of v "
+                             f"{[model.v_names[i] for i in idx]}")
         check_finite(name, x)
         rates.append(np.broadcast_to(x, (Q.shape[0], len(idx))))
-    asm = assemble(model, Q, fixed=[model.joint_names[i] for i in idx], **assemble_kw)
-    out = [_complete_one(model, a.q, idx, va, aa) for a, va, aa in zip(asm, *rates)]
-    q, v, a = (np.array(x).reshape(Q.shape) for x in zip(*out)) if out else (np.zeros(Q.shape),) * 3
+    asm = assemble(model, Q, fixed=[model.joint_names[i] for i in joints], **assemble_kw)
+    out = [_complete_one(model, a.q, joints, idx, va, aa) for a, va, aa in zip(asm, *rates)]
+    N = Q.shape[0]
+    q, v, a = ((np.array(x).reshape(N, n) for x, n in zip(zip(*out), (model.nq, model.nv, model.nv))) if out
+               else (np.zeros((0, model.nq)), np.zeros((0, model.nv)), np.zeros((0, model.nv))))
     for name, x in (("q", q), ("v", v), ("a", a)):
         check_output("complete_state", name, x, model, dict(q=Q))
     return (q[0], v[0], a[0], asm[0]) if single else (q, v, a, asm)
 
 
 @quiet
-def _complete_one(model, q, idx, v_act, a_act):
-    """q̇, q̈ (nv,) of one assembled q from the actuated rates and accelerations."""
-    free = [i for i in range(model.nv) if i not in idx]
+def _complete_one(model, q, joints, idx, v_act, a_act):
+    """q̇, q̈ (nv,) of one assembled q (nq,) from the actuated rates and accelerations (entries idx of v)."""
+    free = moving_dofs(model, joints)
     v, a = np.zeros(model.nv), np.zeros(model.nv)
     v[idx], a[idx] = v_act, a_act
     _, Jc, _ = _closure_terms(model, q[None])

@@ -18,6 +18,7 @@ from ..dynamics.rnea import rnea
 from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output,
                               check_scalar, joint_indices, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
+from ..joints import FREEFLYER
 from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
 
 
@@ -52,10 +53,11 @@ def rank_report(model, J, rtol=None) -> RankReport:
 def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None, f_ext_frame="local"):
     """(q̈, λ) of the KKT system of Eq. 27 on the independent closure rows.
 
-    Parameters: q, v, tau (nv,) or (N, nv) — tau is the full generalized force of the spanning tree
-    (zero on passive joints); baumgarte=(alpha, beta) stabilises drift; f_ext as in ``rnea``.
+    Parameters: q (nq,) or (N, nq), v, tau (nv,) or (N, nv) — tau is the full generalized force of the
+    spanning tree (zero on passive joints; a free-flyer root's six entries are a wrench on the base, body
+    frame); baumgarte=(alpha, beta) stabilises drift; f_ext as in ``rnea``.
     Returns q̈ (nv,)/(N, nv), λ (m,)/(N, m) in the rows of ``row_labels(model)``. The rank of one
-    state's closure rows: ``rank_report(model, closure_terms(model, q)[1])`` for q (nv,).
+    state's closure rows: ``rank_report(model, closure_terms(model, q)[1])`` for q (nq,).
     Without f_ext this runs the compiled kernel (constraints/fast.py), held by the tests to
     ``constrained_forward_dynamics_reference``, the readable solve below.
     """
@@ -69,7 +71,10 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     if code == -2:
         raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")
     if code >= 0:                       # as_batch checked finiteness already: this cannot happen silently
-        raise InputError(f"non-finite input at state {code // model.nv}, joint {model.joint_names[code % model.nv]!r}")
+        nq, N = model.nq, Q.shape[0]           # the kernel's code: s nq + i in Q, then N nq + s nv + i in V, τ
+        s, name = (code // nq, model.q_names[code % nq]) if code < N * nq else \
+            ((code - N * nq) // model.nv, model.v_names[(code - N * nq) % model.nv])
+        raise InputError(f"non-finite input at state {s}, entry {name!r}")
     _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
     return unbatch(qdd, single), unbatch(lam, single)
 
@@ -85,9 +90,9 @@ def constrained_forward_dynamics_reference(model, q, v, tau, *, baumgarte=None, 
     if baumgarte is not None:
         alpha, beta = baumgarte
         c = c - 2.0 * alpha * np.einsum("nij,nj->ni", Jc, V) - beta**2 * Phi
-    rhs = T - rnea(model, Q, V, np.zeros_like(Q), f_ext=f_ext, f_ext_frame=f_ext_frame)   # τ − h
+    rhs = T - rnea(model, Q, V, np.zeros_like(V), f_ext=f_ext, f_ext_frame=f_ext_frame)   # τ − h
     M = mass_matrix(model, Q)
-    qdd, lam = np.empty_like(Q), np.zeros_like(Phi)
+    qdd, lam = np.empty_like(V), np.zeros_like(Phi)
     for s in range(Q.shape[0]):
         keep = independent_rows(Jc[s], phi=Phi[s])
         qdd[s], lam[s, keep] = _kkt(M[s], Jc[s, keep], rhs[s], c[s, keep], model)
@@ -140,6 +145,22 @@ def actuation(model, actuated=None):
     return idx
 
 
+def dofs(model, joints):
+    """The entries of v (and q̇, q̈, τ) of the given joint indices, in order: one per 1-dof joint, six for a
+    free flyer (v = [linear; angular]). On a fixed-base model they are the joint indices themselves."""
+    return [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]
+
+
+def moving_dofs(model, held=()):
+    """The entries of v that assembly and projection move: every joint not in ``held`` (joint indices) —
+    but a free flyer only when a closure ties a body to the world (body −1). Otherwise every closure is
+    internal to the robot: it holds whatever the base pose (on the closures its columns of Φ_q vanish), so
+    the base stays where the caller put it instead of taking a share of the minimum-norm steps."""
+    world = any(c.parent < 0 or c.child < 0 for c in model.constraints)
+    return dofs(model, [j for j in range(model.njoints) if j not in held
+                        and (world or model.kind[j] != FREEFLYER)])
+
+
 def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local"):
     """(τ_a, λ): actuator forces for a prescribed motion of a closed chain, τ_tree = Sᵀ τ_a − Φ_qᵀ λ.
 
@@ -149,7 +170,8 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
     Whether the chain is "fully", "under" or "over" actuated at q: ``actuation_status(model, q, actuated)``.
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-    idx = actuation(model, actuated)
+    joints = actuation(model, actuated)
+    idx = dofs(model, joints)                    # entries of τ the actuators drive (a free flyer: six)
     tol = check_scalar("tol", tol, positive=True)
     check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
     Phi, Jc, bias = closure_terms(model, Q, V)
@@ -164,11 +186,11 @@ def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_e
         x, *_ = np.linalg.lstsq(K, tau_tree[s], rcond=None)
         resid = K @ x - tau_tree[s]
         if np.max(np.abs(resid)) > tol * max(np.max(np.abs(tau_tree[s])), 1.0):
-            raise ConstraintError(f"the actuators {[model.joint_names[i] for i in idx]} cannot produce this "
+            raise ConstraintError(f"the actuators {[model.joint_names[i] for i in joints]} cannot produce this "
                                   f"motion (under-actuated; residual {np.max(np.abs(resid)):.3g})")
         ta[s], lam[s, keep] = x[:len(idx)], x[len(idx):]
     check_output("constrained_inverse_dynamics", "τ_a", ta, model, dict(q=Q, v=V, a=A), what="actuator",
-                 labels=[model.joint_names[i] for i in idx])
+                 labels=[model.v_names[i] for i in idx])
     check_output("constrained_inverse_dynamics", "λ", lam, model, dict(q=Q, v=V, a=A), what="closure row",
                  labels=row_labels(model))
     return unbatch(ta, single), unbatch(lam, single)
@@ -189,10 +211,11 @@ def _check_consistent(model, Phi, Jc, bias, V, A, tol):
 
 
 def actuation_status(model, q, actuated=None):
-    """"fully", "under" or "over" actuated at q (nv,): compares n_actuated + rank(Φ_q) with nv; a batch
-    (N, nv) gives a list, row by row."""
+    """"fully", "under" or "over" actuated at q (nq,): compares the actuated entries of v plus rank(Φ_q)
+    with nv; a batch (N, nq) gives a list, row by row. A free-flyer root counts as six unactuated degrees
+    of freedom unless it is listed in ``actuated`` (a floating robot is under-actuated)."""
     (Q,), single = as_batch(model, q=q)
-    na = len(actuation(model, actuated))
+    na = len(dofs(model, actuation(model, actuated)))
     _, Jc, _ = closure_terms(model, Q)
     out = []
     for J in Jc:

@@ -83,11 +83,13 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     free body, as Pinocchio's ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``; see the module
     docstring); gravity (3,) in the base frame; strict=True refuses inertias that violate the triangle
     inequality instead of warning, and elements or a <robot version> it does not read; locked / root / tips
-    / prune as in ``manipdyn.reduce`` (model only what the scene needs); max_bytes: larger files are refused
-    unread; zero_mass_inertia "keep" (a link of mass 0 keeps its rotational inertia, as Pinocchio 4.1 does:
-    checked, ``model.inertias`` holds it with m = 0) or "drop" (such a link is massless: no inertia at all);
-    mimic=True honours <mimic> (returns a MimicModel: mimic joints carry no coordinate, as Pinocchio 4.1's
-    ``buildModelFromUrdf(path, mimic=True)``), mimic=False loads them as independent joints.
+    / prune as in ``manipdyn.reduce`` (model only what the scene needs; with root_joint="free_flyer",
+    locked={"root_joint": pose (7,)} fixes the root link at that pose, and ``root`` fixes it at the neutral
+    pose); max_bytes: larger files are refused unread; zero_mass_inertia "keep" (a link of mass 0 keeps its
+    rotational inertia, as Pinocchio 4.1 does: checked, ``model.inertias`` holds it with m = 0) or "drop"
+    (such a link is massless: no inertia at all); mimic=True honours <mimic> (returns a MimicModel: mimic
+    joints carry no coordinate, as Pinocchio 4.1's ``buildModelFromUrdf(path, mimic=True)``), mimic=False
+    loads them as independent joints.
     What the loader noticed is in ``model.quirks`` (see model.QUIRK_KINDS) and warned about once per kind.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
     for a root_joint other than None or "free_flyer" or a bad policy value.
@@ -97,9 +99,6 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     _check_policy(zero_mass_inertia, mimic, path)
     if mimic and (locked or root or tips or prune):
         raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with mimic=True")
-    if root_joint is not None and (locked or root or tips or prune):   # reduce() takes 1-dof joints only
-        raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with root_joint="
-                         f"{root_joint!r} (reducing a floating-base model is not supported)")
     if not os.path.isfile(path):
         raise URDFError(f"{path}: no such URDF file")
     with open(path, "rb") as fh:

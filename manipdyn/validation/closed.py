@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..configuration import integrate, neutral
 from ..constraints import closure_terms, constrained_forward_dynamics, project, rank_report
+from ..constraints.dynamics import dofs
 from ..dynamics.lagrange import mass_matrix
 from ..errors import ConstraintError, ModelError
 from .measure import error
@@ -64,13 +66,17 @@ class ClosedReference:
 
 def manifold_states(model, n, rng, spread=0.3, tries=50):
     """n seeded states on the closures: a base configuration assembled from random starts, then random
-    perturbations (N(0, spread²) rad or m) projected back; q̇ ~ N(0, 2²) projected onto Φ_q q̇ = 0.
+    perturbations (N(0, spread²) rad or m, q ⊕ δ) projected back; q̇ ~ N(0, 2²) projected onto Φ_q q̇ = 0.
     Projection from an arbitrary q is not globally convergent (a revolute closure's dot-product rows have
-    spurious least-squares minima with the axes flipped), hence the local sampling."""
+    spurious least-squares minima with the axes flipped), hence the local sampling. A free-flyer root
+    starts at its neutral pose and takes the perturbations' share of q ⊕ δ (projection leaves it there)."""
     base = None
     for _ in range(tries):
         try:
-            base, _ = project(model, rng.uniform(-np.pi, np.pi, model.nv), np.zeros(model.nv))
+            q = rng.uniform(-np.pi, np.pi, model.nq)
+            if model.floating:
+                q[:7] = neutral(model)[:7]
+            base, _ = project(model, q, np.zeros(model.nv))
             break
         except Exception:
             continue
@@ -79,7 +85,8 @@ def manifold_states(model, n, rng, spread=0.3, tries=50):
     out = []
     while len(out) < n:
         try:
-            out.append(project(model, base + rng.normal(0.0, spread, model.nv), rng.normal(0.0, 2.0, model.nv)))
+            out.append(project(model, integrate(model, base, rng.normal(0.0, spread, model.nv)),
+                               rng.normal(0.0, 2.0, model.nv)))
         except Exception:
             continue
     return np.array([q for q, _ in out]), np.array([v for _, v in out])
@@ -90,7 +97,7 @@ def closed_chain_terms(model, ref, Q, rng, progress=None):
     actuator torques at states on the closures (``manifold_states``)."""
     cref = ClosedReference(ref)
     worst = {"phi": [0.0, 0.0], "qdd_closed": [0.0, 0.0]}
-    act = [model.joint_index(j) for j in model.actuated] or list(range(model.nv))
+    act = dofs(model, [model.joint_index(j) for j in model.actuated]) or list(range(model.nv))
     Qm, Vm = manifold_states(model, Q.shape[0], rng)
     for s in range(Q.shape[0]):
         Phi, _, _ = closure_terms(model, Q[s:s + 1])
@@ -126,7 +133,8 @@ def actuator_torques_by_inversion(model, cref, q, v, a_act, actuated, gen_force=
     """Pinocchio has no closed-loop inverse dynamics: invert its forward map, which is affine in τ.
 
     q̈(τ_a) = q̈(0) + Σ_k τ_a,k (q̈(e_k) − q̈(0)); solve the actuated rows for τ_a so that the actuated
-    joints get the accelerations a_act. ``gen_force`` (nv,) is added to the joint torques (e.g. an
+    joints get the accelerations a_act. ``actuated``: entries of v (``constraints.dynamics.dofs`` of the
+    actuated joints; the joint indices themselves on a fixed base). ``gen_force`` (nv,) is added to the joint torques (e.g. an
     external moment m on a body as J_ωᵀ m — constraintDynamics takes no external forces).
     """
     base = np.zeros(model.nv) if gen_force is None else np.asarray(gen_force, float)

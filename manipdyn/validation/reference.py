@@ -33,7 +33,8 @@ class Reference:
     def __init__(self, model, urdf_path):
         P = pin()
         self.model = model
-        root = (P.JointModelFreeFlyer(),) if model.floating else ()
+        free = model.floating or any(np.ndim(v) == 1 for v in model.locked.values())   # a locked free flyer:
+        root = (P.JointModelFreeFlyer(),) if free else ()                               # its pose (7,)
         self.pm = P.buildModelFromUrdf(str(urdf_path), *root)
         if model.locked:                      # a reduced model: compare with Pinocchio's reduced model
             self.pm = P.buildReducedModel(self.pm, [self.pm.getJointId(j) for j in model.locked],

@@ -106,9 +106,16 @@ def test_root_joint_refuses_other_values(value, write_urdf):
             load()
 
 
-def test_root_joint_with_a_reduction_is_refused_before_reading():
-    with pytest.raises(InputError, match="cannot yet be combined with root_joint='free_flyer'"):
-        load_urdf("/no/such/file.urdf", root_joint="free_flyer", locked={"j": 0.0})
+def test_root_joint_with_a_reduction():
+    # the reduction itself is held to Pinocchio's buildReducedModel in test_reduce.py
+    path = robots_dir() / ROBOTS["solo12"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = load_urdf(path, root_joint="free_flyer", locked={"FL_HAA": 0.2}, tips=["FR_FOOT"])
+    assert model.joint_names == ("root_joint", "FR_HAA", "FR_HFE", "FR_KFE") and (model.nq, model.nv) == (10, 9)
+    assert model.locked["FL_HAA"] == 0.2 and model.locked["HL_KFE"] == 0.0
+    with pytest.raises(InputError, match="'root_joint' is 0.0: expected a pose"):
+        load_urdf(path, root_joint="free_flyer", locked={"root_joint": 0.0})
 
 
 def test_a_moving_joint_named_root_joint_is_refused():
@@ -373,8 +380,14 @@ def test_cli_inspect_shows_the_free_flyer(capsys):
     assert "warning:" in capsys.readouterr().out
     assert main(["inspect", str(path), "--root-joint", "floating"]) == 2
     assert "choose from 'free_flyer'" in capsys.readouterr().err
-    assert main(["validate", str(path), "--root-joint", "free_flyer", "--lock", "FL_HAA=0"]) == 2
-    assert "cannot yet be combined" in capsys.readouterr().err
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "FL_HAA=0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "nq = 18, nv = 17" in out and "locked joints: FL_HAA = 0.5" in out
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "root_joint=0"]) == 2
+    assert "expected a pose" in capsys.readouterr().err
+    assert main(["inspect", str(path), "--root-joint", "free_flyer", "--lock", "root_joint=1,2,3,0,0,0.6,0.8"]) == 0
+    out = capsys.readouterr().out
+    assert "nq = nv = 12" in out and "root_joint = [1.0, 2.0, 3.0, 0.0, 0.0, 0.6, 0.8]" in out
 
 
 def test_exports():

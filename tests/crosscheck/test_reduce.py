@@ -91,3 +91,117 @@ def test_dynamics_path_never_loads_geometry(tmp_path):
     (tmp_path / "r.urdf").write_text(text)
     model = md.load_urdf(tmp_path / "r.urdf")
     assert model.nv == 1 and np.isfinite(md.rnea(model, [0.1], [0.2], [0.3])).all()
+
+
+# ---- floating bases: a free-flyer root (nq = nv + 1) --------------------------------------------------------
+FLOAT = {"solo12": "solo_description/robots/solo12.urdf", "anymal": "anymal_b_simple_description/robots/anymal.urdf",
+         "talos": "talos_data/robots/talos_reduced.urdf"}
+POSE = (0.3, -0.2, 0.8, *np.array([0.2, -0.5, 0.3, 0.7]) / np.linalg.norm([0.2, -0.5, 0.3, 0.7]))
+TALOS_ARMS = {f"arm_{s}_{k}_joint": 0.1 * k * (1 if s == "left" else -1) for s in ("left", "right") for k in range(1, 8)}
+FLOAT_CASES = {    # name -> (robot, reduction, free flyer kept)
+    "solo12 one leg and a knee locked": ("solo12", dict(locked={"FL_HAA": 0.1, "FL_HFE": -0.7, "FL_KFE": 1.2,
+                                                                "HR_KFE": -0.4}), True),
+    "anymal two joints locked": ("anymal", dict(locked={"LF_HFE": 0.4, "RH_KFE": -0.9}), True),
+    "talos arms locked": ("talos", dict(locked=TALOS_ARMS), True),
+    "talos tips, no root (free flyer on the chain)": ("talos", dict(tips=["arm_left_7_link", "leg_right_6_link"]), True),
+    "anymal root at the base (free flyer locked at neutral)": ("anymal", dict(root="base", tips=["LF_SHANK"]), False),
+    "talos root/tips below the free flyer": ("talos", dict(root="torso_2_link", tips=["arm_left_7_link"]), False),
+    "solo12 free flyer locked at a pose": ("solo12", dict(locked={"root_joint": POSE, "HL_HAA": 0.3}), False),
+}
+
+
+def _float_path(name):
+    from manipdyn.validation.zoo import robots_dir
+    return robots_dir() / FLOAT[name]
+
+
+def _load_float(name, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return md.load_urdf(_float_path(name), root_joint="free_flyer", **kw)
+
+
+@pytest.mark.parametrize("case", list(FLOAT_CASES))
+def test_reduced_floating_model_matches_pinocchio(case):
+    """rnea, crba, aba of the reduced model against pin.buildReducedModel of Pinocchio's free-flyer model
+    (validate's reference: the locked free flyer enters buildReducedModel with its pose as the reference q)."""
+    name, kw, floating = FLOAT_CASES[case]
+    model, full = _load_float(name, **kw), _load_float(name)
+    assert model.floating == floating and model.nv < full.nv
+    assert set(model.locked) == set(full.joint_names) - set(model.joint_names)
+    if not floating:
+        assert model.nq == model.nv and isinstance(model.locked["root_joint"], tuple)
+    rep = validate(model, _float_path(name), n_states=40, seed=4)
+    got = {t.term: t for t in rep.terms}
+    tol = {"tau": 1e-13, "M_crba": 5e-14, "qdd_aba": 5e-15}   # measured ≤ 1.2e-15, 7.8e-16, 5.7e-17 (all cases)
+    for t in tol:
+        assert got[t].supported and got[t].err <= tol[t], (t, got[t].err, rep.notes)
+
+
+def test_locked_free_flyer_against_pinocchio_directly():
+    """The same without validate: Pinocchio's reduced model built here, the free flyer locked at POSE."""
+    P = pytest.importorskip("pinocchio")
+    path = _float_path("solo12")
+    model = md.reduce(_load_float("solo12"), locked={"root_joint": POSE, "FR_KFE": 0.5})
+    pm = P.buildModelFromUrdf(str(path), P.JointModelFreeFlyer())
+    qref = P.neutral(pm)
+    qref[:7] = POSE
+    qref[pm.joints[pm.getJointId("FR_KFE")].idx_q] = 0.5
+    pr = P.buildReducedModel(pm, [pm.getJointId("root_joint"), pm.getJointId("FR_KFE")], qref)
+    pd = pr.createData()
+    assert tuple(pr.names[1:]) == model.joint_names and pr.nq == model.nq == 11
+    Q, V, A = random_states(model, 20, np.random.default_rng(8))
+    T = md.rnea(model, Q, V, A)
+    Mq, qdd = md.mass_matrix(model, Q), md.aba(model, Q, V, T + 1.0)
+    for s in range(20):
+        assert_close(T[s], P.rnea(pr, pd, Q[s], V[s], A[s]), 5e-15, "rnea")          # measured 8.3e-17
+        assert_close(Mq[s], P.crba(pr, pd, Q[s]), 1e-16, "crba")                       # measured 1.7e-18
+        assert_close(qdd[s], P.aba(pr, pd, Q[s], V[s], T[s] + 1.0), 1e-13, "aba")     # measured 1.3e-15
+
+
+def test_reduced_floating_equals_full_with_joints_held():
+    # independent of Pinocchio: the full floating model with locked joints at their values and at rest
+    full = _load_float("anymal")
+    locked = {"LF_HFE": 0.4, "RH_KFE": -0.9}
+    red = md.reduce(full, locked=locked)
+    Q, V, A = random_states(red, 20, np.random.default_rng(6))
+    iq = np.concatenate([np.arange(7)] + [[full.idx_q[full.joint_index(j)]] for j in red.joint_names[1:]])
+    iv = np.concatenate([np.arange(6)] + [[full.idx_v[full.joint_index(j)]] for j in red.joint_names[1:]])
+    Qf, Vf, Af = np.zeros((20, full.nq)), np.zeros((20, full.nv)), np.zeros((20, full.nv))
+    Qf[:, iq], Vf[:, iv], Af[:, iv] = Q, V, A
+    for j, val in locked.items():
+        Qf[:, full.idx_q[full.joint_index(j)]] = val
+    assert_close(md.rnea(red, Q, V, A), md.rnea(full, Qf, Vf, Af)[:, iv], 5e-15, "rnea")   # measured 4.7e-17
+    assert_close(md.mass_matrix(red, Q), md.mass_matrix(full, Qf)[:, iv][:, :, iv], 1e-15, "M")  # measured 1.5e-17
+
+
+def test_free_flyer_locked_equals_the_floating_model_held_at_the_pose():
+    # a fixed base at POSE = the floating model whose base is held there (zero base rates): rnea's joint
+    # rows equal, and the world placement of every frame too
+    full = _load_float("solo12")
+    red = md.reduce(full, locked={"root_joint": POSE})
+    Q, V, A = random_states(red, 20, np.random.default_rng(7))
+    Qf = np.hstack([np.tile(POSE, (20, 1)), Q])
+    Vf, Af = np.hstack([np.zeros((20, 6)), V]), np.hstack([np.zeros((20, 6)), A])
+    assert_close(md.rnea(red, Q, V, A), md.rnea(full, Qf, Vf, Af)[:, 6:], 3e-15, "rnea")   # measured 2.8e-17
+    for link in ("base_link", "FL_FOOT", "HR_UPPER_LEG"):
+        R1, p1 = md.frame_placement(red, Q[3], link)
+        R2, p2 = md.frame_placement(full, Qf[3], link)
+        assert_close(R1, R2, 1e-14, link)
+        assert_close(p1, p2, 1e-14, link)                   # measured ≤ 4.0e-16
+
+
+def test_locking_a_free_flyer_needs_a_pose():
+    full = _load_float("solo12")
+    with pytest.raises(md.InputError, match=r"'root_joint' is 0.0: expected a pose \[x y z qx qy qz qw\]"):
+        md.reduce(full, locked={"root_joint": 0.0})
+    with pytest.raises(md.InputError, match="quaternion .* has norm 2"):
+        md.reduce(full, locked={"root_joint": [0, 0, 0, 0, 0, 0, 2.0]})
+    with pytest.raises(md.InputError, match="'FL_HAA' is .*expected a real number"):
+        md.reduce(full, locked={"FL_HAA": [0.1, 0.2]})
+    with pytest.raises(md.InputError, match="must be finite"):
+        md.reduce(full, locked={"FL_HAA": np.nan})
+    neutral = md.reduce(full, locked={"root_joint": None})            # None: the neutral pose
+    assert neutral.locked["root_joint"] == (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    assert "root_joint = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]" in neutral.summary()
+    assert neutral.frames["base_link"].body == -1 and neutral.merged["base_link"] == full.merged["base_link"]

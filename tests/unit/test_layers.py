@@ -162,3 +162,29 @@ def test_the_checks_catch_an_upward_import_and_a_cycle(tmp_path):
                                    "(constraints, a higher layer)"]
     assert cycle(g) in (["manipdyn.validation.a", "manipdyn.validation.b", "manipdyn.validation.a"],
                         ["manipdyn.validation.b", "manipdyn.validation.a", "manipdyn.validation.b"])
+
+
+ENGINE_MODULES = ("mujoco", "pybullet", "pybullet_data", "pydrake")
+ENGINE_HOSTS = ("manipdyn.validation.engines", "manipdyn.validation.referee_zoo")
+
+
+def engine_imports(path):
+    """[(line, module, at_top_level)] of every import of another engine (MuJoCo, PyBullet, Drake)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    top = {id(n) for n in tree.body}
+    out = []
+    for node in ast.walk(tree):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+        out += [(node.lineno, n, id(node) in top) for n in names if n.split(".")[0] in ENGINE_MODULES]
+    return out
+
+
+def test_other_engines_are_imported_only_by_the_referee_and_lazily():
+    # MuJoCo, PyBullet and Drake are optional (manipdyn[engines]): only validation/engines.py and
+    # validation/referee_zoo.py import them, inside functions (importlib.import_module counts as lazy)
+    _, known = graph()
+    found = {m: engine_imports(p) for m, p in known.items()}
+    assert any(found[m] for m in ENGINE_HOSTS)                 # the scan sees them
+    assert {m for m, e in found.items() if e} <= set(ENGINE_HOSTS)
+    assert [(m, line, n) for m, e in found.items() for line, n, top in e if top] == []
