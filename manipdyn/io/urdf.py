@@ -326,6 +326,7 @@ def _check_xml(root, source, strict=False, quirks=None):
     _check_names(joints, links, source)
     names = {j.get("name") for j in joints}
     for j in joints:
+        _dangling_mimic(j, names, source, strict, quirks)
         _check_joint(j, names, source)
     for link in links:
         _check_link(link, source)
@@ -397,6 +398,21 @@ def _check_limit(e, where, kind, source):
     if kind == "prismatic":
         for k in ("lower", "upper"):
             _bounded(values[k], MAX_LENGTH, "limit", e, k, where, source)
+
+
+def _dangling_mimic(j, joint_names, source, strict, quirks):
+    """A <mimic joint=...> naming no joint of the file (example-robot-data's alex_psyonic_hands has one):
+    the mimic is dropped with a "mimic" quirk, as Pinocchio, PyBullet and MuJoCo load the file; an error with
+    strict=True. A mimic without a joint attribute, or of itself, stays an error (_check_mimic)."""
+    for e in j.findall("mimic"):
+        target = e.get("joint")
+        if target is None or target in joint_names:
+            continue
+        detail = f"<mimic joint={target!r}> names no joint of the file: ignored, the joint moves on its own"
+        if strict:
+            raise URDFError(f"{source}: joint {j.get('name')!r}: {detail} (strict=True)")
+        quirks.append(Quirk("mimic", j.get("name"), detail))
+        j.remove(e)
 
 
 def _check_mimic(e, name, joint_names, source):

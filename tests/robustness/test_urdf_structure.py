@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 from conftest import assert_close
 
-from manipdyn import InputError, ManipdynError, ModelError, URDFError, load_urdf, load_urdf_string
+from manipdyn import InputError, ManipdynError, ModelError, URDFError, load_urdf, load_urdf_string, rnea
 from manipdyn.io.urdf import MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS
 from manipdyn.validation import robots_dir
 
@@ -122,11 +122,8 @@ REFUSED.update({
                                         j1_limit='<limit lower="3" upper="-3" effort="1" velocity="1"/>'),
                                   ["joint 'j1'", "lower > upper"]),
     # mimic
-    "mimic-missing-target": (robot(j1='<mimic joint="nowhere"/>'), ["joint 'j1'", "<mimic joint='nowhere'>",
-                                                                     "names no joint"]),
     "mimic-self": (robot(j1='<mimic joint="j1"/>'), ["joint 'j1'", "mimics itself"]),
     "mimic-no-joint-attribute": (robot(j1='<mimic multiplier="2"/>'), ["joint 'j1'", "<mimic joint=None>"]),
-    "mimic-link-name": (robot(j1='<mimic joint="l2"/>'), ["joint 'j1'", "<mimic joint='l2'>"]),
     # types and names
     "joint-type-unknown": (robot(j1_type="hinge"), ["joint 'j1'", "unknown joint type"]),
     "joint-type-floating": (robot(j1_type="floating"), ["joint 'j1'", "not supported"]),
@@ -147,6 +144,20 @@ def test_refused_with_a_named_error(case):
     assert msg.startswith("structure.urdf: "), msg
     for w in words:
         assert w in msg, f"{w!r} not in {msg!r}"
+
+
+@pytest.mark.parametrize("target", ["nowhere", "l2"])          # no such joint; a link's name
+def test_mimic_of_a_missing_joint_is_dropped_with_a_quirk_or_refused_when_strict(target):
+    text = robot(j1=f'<mimic joint="{target}"/>')
+    with pytest.warns(UserWarning, match=f"mimic joint='{target}'> names no joint"):
+        model = load_urdf_string(text, source="structure.urdf")
+    assert [(k.kind, k.name) for k in model.quirks if k.kind == "mimic"] == [("mimic", "j1")]
+    assert model.mimic == () and model.joint_names == ("j1", "j2")      # both joints move on their own
+    plain = load_urdf_string(robot(), source="structure.urdf")
+    q, v, a = np.array([0.3, -0.7]), np.array([1.0, 2.0]), np.array([-0.5, 0.4])
+    assert np.array_equal(rnea(model, q, v, a), rnea(plain, q, v, a))
+    with pytest.raises(URDFError, match=f"joint 'j1': <mimic joint='{target}'> names no joint.*strict=True"):
+        load_urdf_string(text, source="structure.urdf", strict=True)
 
 
 def test_huge_attribute_is_refused_with_a_short_message():
