@@ -39,11 +39,18 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import InputError
-from ..joints import joint_force
 from .aba import force_to_parent
 from .core import kernel_arrays, unpack
 from .rnea import outward
-from .state import as_batch, as_real, check_finite, check_model, fast_shape, raise_kernel_error, unbatch
+from .state import (
+    as_batch,
+    as_real,
+    check_finite,
+    check_model,
+    fast_shape,
+    raise_kernel_error,
+    unbatch,
+)
 
 NP = 10                                          # dynamic parameters per body
 PARAMETER_NAMES = ("m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
@@ -178,7 +185,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
 def body_block(work, i, W):
     """W (10, 6): column k of A_i as a wrench [f; n] about body i's origin, in its axes — the inertial
     wrench of a unit parameter k (module docstring; Atkeson et al. 1986, Eq. 9)."""
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    w, dw, dv = work[3], work[4], work[6]                  # ω'_i, ω̇'_i, v̇'_i of rnea.outward
     wx, wy, wz = w[i, 0], w[i, 1], w[i, 2]
     ax, ay, az = dw[i, 0], dw[i, 1], dw[i, 2]
     gx, gy, gz = dv[i, 0], dv[i, 1], dv[i, 2]              # v̇'_i, with −g
@@ -214,7 +221,7 @@ def inertia_column(W, k, Ia, Iw, w):
 def to_ancestors(mdl, work, i, W, tmp, Y):
     """Y[rows of j, columns of i] = S_jᵀ ʲX*_i A_i for j = i, λ(i), λ(λ(i)), …: project onto joint j
     (Eqs. 17–18, ``joints.joint_force``), then move the wrenches into the parent (Eqs. 15–16). W is consumed."""
-    parent, kind, iq, iv, nvj, S = mdl[:6]
+    parent, iv, nvj, S = mdl[0], mdl[3], mdl[4], mdl[5]
     Rl, pl = work[0], work[2]
     j = i
     while j >= 0:

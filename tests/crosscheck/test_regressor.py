@@ -100,7 +100,7 @@ def test_one_state_equals_a_batch_row(name):
 
 @pytest.mark.parametrize("name", ["aau_arm", "baxter", "tree4", "solo12"])
 def test_model_with_parameters_round_trip(name):
-    model, pm, to_pin = reference(name)
+    model = reference(name)[0]
     Q, V, A = random_states(model, 5, np.random.default_rng(7))
     back = md.model_with_parameters(model, md.dynamic_parameters(model))
     assert back is not model and back.joint_names == model.joint_names
@@ -228,7 +228,7 @@ def _probe(nojit):
     env.update(PYTHONPATH=str(ROOT), **({"MANIPDYN_NOJIT": "1"} if nojit else {}))
     code = PROBE.format(tests=str(ROOT / "tests"), here=str(Path(__file__).parent), names=NOJIT_CASES)
     run = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
-                         timeout=900)
+                         timeout=900, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
     return json.loads(run.stdout.splitlines()[-1])
 
