@@ -84,13 +84,17 @@ def cross3(a, b, out):
 
 @njit(cache=True, inline="always")
 def sandwich3(R, X, tmp, out):
-    """out += R X Rᵀ for 3×3 blocks (tmp is scratch)."""
-    for i in range(3):
-        for j in range(3):
-            tmp[i, j] = R[i, 0] * X[0, j] + R[i, 1] * X[1, j] + R[i, 2] * X[2, j]
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += tmp[i, 0] * R[j, 0] + tmp[i, 1] * R[j, 1] + tmp[i, 2] * R[j, 2]
+    """out += R X Rᵀ for a symmetric 3×3 X (an inertia): the upper triangle, mirrored, so that the result is
+    exactly symmetric (tmp is scratch)."""
+    for a in range(3):
+        for b in range(3):
+            tmp[a, b] = R[a, 0] * X[0, b] + R[a, 1] * X[1, b] + R[a, 2] * X[2, b]
+    for a in range(3):
+        for b in range(a, 3):
+            x = tmp[a, 0] * R[b, 0] + tmp[a, 1] * R[b, 1] + tmp[a, 2] * R[b, 2]
+            out[a, b] += x
+            if b != a:
+                out[b, a] += x
 
 
 # -- forward kinematics: the one pass -----------------------------------------------------------------

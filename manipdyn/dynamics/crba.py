@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..joints import joint_placement
-from .core import kernel_arrays, rot3, unpack
+from .core import kernel_arrays, rot3, sandwich3, unpack
 from .state import as_batch, fast_shape, raise_kernel_error, unbatch
 
 
@@ -68,20 +68,6 @@ def combine(w, c1, c2, I2):
 
 
 @njit(cache=True, inline="always")
-def rotate_inertia(R, X, tmp, out):
-    """out += R X Rᵀ for a symmetric 3×3 X: the upper triangle, mirrored (tmp is scratch)."""
-    for a in range(3):
-        for b in range(3):
-            tmp[a, b] = R[a, 0] * X[0, b] + R[a, 1] * X[1, b] + R[a, 2] * X[2, b]
-    for a in range(3):
-        for b in range(a, 3):
-            x = tmp[a, 0] * R[b, 0] + tmp[a, 1] * R[b, 1] + tmp[a, 2] * R[b, 2]
-            out[a, b] += x
-            if b != a:
-                out[b, a] += x
-
-
-@njit(cache=True, inline="always")
 def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     """Pass 1: placements (R, p)[i] of every body in its parent (joints.joint_placement), then the
     composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
@@ -98,7 +84,7 @@ def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
         rot3(R[i], cC[i], d)                   # c_i in λ's frame: R c_i + p
         for a in range(3):
             d[a] += p[i, a]
-        rotate_inertia(R[i], IC[i], tmp, IC[j])     # R I_c,i Rᵀ: about its own centre of mass
+        sandwich3(R[i], IC[i], tmp, IC[j])     # R I_c,i Rᵀ: about its own centre of mass
         combine(W[i], d, cC[j], IC[j])
 
 

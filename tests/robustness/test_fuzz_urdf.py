@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-import pytest
 from conftest import err
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
