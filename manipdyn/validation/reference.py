@@ -132,3 +132,8 @@ class Reference:
             out["dJ_" + key] = np.array([np.reshape(P.getFrameJacobianTimeVariation(pm, pd, f, ref), (6, pm.nv))
                                          for f in ids])
         return out
+
+    def regressor(self, q, v, a):
+        """Pinocchio's joint-torque regressor (nv, 10 nb) for one state (computeJointTorqueRegressor)."""
+        P = pin()
+        return P.computeJointTorqueRegressor(self.pm, self.pd, self.to_pin_q(q), v, a).copy()
