@@ -221,9 +221,9 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
         C=lambda q, v, t: coriolis_matrix(model, q, v), g=lambda q, v, t: gravity_torques(model, q),
         qdd_aba=lambda q, v, t: aba(model, q, v, t),
         qdd_cholesky=lambda q, v, t: forward_dynamics(model, q, v, t, method="cholesky"),
-        J_world=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
+        J_local_world_aligned=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
         J_local=lambda q, v, t: _jacobians(model, q, None, "local"),
-        dJ_world=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),
+        dJ_local_world_aligned=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),
         dJ_local=lambda q, v, t: _jacobians(model, q, v, "local"),
         Y=lambda q, v, t: joint_torque_regressor(model, q, v, a))          # a: this chunk's q̈
     for s0 in range(0, Q.shape[0], chunk):
