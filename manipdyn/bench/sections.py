@@ -50,8 +50,7 @@ def latency(paths, quick=False):
              lambda s: (aba(model, Q[s], V[s], A[s]), P.aba(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
             ("joint_torque_regressor", lambda: joint_torque_regressor(model, q, v, a),
              lambda: P.computeJointTorqueRegressor(pm, pd, pq, v, a),
-             lambda s: (joint_torque_regressor(model, Q[s], V[s], A[s]),
-                        P.computeJointTorqueRegressor(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+             lambda s: (joint_torque_regressor(model, Q[s], V[s], A[s]), ref.regressor(Q[s], V[s], A[s]))),
         ]
         for name, ours, theirs, pair in cases:
             ours(), theirs()

@@ -136,4 +136,5 @@ class Reference:
     def regressor(self, q, v, a):
         """Pinocchio's joint-torque regressor (nv, 10 nb) for one state (computeJointTorqueRegressor)."""
         P = pin()
-        return P.computeJointTorqueRegressor(self.pm, self.pd, self.to_pin_q(q), v, a).copy()
+        Y = P.computeJointTorqueRegressor(self.pm, self.pd, self.to_pin_q(q), v, a)
+        return np.reshape(Y, (self.pm.nv, 10 * (self.pm.njoints - 1))).copy()   # eigenpy: 1 × n comes back (n,)
