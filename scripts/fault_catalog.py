@@ -344,6 +344,9 @@ FAULTS = (
     Fault("parameters-back-about-origin", "regressor", "manipdyn/dynamics/regressor.py",
           "Ic = I - m * (c @ c * np.eye(3) - np.outer(c, c))", "Ic = I",
           (_REGRESSOR,), "model_with_parameters keeps the inertia about the origin as if it were about the CoM"),
+    Fault("identify-base-parameters-without-K", "regressor", "manipdyn/examples/identify.py",
+          "beta = pi[P[:r]] + K @ pi[P[r:]]", "beta = pi[P[:r]]",
+          ("tests/unit/test_identify.py",), "the true base parameters without the dependent columns' share K π₂"),
 )
 
 
