@@ -22,11 +22,15 @@ the same pass, not a copy). So [f'_i; n'_i] = A_i π_i with the 6 × 10 block (r
     A_i = [[v̇', [ω̇']× + [ω']×[ω']×, 0        ],
            [0,  −[v̇']×,              L(ω̇') + [ω']× L(ω')]],   I ω = L(ω) (I_xx, I_xy, I_yy, I_xz, I_yz, I_zz).
 
-The wrench reaches joint j (i itself and every ancestor) moved into body j's frame, ʲX*_i A_i (Eqs. 15–16,
-``aba.force_to_parent`` one step at a time), and joint j feels its motion-subspace component: the column
-block of body i in joint j's rows is
+The wrench reaches joint j (i itself and every ancestor) moved into body j's frame, ʲX*_i A_i (Eqs. 15–16),
+and joint j feels its motion-subspace component: the column block of body i in joint j's rows is
 
-    Y_{j,i} = S_jᵀ ʲX*_i A_i    (j an ancestor of i or i; zero otherwise: Y is block upper triangular).
+    Y_{j,i} = S_jᵀ ʲX*_i A_i = (ⁱX_j S_j)ᵀ A_i      (ʲX*_i = (ⁱX_j)ᵀ; j = i or an ancestor of i, else zero:
+                                                    Y is block upper triangular)
+
+The kernel takes the right-hand form: instead of carrying ten wrench columns inward once per ancestor, it
+carries each ancestor's motion subspace outward once per body, ⁱX_j S_j = ⁱX_λ (^λX_j S_j)
+(``aba.motion_to_child``), and projects A_i onto it — one 6-vector moved per ancestor velocity instead of ten.
 
 Single states (nv,), batches (N, nv); the kernel is compiled by numba and runs as plain Python under
 MANIPDYN_NOJIT=1.
@@ -39,7 +43,7 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import InputError
-from .aba import force_to_parent
+from .aba import motion_to_child
 from .core import kernel_arrays, unpack
 from .rnea import outward
 from .state import (
@@ -150,8 +154,8 @@ def regressor_one(I, F, q, v, a, Y):
 
 @njit(cache=True, inline="always")
 def regressor_kernel(I, F, Q, V, A, Y):
-    """Y[s] = [S_jᵀ ʲX*_i A_i]_{j, i} for every state s: the outward pass, then each body's block A_i carried
-    down its ancestors (module docstring).
+    """Y[s] = [(ⁱX_j S_j)ᵀ A_i]_{j, i} for every state s: the outward pass, then each body's block A_i
+    projected onto its own and its ancestors' motion subspaces (module docstring).
 
     I, F: the model in core form (``core.kernel_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb) result.
     Returns -1, ≥ 0 for a non-finite input (state index), or −2 − nb − k for a non-finite entry at flat
@@ -161,7 +165,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
     RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
     work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
-    W, tmp = np.empty((NP, 6)), np.empty(6)       # A_i's columns as wrenches [f; n], then moved down
+    W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
     for s in range(N):
         for k in range(Q.shape[1]):
             if not np.isfinite(Q[s, k]):
@@ -173,7 +177,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
         Y[s, :, :] = 0.0
         for i in range(nb):
             body_block(work, i, W)
-            to_ancestors(mdl, work, i, W, tmp, Y[s])
+            to_ancestors(mdl, work, i, W, Sx, Y[s])
         for r in range(nv):                               # finite result (else an intermediate overflowed)
             for c in range(NP * nb):
                 if not np.isfinite(Y[s, r, c]):
@@ -218,20 +222,27 @@ def inertia_column(W, k, Ia, Iw, w):
 
 
 @njit(cache=True, inline="always")
-def to_ancestors(mdl, work, i, W, tmp, Y):
-    """Y[rows of j, columns of i] = S_jᵀ ʲX*_i A_i for j = i, λ(i), λ(λ(i)), …: project onto joint j
-    (Eqs. 17–18, ``joints.joint_force``), then move the wrenches into the parent (Eqs. 15–16). W is consumed."""
+def to_ancestors(mdl, work, i, W, Sx, Y):
+    """Y[r, columns of i] = (ⁱX_j S_j)ᵀ A_i = S_jᵀ ʲX*_i A_i for every velocity r of joint i and of each
+    ancestor j: the ancestors' motion subspaces carried out to body i, Sx[i, r] = ⁱX_λ Sx[λ, r] (RBDA
+    Table 2.2, ``aba.motion_to_child``; Sx[λ] is complete since λ < i), rather than ten wrenches carried in."""
     parent, iv, nvj, S = mdl[0], mdl[3], mdl[4], mdl[5]
     Rl, pl = work[0], work[2]
-    j = i
+    lam = parent[i]
+    for r in range(iv[i], iv[i] + nvj[i]):                # joint i's own S, in its body frame
+        Sx[i, r, :] = S[r]
+        project(Sx[i, r], W, Y, r, NP * i)
+    j = lam
     while j >= 0:
-        for r in range(iv[j], iv[j] + nvj[j]):            # Sᵀ [f; n] (joints.joint_force), per column
-            for k in range(NP):
-                Y[r, NP * i + k] = (S[r, 0] * W[k, 0] + S[r, 1] * W[k, 1] + S[r, 2] * W[k, 2]
-                                    + S[r, 3] * W[k, 3] + S[r, 4] * W[k, 4] + S[r, 5] * W[k, 5])
-        if parent[j] >= 0:
-            for k in range(NP):
-                tmp[:] = 0.0
-                force_to_parent(Rl[j], pl[j], W[k], tmp)
-                W[k, :] = tmp
+        for r in range(iv[j], iv[j] + nvj[j]):
+            motion_to_child(Rl[i], pl[i], Sx[lam, r], Sx[i, r])
+            project(Sx[i, r], W, Y, r, NP * i)
         j = parent[j]
+
+
+@njit(cache=True, inline="always")
+def project(s, W, Y, r, c0):
+    """Y[r, c0 + k] = sᵀ W[k], k < 10: the power of the wrench W[k] along the motion s (Eqs. 17–18)."""
+    for k in range(NP):
+        Y[r, c0 + k] = (s[0] * W[k, 0] + s[1] * W[k, 1] + s[2] * W[k, 2]
+                        + s[3] * W[k, 3] + s[4] * W[k, 4] + s[5] * W[k, 5])
