@@ -16,6 +16,7 @@ from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_place
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics import mimic as _mimic  # noqa: F401  (registers the MimicModel versions of rnea, aba, ...)
 from .dynamics.rnea import rnea, rnea_terms
+from .dynamics.regressor import dynamic_parameters, joint_torque_regressor, model_with_parameters
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
                      ManipdynError, ModelError, NumericalError, QuirkWarning, SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
@@ -41,4 +42,4 @@ __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "proj
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning",
            "FloatingBaseWarning", "FREEFLYER", "neutral", "integrate", "difference", "random_configuration",
-           "normalize"]
+           "normalize", "joint_torque_regressor", "dynamic_parameters", "model_with_parameters"]

@@ -321,6 +321,13 @@ def _example(args) -> int:
               f"|τ| ≤ {abs(tau).max():.2f} N·m with a {ex.PAYLOAD_KG:g} kg payload")
         print(f"wrote {out / 'aau_arm.csv'}, fig3_joint_rates.png, fig4_joint_torques.png")
         return 0
+    if args.name == "identify":
+        from .examples import identify as ex
+        res = ex.identify(samples=args.samples)
+        print(ex.format_result(res))
+        ex.write_csv(out / "identify_aau.csv", res)
+        print(f"wrote {out / 'identify_aau.csv'}")
+        return 0
     from .validation import fig7
     return fig7.main(out, samples=min(args.samples, 101))
 
@@ -380,7 +387,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_root_joint_option(pl)
     pl.set_defaults(func=_play)
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
-    e.add_argument("name", choices=["aau", "spm"], help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7)")
+    e.add_argument("name", choices=["aau", "spm", "identify"],
+                   help="aau: Example I (Figs. 3-4); spm: Example II (Fig. 7); identify: the AAU arm's base "
+                        "parameters from noisy torques (the regressor), tested on a second trajectory")
     e.add_argument("--out", default=".", help="output folder")
     e.add_argument("--samples", type=_int_in(2, MAX_SAMPLES), default=401,
                    help=f"time samples, 2..{MAX_SAMPLES} (default 401; spm uses at most 101)")

@@ -33,7 +33,7 @@ class Fault:
 
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
-         "validation", "reduce", "viz")
+         "validation", "reduce", "viz", "regressor")
 
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
@@ -55,6 +55,7 @@ _DH = "tests/unit/test_dh.py"
 _QUIRKS = "tests/unit/test_quirks.py"
 _MIMIC = "tests/crosscheck/test_mimic.py"
 _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
+_REGRESSOR = "tests/crosscheck/test_regressor.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -70,6 +71,7 @@ AREA_TESTS = {
     "constraints": ("tests/crosscheck/test_spatial_loops.py", "tests/batch/test_kernels_vs_readable.py"),
     "integrators": ("tests/unit/test_symplectic_euler.py",),
     "validation": ("tests/crosscheck/test_single_joint.py",),
+    "regressor": (_REGRESSOR,),
 }
 
 FAULTS = (
@@ -427,6 +429,32 @@ FAULTS = (
     Fault("urdfplus-loop-origin-dropped", "loader", "manipdyn/io/urdf.py",
           'org = None if el is None else el.find("origin")', "org = None",
           (_URDFPLUS,), "a URDF+ <loop>'s <predecessor>/<successor> <origin> is ignored (the closure at the link origin)"),
+    # ---------------------------------------------------------------- regressor (dynamics/regressor.py)
+    Fault("regressor-first-moment-torque-sign", "regressor", "manipdyn/dynamics/regressor.py",
+          "W[1 + k, 3] = e1 * gz - e2 * gy", "W[1 + k, 3] = e2 * gy - e1 * gz",
+          (_REGRESSOR,), "the first moment's moment h × v̇' with the wrong sign in its x component"),
+    Fault("regressor-gyroscopic-term-dropped", "regressor", "manipdyn/dynamics/regressor.py",
+          "W[k, 5] = Ia[2] + w[0] * Iw[1] - w[1] * Iw[0]", "W[k, 5] = Ia[2]",
+          (_REGRESSOR,), "the inertia columns without ω × I ω (z component)"),
+    Fault("regressor-Ixy-unit-inertia", "regressor", "manipdyn/dynamics/regressor.py",
+          "inertia_column(W, 5, (ay, ax, 0.0), (wy, wx, 0.0), (wx, wy, wz))",
+          "inertia_column(W, 5, (ax, ay, 0.0), (wx, wy, 0.0), (wx, wy, wz))",
+          (_REGRESSOR,), "I_xy's column built from the wrong unit inertia (I ω with the xy entries on the diagonal)"),
+    Fault("regressor-lever-arm-dropped", "regressor", "manipdyn/dynamics/regressor.py",
+          "motion_to_child(Rl[i], pl[i], Sx[lam, r], Sx[i, r])", "motion_to_child(Rl[i], pl[i] * 0.0, Sx[lam, r], Sx[i, r])",
+          (_REGRESSOR,), "ancestors' motion subspaces carried to the child without the ω × p lever arm (Eq. 4)"),
+    Fault("regressor-own-joint-only", "regressor", "manipdyn/dynamics/regressor.py",
+          "        j = parent[j]\n", "        j = -1\n",
+          (_REGRESSOR,), "each body's block reaches its own joint only, not its ancestors' (Y block diagonal)"),
+    Fault("parameters-parallel-axis-sign", "regressor", "manipdyn/dynamics/regressor.py",
+          "I = Ic + m[:, None, None] * (", "I = Ic - m[:, None, None] * (",
+          (_REGRESSOR,), "dynamic_parameters: the inertia about the origin by the parallel-axis theorem with a minus sign"),
+    Fault("parameters-back-about-origin", "regressor", "manipdyn/dynamics/regressor.py",
+          "Ic = I - m * (c @ c * np.eye(3) - np.outer(c, c))", "Ic = I",
+          (_REGRESSOR,), "model_with_parameters keeps the inertia about the origin as if it were about the CoM"),
+    Fault("identify-base-parameters-without-K", "regressor", "manipdyn/examples/identify.py",
+          "beta = pi[P[:r]] + K @ pi[P[r:]]", "beta = pi[P[:r]]",
+          ("tests/unit/test_identify.py",), "the true base parameters without the dependent columns' share K π₂"),
 )
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from ..constraints import constrained_forward_dynamics
 from ..dynamics.aba import aba
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
+from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea
 from ..io.urdf import load_urdf
 from ..validation.compare import random_states
@@ -47,6 +48,9 @@ def latency(paths, quick=False):
              lambda s: (gravity_torques(model, Q[s]), P.computeGeneralizedGravity(pm, pd, ref.to_pin_q(Q[s])))),
             ("aba", lambda: aba(model, q, v, a), lambda: P.aba(pm, pd, pq, v, a),
              lambda s: (aba(model, Q[s], V[s], A[s]), P.aba(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+            ("joint_torque_regressor", lambda: joint_torque_regressor(model, q, v, a),
+             lambda: P.computeJointTorqueRegressor(pm, pd, pq, v, a),
+             lambda s: (joint_torque_regressor(model, Q[s], V[s], A[s]), ref.regressor(Q[s], V[s], A[s]))),
         ]
         for name, ours, theirs, pair in cases:
             ours(), theirs()

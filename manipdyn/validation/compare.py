@@ -20,6 +20,7 @@ import numpy as np
 from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
+from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea, rnea_terms
 from ..configuration import FREE_RANGE
 from ..model import FREEFLYER, PRISMATIC
@@ -45,6 +46,7 @@ DYN_TERMS = {
     "qdd_aba": "q̈ (ABA) vs aba, err/cond(M)", "qdd_cholesky": "q̈ (Cholesky) vs aba, err/cond(M)",
     "J_local_world_aligned": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
     "dJ_local_world_aligned": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
+    "Y": "regressor Y vs computeJointTorqueRegressor",
 }
 CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
                 "qdd_closed": "closed q̈ vs constraintDynamics, err/κ"}   # κ = cond(M) cond(Φ_q)²
@@ -219,10 +221,11 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
         C=lambda q, v, t: coriolis_matrix(model, q, v), g=lambda q, v, t: gravity_torques(model, q),
         qdd_aba=lambda q, v, t: aba(model, q, v, t),
         qdd_cholesky=lambda q, v, t: forward_dynamics(model, q, v, t, method="cholesky"),
-        J_world=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
+        J_local_world_aligned=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
         J_local=lambda q, v, t: _jacobians(model, q, None, "local"),
-        dJ_world=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),
-        dJ_local=lambda q, v, t: _jacobians(model, q, v, "local"))
+        dJ_local_world_aligned=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),
+        dJ_local=lambda q, v, t: _jacobians(model, q, v, "local"),
+        Y=lambda q, v, t: joint_torque_regressor(model, q, v, a))          # a: this chunk's q̈
     for s0 in range(0, Q.shape[0], chunk):
         q, v, a, t = (X[s0:s0 + chunk] for X in (Q, V, A, T))
         ours = {k: guard((k,), lambda: f(q, v, t)) for k, f in ours_of.items()}
@@ -238,6 +241,7 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
             theirs = {**ref.dynamics(q[s], v[s], t[s]), **ref.jacobians(q[s], v[s])}
             theirs.update(M_crba=theirs["M"], M_lagrange=theirs["M"], lagrange_ne=None if tau_ne is None else tau_ne[s],
                           qdd_aba=theirs["qdd"], qdd_cholesky=theirs["qdd"])
+            theirs["Y"] = ref.regressor(q[s], v[s], a[s])
             for k in DYN_TERMS:
                 if ours.get(k) is None:
                     continue

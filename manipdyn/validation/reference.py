@@ -133,3 +133,9 @@ class Reference:
             out["dJ_" + key] = np.array([np.reshape(P.getFrameJacobianTimeVariation(pm, pd, f, ref), (6, pm.nv))
                                          for f in ids])
         return out
+
+    def regressor(self, q, v, a):
+        """Pinocchio's joint-torque regressor (nv, 10 nb) for one state (computeJointTorqueRegressor)."""
+        P = pin()
+        Y = P.computeJointTorqueRegressor(self.pm, self.pd, self.to_pin_q(q), v, a)
+        return np.reshape(Y, (self.pm.nv, 10 * (self.pm.njoints - 1))).copy()   # eigenpy: 1 × n comes back (n,)

@@ -447,7 +447,8 @@ def test_dynamics_validate_passes_on_a_floating_robot(name):
     model, ref = robot(name)
     rep = validate(model, robots_dir() / ROBOTS[name], n_states=20, seed=5, tol=5e-13)
     core = {"w", "v", "dw", "acc", "fc", "nO", "f", "n", "tau", "f_ext", "n_ext", "tau_ext", "M_crba", "g",
-            "qdd_aba", "J_world", "J_local", "dJ_world", "dJ_local"}
+            "qdd_aba", "J_local_world_aligned", "J_local", "dJ_local_world_aligned", "dJ_local", "Y"}
+    assert core <= {t.term for t in rep.terms}           # a misspelt key would check nothing
     bad = [f"{t.term}: {'not supported' if not t.supported else f'{t.err:.2e}'}" for t in rep.terms
            if t.term in core and not t.passed]
     assert not bad, f"{bad}; notes: {rep.notes}"

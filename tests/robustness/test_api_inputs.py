@@ -32,6 +32,8 @@ TREE = {
     "rnea_v": (lambda x: md.rnea(ARM, Z, x, Z), "v"),
     "aba_tau": (lambda x: md.aba(ARM, Z, Z, x), "tau"),
     "kinetic_energy_v": (lambda x: md.kinetic_energy(ARM, Z, x), "v"),
+    "joint_torque_regressor": (lambda x: md.joint_torque_regressor(ARM, x, Z, Z), "q"),
+    "joint_torque_regressor_a": (lambda x: md.joint_torque_regressor(ARM, Z, Z, x), "a"),
 }
 CLOSED = {
     "assemble": (lambda x: md.assemble(FOURBAR, x), "q"),
@@ -100,6 +102,7 @@ EMPTY = {   # public function -> call on a state argument x (one state or a batc
     "constrained_forward_dynamics": lambda x: md.constrained_forward_dynamics(
         FOURBAR, np.broadcast_to(QF, x.shape[:-1] + (N3,)), x[..., :N3], x[..., :N3])[1],
     "closure_terms": lambda x: mc.closure_terms(FOURBAR, np.broadcast_to(QF, x.shape[:-1] + (N3,)))[1],
+    "joint_torque_regressor": lambda x: md.joint_torque_regressor(ARM, x, x, x),
 }
 
 
@@ -231,6 +234,7 @@ NV0 = {
     "simulate": (lambda q: md.simulate(FIXED, q, q, (0, 0.01)).q, (11, 0)),
     "constrained_forward_dynamics": (lambda q: md.constrained_forward_dynamics(FIXED, q, q, q)[0], (0,)),
     "closure_terms": (lambda q: mc.closure_terms(FIXED, q)[1], (0, 0)),
+    "joint_torque_regressor": (lambda q: md.joint_torque_regressor(FIXED, q, q, q), (0, 0)),
 }
 
 
