@@ -8,6 +8,7 @@ import numpy as np
 
 from ..constraints import constrained_forward_dynamics
 from ..dynamics.aba import aba
+from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.rnea import rnea
 from ..io.urdf import load_urdf
@@ -47,6 +48,14 @@ def latency(paths, quick=False):
              lambda s: (gravity_torques(model, Q[s]), P.computeGeneralizedGravity(pm, pd, ref.to_pin_q(Q[s])))),
             ("aba", lambda: aba(model, q, v, a), lambda: P.aba(pm, pd, pq, v, a),
              lambda s: (aba(model, Q[s], V[s], A[s]), P.aba(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+            ("rnea_derivatives", lambda: rnea_derivatives(model, q, v, a),
+             lambda: P.computeRNEADerivatives(pm, pd, pq, v, a),
+             lambda s: (rnea_derivatives(model, Q[s], V[s], A[s]),
+                        P.computeRNEADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+            ("aba_derivatives", lambda: aba_derivatives(model, q, v, a),
+             lambda: P.computeABADerivatives(pm, pd, pq, v, a),
+             lambda s: (aba_derivatives(model, Q[s], V[s], A[s]),
+                        P.computeABADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
         ]
         for name, ours, theirs, pair in cases:
             ours(), theirs()

@@ -218,8 +218,8 @@ def test_batch_equals_stacked_single_states():
         for frame in ("local", "world"):
             batch = fn(model, Q, V, A, f_ext=fx, f_ext_frame=frame)
             for s in range(5):
-                one = fn(model, Q[s], V[s], A[s], f_ext={k: (np.broadcast_to(f, (5, 3))[s], np.broadcast_to(m, (5, 3))[s])
-                                                         for k, (f, m) in fx.items()}, f_ext_frame=frame)
+                row = {k: (np.broadcast_to(f, (5, 3))[s], np.broadcast_to(m, (5, 3))[s]) for k, (f, m) in fx.items()}
+                one = fn(model, Q[s], V[s], A[s], f_ext=row, f_ext_frame=frame)
                 assert all(err(one[k], batch[k][s]) <= 1e-14 for k in range(3))    # measured 0
         lists = fn(model, Q.tolist(), V.tolist(), A.tolist())                      # the checked path
         assert all(err(x, y) == 0.0 for x, y in zip(lists, fn(model, Q, V, A)))
