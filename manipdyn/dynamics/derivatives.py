@@ -12,11 +12,12 @@ For body i, with λ its parent and S_i its motion subspace (constant in the body
   v_i   = v_λ + J_i q̇_i                       a_i = a_λ + J_i q̈_i + v_i × J_i q̇_i   (a_0 = −a_g = [−g; 0])
   Y_i   world inertia,  h_i = Y_i v_i,  f_i = Y_i a_i + v_i ×* h_i − f^ext_i          (RNEA, world form)
   τ_i   = J_iᵀ F_i,  F_i = Σ_{k ⪰ i} f_k (the subtree's force; Y^c_i, Ẏ^c_i the subtree sums likewise)
-and the partial derivatives of the motion with respect to joint j's coordinates (j ⪯ i):
-  ∂v_i/∂q_j = v_λ(j) × J_j =: V_j          ∂a_i/∂q_j = a_λ(j) × J_j + v_λ(j) × V_j =: A_j
-  ∂a_i/∂q̇_j = v_j × J_j + V_j =: B_j       (J̇_j = v_j × J_j)
+and the pieces of the motion's derivatives with respect to joint j's coordinates (Pinocchio's dVdq, dAdq, dAdv):
+  V_j = v_λ(j) × J_j,   A_j = a_λ(j) × J_j + v_λ(j) × V_j,   B_j = J̇_j + V_j   (J̇_j = v_j × J_j)
   Ẏ_i = v_i ×* Y_i − Y_i v_i× + h_i ×̄      (the variation of Y_i with its ∂(v ×* h)/∂v term, h ×̄ m = −m ×* h)
-which give, for j ⪯ i (j an ancestor of i or i itself, Carpentier & Mansard's "subtree" identities):
+— the part of ∂v_i/∂q_j that depends on the body i (for one column, ∂v_i/∂q_j = J_j × (v_i − v_j) = V_j − v_i × J_j)
+enters through Ẏ_i's −Y_i v_i× term, which is what lets the subtree sums carry it;
+these give, for j ⪯ i (j an ancestor of i or i itself):
   ∂τ_j/∂q_i = J_jᵀ (Ẏ^c_i V_i + Y^c_i A_i + [j ≠ i] J_i ×* F_i),  ∂τ_i/∂q_j = J_iᵀ (Y^c_i A_j + Ẏ^c_i V_j)
   ∂τ_j/∂q̇_i = J_jᵀ (Ẏ^c_i J_i + Y^c_i B_i),                       ∂τ_i/∂q̇_j = J_iᵀ (Y^c_i B_j + Ẏ^c_i J_j)
   ∂τ_j/∂q̈_i = J_jᵀ Y^c_i J_i = M_ji,                              and bodies on different branches do not couple.
