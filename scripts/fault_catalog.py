@@ -356,7 +356,7 @@ FAULTS = (
     Fault("deriv-minv-upper-triangle", "derivatives", "manipdyn/dynamics/derivatives.py",
           "x -= L[m, r] * out[m, c]",
           "x -= L[r, m] * out[m, c]",
-          (_DERIV,), "M⁻¹ by Cholesky: the back substitution reads L's (empty) upper triangle instead of Lᵀ"),
+          (_DERIV,), "M⁻¹ by Cholesky: the back substitution reads L's upper triangle (never written) instead of Lᵀ"),
 )
 
 

@@ -184,14 +184,17 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
-    Rl, Rw, pl, pw = np.empty((nb, 3, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3))
-    vel, acc, frc = np.empty((nb, 6)), np.empty((nb, 6)), np.empty((nb, 6))   # v_i, a_i (with −a_g), f_i
-    Yc, dYc, Ae = np.empty((nb, 6, 6)), np.empty((nb, 6, 6)), np.empty((nb, 6, 3))   # Y^c, Ẏ^c, A^ext
-    Jc, Vc, Ac, Bc = np.empty((nv, 6)), np.empty((nv, 6)), np.empty((nv, 6)), np.empty((nv, 6))  # J, V, A, B
-    B66 = np.empty((5, 6, 6))
-    YJ, dYJ, Fq, Fv, T = B66[0], B66[1], B66[2], B66[3], B66[4]   # per joint column: Y^c J, Ẏ^cᵀ J, …
-    AJ, t, u, a0 = np.empty((6, 3)), np.empty(6), np.empty(6), np.zeros(6)
-    a0[:3] = mg                                                 # a_0 = −a_g = [−g; 0]
+    R33, P3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))    # five allocations, cut into blocks
+    B6, B66, B63 = np.empty((3 * nb + 4 * nv + 3, 6)), np.empty((2 * nb + 5, 6, 6)), np.empty((nb + 1, 6, 3))
+    Rl, Rw, pl, pw = R33[:nb], R33[nb:], P3[:nb], P3[nb:]         # placements in the parent, in the world
+    vel, acc, frc = B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb]     # v_i, a_i (with −a_g), f_i
+    e = 3 * nb                                                  # J, V, A, B: one row per joint column
+    Jc, Vc, Ac, Bc = B6[e:e + nv], B6[e + nv:e + 2 * nv], B6[e + 2 * nv:e + 3 * nv], B6[e + 3 * nv:e + 4 * nv]
+    t, u, a0 = B6[e + 4 * nv], B6[e + 4 * nv + 1], B6[e + 4 * nv + 2]   # scratch; a_0 = −a_g = [−g; 0]
+    Yc, dYc, Ae, AJ = B66[:nb], B66[nb:2 * nb], B63[:nb], B63[nb]      # Y^c, Ẏ^c, A^c per body; A^cᵀ J
+    YJ, dYJ, Fq, Fv, T = B66[2 * nb], B66[2 * nb + 1], B66[2 * nb + 2], B66[2 * nb + 3], B66[2 * nb + 4]
+    for x in range(3):                                          # (per column of joint i: Y^c J, Ẏ^cᵀ J, Fq, Fv)
+        a0[x], a0[3 + x] = mg[x], 0.0
 
     def motion(q, v, a):
         """Forward pass (i = 1 … nb): placements, J_i, v_i, a_i, V_i, A_i, B_i, Y_i, f_i, Ẏ_i."""
@@ -354,7 +357,8 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
     code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
     if code != -1:
         return code - N * nv if code <= -2 - nb else code   # non-finite entries: after q̈'s codes
-    L, M, T = np.zeros((nv, nv)), np.empty((nv, nv)), np.empty(nv)
+    W = np.empty((2 * nv + 1, nv))
+    L, M, T = W[:nv], W[nv:2 * nv], W[2 * nv]          # Cholesky factor (lower triangle), M, a column
     for s in range(N):
         M[:, :] = Minv[s]
         k = spd_inverse(M, L, Minv[s])
