@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from .configuration import difference, integrate, neutral, normalize, random_configuration
 from .dynamics.aba import aba, forward_dynamics
+from .dynamics.derivatives import aba_derivatives, rnea_derivatives
 from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
@@ -36,7 +37,8 @@ def dh_to_urdf(*args, **kwargs):
 
 
 __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "project", "assemble",
-           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics",
+           "rnea_derivatives", "aba_derivatives", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "MimicModel", "Quirk", "QuirkWarning",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",

@@ -33,7 +33,7 @@ class Fault:
 
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
-         "validation", "reduce", "viz", "regressor")
+         "validation", "reduce", "viz", "regressor", "derivatives")
 
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
@@ -56,6 +56,7 @@ _QUIRKS = "tests/unit/test_quirks.py"
 _MIMIC = "tests/crosscheck/test_mimic.py"
 _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 _REGRESSOR = "tests/crosscheck/test_regressor.py"
+_DERIV = "tests/crosscheck/test_derivatives.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -72,6 +73,8 @@ AREA_TESTS = {
     "integrators": ("tests/unit/test_symplectic_euler.py",),
     "validation": ("tests/crosscheck/test_single_joint.py",),
     "regressor": (_REGRESSOR,),
+    "derivatives": ("tests/crosscheck/test_derivatives.py",
+                    "tests/properties/test_random_trees.py::test_random_tree_dynamics_derivatives_agree_with_pinocchio"),
 }
 
 FAULTS = (
@@ -455,6 +458,41 @@ FAULTS = (
     Fault("identify-base-parameters-without-K", "regressor", "manipdyn/examples/identify.py",
           "beta = pi[P[:r]] + K @ pi[P[r:]]", "beta = pi[P[:r]]",
           ("tests/unit/test_identify.py",), "the true base parameters without the dependent columns' share K π₂"),
+    # ---------------------------------------------------------------- derivatives (dynamics/derivatives.py)
+    Fault("deriv-dadq-own-velocity", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "cross_motion(vl, Vc[r], u)",
+          "cross_motion(vel[i], Vc[r], u)",
+          (_DERIV,), "∂a/∂q_j = a_λ × J_j + v_j × V_j (the joint's own body) instead of v_λ(j) × V_j. (The same "
+                     "slip in V_j = v_λ × J_j changes nothing: v_j × J_j = v_λ × J_j for one column.)"),
+    Fault("deriv-dadq-velocity-term-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "Ac[r, x] += u[x]",
+          "Ac[r, x] -= u[x]",
+          (_DERIV,), "∂a/∂q_j = a_λ × J_j − v_λ × V_j (the velocity term's sign)"),
+    Fault("deriv-force-cross-angular-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], h[3], h[4], h[5]",
+          "hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], -h[3], -h[4], -h[5]",
+          (_DERIV,), "Ẏ: the angular block of h ×̄ is +[h_a]× instead of −[h_a]×"),
+    Fault("deriv-ancestor-rigid-term-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "Fq[c, x] += t[x]",
+          "Fq[c, x] -= t[x]",
+          (_DERIV,), "∂τ_j/∂q_i (j an ancestor): − J_i ×* F_i instead of + (the subtree moved rigidly)"),
+    Fault("deriv-dv-descendant-drops-ydot", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "Dv[k, r] = dot6(YJ[c], Bc[r]) + dot6(dYJ[c], Jc[r])",
+          "Dv[k, r] = dot6(YJ[c], Bc[r])",
+          (_DERIV,), "∂τ_i/∂q̇_j (j an ancestor) without the (Ẏ^cᵀ J_i)ᵀ J_j term"),
+    Fault("deriv-world-fext-ancestor-term-dropped", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "+ AJ[c, 0] * Jc[r, 3] + AJ[c, 1] * Jc[r, 4] + AJ[c, 2] * Jc[r, 5])",
+          ")",
+          (_DERIV,), "a world-axes f_ext: ∂τ_i/∂q_j (j an ancestor) without J_iᵀ A^c_i ω_j, the wrench "
+                     "that does not turn with the body"),
+    Fault("deriv-local-fext-turned-back", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "Rw[b, y, 0] * x[k, z] + Rw[b, y, 1] * x[k, z + 1] + Rw[b, y, 2] * x[k, z + 2]",
+          "Rw[b, 0, y] * x[k, z] + Rw[b, 1, y] * x[k, z + 1] + Rw[b, 2, y] * x[k, z + 2]",
+          (_DERIV,), "a body-axes f_ext turned into world axes by Rwᵀ instead of Rw"),
+    Fault("deriv-minv-upper-triangle", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "x -= L[m, r] * out[m, c]",
+          "x -= L[r, m] * out[m, c]",
+          (_DERIV,), "M⁻¹ by Cholesky: the back substitution reads L's upper triangle (never written) instead of Lᵀ"),
 )
 
 

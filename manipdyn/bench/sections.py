@@ -8,6 +8,7 @@ import numpy as np
 
 from ..constraints import constrained_forward_dynamics
 from ..dynamics.aba import aba
+from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea
@@ -51,6 +52,14 @@ def latency(paths, quick=False):
             ("joint_torque_regressor", lambda: joint_torque_regressor(model, q, v, a),
              lambda: P.computeJointTorqueRegressor(pm, pd, pq, v, a),
              lambda s: (joint_torque_regressor(model, Q[s], V[s], A[s]), ref.regressor(Q[s], V[s], A[s]))),
+            ("rnea_derivatives", lambda: rnea_derivatives(model, q, v, a),
+             lambda: P.computeRNEADerivatives(pm, pd, pq, v, a),
+             lambda s: (rnea_derivatives(model, Q[s], V[s], A[s]),
+                        P.computeRNEADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
+            ("aba_derivatives", lambda: aba_derivatives(model, q, v, a),
+             lambda: P.computeABADerivatives(pm, pd, pq, v, a),
+             lambda s: (aba_derivatives(model, Q[s], V[s], A[s]),
+                        P.computeABADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
         ]
         for name, ours, theirs, pair in cases:
             ours(), theirs()

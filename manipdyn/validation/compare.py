@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..dynamics.aba import aba, forward_dynamics
+from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.regressor import joint_torque_regressor
@@ -47,6 +48,9 @@ DYN_TERMS = {
     "J_local_world_aligned": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
     "dJ_local_world_aligned": "J̇ world-aligned vs ...TimeVariation", "dJ_local": "J̇ local vs ...TimeVariation",
     "Y": "regressor Y vs computeJointTorqueRegressor",
+    "dtau_dq": "∂τ/∂q vs computeRNEADerivatives", "dtau_dv": "∂τ/∂q̇ vs computeRNEADerivatives",
+    "dqdd_dq": "∂q̈/∂q vs computeABADerivatives, err/cond(M)",
+    "dqdd_dv": "∂q̈/∂q̇ vs computeABADerivatives, err/cond(M)",
 }
 CLOSED_TERMS = {"phi": "closure gaps Φ (p_A − p_B) vs Pinocchio placements",
                 "qdd_closed": "closed q̈ vs constraintDynamics, err/κ"}   # κ = cond(M) cond(Φ_q)²
@@ -229,6 +233,9 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
     for s0 in range(0, Q.shape[0], chunk):
         q, v, a, t = (X[s0:s0 + chunk] for X in (Q, V, A, T))
         ours = {k: guard((k,), lambda: f(q, v, t)) for k, f in ours_of.items()}
+        d_tau = guard(("dtau_dq", "dtau_dv"), lambda: rnea_derivatives(model, q, v, a))
+        d_qdd = guard(("dqdd_dq", "dqdd_dv"), lambda: aba_derivatives(model, q, v, t))
+        ours.update(dict(zip(("dtau_dq", "dtau_dv"), d_tau or ())), **dict(zip(("dqdd_dq", "dqdd_dv"), d_qdd or ())))
         if ours["C"] is not None and ours["g"] is not None:
             ours["nle"] = np.einsum("nij,nj->ni", ours["C"], v) + ours["g"]
         tau_ne = guard(("lagrange_ne",), lambda: rnea(model, q, v, a))
@@ -238,7 +245,8 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
             if ours.get(k) is None and k not in guard.failed:
                 guard.failed[k] = "built from a term that is not supported"
         for s in range(q.shape[0]):
-            theirs = {**ref.dynamics(q[s], v[s], t[s]), **ref.jacobians(q[s], v[s])}
+            theirs = {**ref.dynamics(q[s], v[s], t[s]), **ref.jacobians(q[s], v[s]),
+                      **ref.derivatives(q[s], v[s], a[s], t[s])}
             theirs.update(M_crba=theirs["M"], M_lagrange=theirs["M"], lagrange_ne=None if tau_ne is None else tau_ne[s],
                           qdd_aba=theirs["qdd"], qdd_cholesky=theirs["qdd"])
             theirs["Y"] = ref.regressor(q[s], v[s], a[s])
@@ -246,7 +254,7 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
                 if ours.get(k) is None:
                     continue
                 x, y = ours[k][s], theirs[k]
-                scale = theirs["cond"] if k.startswith("qdd") else 1.0
+                scale = theirs["cond"] if k.startswith(("qdd", "dqdd")) else 1.0
                 worst[k][1] = max(worst[k][1], error(x, y) / scale)
                 worst[k][0] = max(worst[k][0], float(np.max(np.abs(x - y))))
             if progress is not None:

@@ -118,6 +118,15 @@ class Reference:
                     nle=P.nonLinearEffects(pm, pd, pq, v).copy(),
                     qdd=P.aba(pm, pd, pq, v, tau).copy(), cond=float(np.linalg.cond(M)))
 
+    def derivatives(self, q, v, a, tau):
+        """Pinocchio's ∂τ/∂q, ∂τ/∂q̇ at (q, q̇, q̈ = a) (computeRNEADerivatives) and ∂q̈/∂q, ∂q̈/∂q̇ at (q, q̇, τ)
+        (computeABADerivatives), copied (the binding returns views of its data) — tangent-space q-derivatives."""
+        P, pm, pd = pin(), self.pm, self.pd
+        pq = self.to_pin_q(q)
+        dq, dv = (np.array(x) for x in P.computeRNEADerivatives(pm, pd, pq, v, a)[:2])
+        fq, fv = (np.array(x) for x in P.computeABADerivatives(pm, pd, pq, v, tau)[:2])
+        return dict(dtau_dq=dq, dtau_dv=dv, dqdd_dq=fq, dqdd_dv=fv)
+
     def jacobians(self, q, v):
         """Every body frame's Jacobian and its time derivative, world-aligned and local: (nb, 6, nv) each."""
         P, pm, pd = pin(), self.pm, self.pd

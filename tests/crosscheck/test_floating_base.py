@@ -442,12 +442,14 @@ def test_dynamics_aba_is_pinocchios(name):
 
 @pytest.mark.parametrize("name", ["solo12", "talos", "pr2", "hector"])
 def test_dynamics_validate_passes_on_a_floating_robot(name):
-    """validate's terms in the kernels' reach (Newton–Euler terms, CRBA, g, C q̇ + g, ABA, Jacobians)."""
+    """validate's terms in the kernels' reach (Newton–Euler terms, CRBA, g, C q̇ + g, ABA, Jacobians, the
+    RNEA and ABA derivatives)."""
     from manipdyn.validation import validate
     model, ref = robot(name)
     rep = validate(model, robots_dir() / ROBOTS[name], n_states=20, seed=5, tol=5e-13)
     core = {"w", "v", "dw", "acc", "fc", "nO", "f", "n", "tau", "f_ext", "n_ext", "tau_ext", "M_crba", "g",
-            "qdd_aba", "J_local_world_aligned", "J_local", "dJ_local_world_aligned", "dJ_local", "Y"}
+            "qdd_aba", "J_local_world_aligned", "J_local", "dJ_local_world_aligned", "dJ_local", "Y",
+            "dtau_dq", "dtau_dv", "dqdd_dq", "dqdd_dv"}
     assert core <= {t.term for t in rep.terms}           # a misspelt key would check nothing
     bad = [f"{t.term}: {'not supported' if not t.supported else f'{t.err:.2e}'}" for t in rep.terms
            if t.term in core and not t.passed]

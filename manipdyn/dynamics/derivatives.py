@@ -1,0 +1,473 @@
+"""Analytic derivatives of inverse and forward dynamics: ∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ = M and ∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂τ = M⁻¹.
+
+The recursion of Carpentier & Mansard, "Analytical derivatives of rigid body dynamics algorithms" (RSS 2018),
+in the form Pinocchio implements it (``computeRNEADerivatives``: rnea-derivatives.hxx, forward and backward
+steps): an O(n·d) pass pair (d the depth of the tree, so O(n²) at worst), no finite differences, no ∂M/∂q.
+One compiled source (numba), run as plain Python under MANIPDYN_NOJIT=1.
+
+Frame (owned here): every spatial quantity is in the world frame, about the world origin, as 6-vectors
+[linear; angular] (Pinocchio's order; ``aba`` owns the algebra: ``cross_motion`` v ×, ``cross_force`` v ×*).
+For body i, with λ its parent and S_i its motion subspace (constant in the body frame):
+  J_i   = ⁰X_i S_i                            the joint's columns of the world Jacobian
+  v_i   = v_λ + J_i q̇_i                       a_i = a_λ + J_i q̈_i + v_i × J_i q̇_i   (a_0 = −a_g = [−g; 0])
+  Y_i   world inertia,  h_i = Y_i v_i,  f_i = Y_i a_i + v_i ×* h_i − f^ext_i          (RNEA, world form)
+  τ_i   = J_iᵀ F_i,  F_i = Σ_{k ⪰ i} f_k (the subtree's force; Y^c_i, Ẏ^c_i the subtree sums likewise)
+and the pieces of the motion's derivatives with respect to joint j's coordinates (Pinocchio's dVdq, dAdq, dAdv):
+  V_j = v_λ(j) × J_j,   A_j = a_λ(j) × J_j + v_λ(j) × V_j,   B_j = J̇_j + V_j   (J̇_j = v_j × J_j)
+  Ẏ_i = v_i ×* Y_i − Y_i v_i× + h_i ×̄      (the variation of Y_i with its ∂(v ×* h)/∂v term, h ×̄ m = −m ×* h)
+— the part of ∂v_i/∂q_j that depends on the body i (for one column, ∂v_i/∂q_j = J_j × (v_i − v_j) = V_j − v_i × J_j)
+enters through Ẏ_i's −Y_i v_i× term, which is what lets the subtree sums carry it;
+these give, for j ⪯ i (j an ancestor of i or i itself):
+  ∂τ_j/∂q_i = J_jᵀ (Ẏ^c_i V_i + Y^c_i A_i + [j ≠ i] J_i ×* F_i),  ∂τ_i/∂q_j = J_iᵀ (Y^c_i A_j + Ẏ^c_i V_j)
+  ∂τ_j/∂q̇_i = J_jᵀ (Ẏ^c_i J_i + Y^c_i B_i),                       ∂τ_i/∂q̇_j = J_iᵀ (Y^c_i B_j + Ẏ^c_i J_j)
+  ∂τ_j/∂q̈_i = J_jᵀ Y^c_i J_i = M_ji,                              and bodies on different branches do not couple.
+The q-derivative is taken in the tangent space, as Pinocchio's: joint j moves to q ⊕ δ_j (``integrate``), so
+a free-flyer root's six columns are body-frame twists and every matrix is (nv, nv).
+
+External wrenches (``state.wrench_rows``): a wrench fixed in the body ("local": constant in body axes, as
+Pinocchio's ``fext``) turns with the body, so −f^ext sits in f_i and its derivative is the rigid-motion term
+J ×* F above. A wrench fixed in world axes ("world") about a point p fixed in the body keeps its direction:
+its derivative lacks the turning of the wrench about p, R_j ×* f^ext with R_j = [p × ω_j; ω_j] (ω_j the
+angular part of J_j), = [ω_j × f; p × (ω_j × f) + ω_j × n] =: A^ext_b ω_j (A^ext_b (6, 3), summed over the
+subtree as A^c_i), added to ∂τ_j/∂q_i and ∂τ_i/∂q_j as J_jᵀ A^c_i ω_i and J_iᵀ A^c_i ω_j.
+
+Forward dynamics: ∂q̈/∂τ = M⁻¹, ∂q̈/∂q = −M⁻¹ ∂τ/∂q |_{q̈ = aba(q, q̇, τ)}, ∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇ (differentiating
+τ = ID(q, q̇, FD(q, q̇, τ))). q̈ from ``aba_kernel``; M⁻¹ by a Cholesky factorisation of the M = ∂τ/∂q̈ of the
+same pass, in the kernel (O(n³) where the passes are O(n·d); not the O(n²) ABA-based M⁻¹).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from ..joints import joint_placement
+from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
+from .core import kernel_arrays, unpack
+from .state import (
+    as_batch,
+    fast_shape,
+    raise_kernel_error,
+    raise_output_error,
+    unbatch,
+    wrench_rows,
+)
+
+_NO_X, _NO_B, _NO_P = np.empty((1, 0, 6)), np.empty(0, np.int64), np.empty((0, 3))   # no external wrench
+_QVA, _QVT = ("q", "v", "a"), ("q", "v", "tau")
+OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "dqdd_dtau")
+
+
+# -- 6-vector helpers on rows of (n, 6) arrays, inlined ------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def dot6(x, y):
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] + x[4] * y[4] + x[5] * y[5]
+
+
+@njit(cache=True, inline="always")
+def mat6(Y, x, out, add):
+    """out = Y x (or out += Y x with ``add``) for Y (6, 6), x (6,)."""
+    for a in range(6):
+        s = Y[a, 0] * x[0] + Y[a, 1] * x[1] + Y[a, 2] * x[2] + Y[a, 3] * x[3] + Y[a, 4] * x[4] + Y[a, 5] * x[5]
+        out[a] = out[a] + s if add else s
+
+
+@njit(cache=True, inline="always")
+def world_motion(R, p, s, out):
+    """out = ⁰X_i s = [R s_lin + p × R s_ang; R s_ang] for body i at (R, p) in the world (RBDA Table 2.2)."""
+    for a in range(3):
+        out[3 + a] = R[a, 0] * s[3] + R[a, 1] * s[4] + R[a, 2] * s[5]
+        out[a] = R[a, 0] * s[0] + R[a, 1] * s[1] + R[a, 2] * s[2]
+    out[0] += p[1] * out[5] - p[2] * out[4]
+    out[1] += p[2] * out[3] - p[0] * out[5]
+    out[2] += p[0] * out[4] - p[1] * out[3]
+
+
+@njit(cache=True, inline="always")
+def world_inertia(m, c, Ic, R, p, T, out):
+    """out (6, 6) = Y_i in the world, about its origin: ``rigid_inertia`` of the CoM R c + p and of R I_C Rᵀ
+    (T (6, 6) scratch)."""
+    for a in range(3):
+        for b in range(3):
+            T[a, b] = R[a, 0] * Ic[0, b] + R[a, 1] * Ic[1, b] + R[a, 2] * Ic[2, b]          # R I_C
+        T[3, a] = p[a] + R[a, 0] * c[0] + R[a, 1] * c[1] + R[a, 2] * c[2]                 # R c + p
+    for a in range(3):
+        for b in range(3):
+            T[a, 3 + b] = T[a, 0] * R[b, 0] + T[a, 1] * R[b, 1] + T[a, 2] * R[b, 2]      # R I_C Rᵀ
+    rigid_inertia(m, T[3, :3], T[:3, 3:], out)
+
+
+@njit(cache=True, inline="always")
+def inertia_variation(Y, v, h, P, out):
+    """out = Ẏ = v ×* Y − Y v× + h ×̄ (Pinocchio's ``variation`` plus ``addForceCrossMatrix``): with the
+    motion-cross matrix X = v× = [[ω×, v_l×], [0, ω×]] and v ×* = −Xᵀ, Y symmetric: −XᵀY − (XᵀY)ᵀ, plus
+    h ×̄ = [[0, −[h_l]×], [−[h_l]×, −[h_a]×]] (h ×̄ m = −m ×* h, the v-derivative of v ×* h). P (6, 6) scratch."""
+    wx, wy, wz, lx, ly, lz = v[3], v[4], v[5], v[0], v[1], v[2]
+    for k in range(6):                       # P = Xᵀ Y, row by row: Xᵀ = [[−[ω]×, 0], [−[v_l]×, −[ω]×]]
+        y0, y1, y2, y3, y4, y5 = Y[0, k], Y[1, k], Y[2, k], Y[3, k], Y[4, k], Y[5, k]
+        P[0, k] = wz * y1 - wy * y2
+        P[1, k] = wx * y2 - wz * y0
+        P[2, k] = wy * y0 - wx * y1
+        P[3, k] = lz * y1 - ly * y2 + wz * y4 - wy * y5
+        P[4, k] = lx * y2 - lz * y0 + wx * y5 - wz * y3
+        P[5, k] = ly * y0 - lx * y1 + wy * y3 - wx * y4
+    for a in range(6):
+        for k in range(6):
+            out[a, k] = -P[a, k] - P[k, a]
+    hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], h[3], h[4], h[5]
+    for r0, c0 in ((0, 3), (3, 0)):          # −[h_l]× in the two off-diagonal blocks
+        out[r0, c0 + 1] += hz
+        out[r0, c0 + 2] -= hy
+        out[r0 + 1, c0] -= hz
+        out[r0 + 1, c0 + 2] += hx
+        out[r0 + 2, c0] += hy
+        out[r0 + 2, c0 + 1] -= hx
+    out[3, 4] += nz                          # −[h_a]× in the angular block
+    out[3, 5] -= ny
+    out[4, 3] -= nz
+    out[4, 5] += nx
+    out[5, 3] += ny
+    out[5, 4] -= nx
+
+
+@njit(cache=True, inline="always")
+def spd_inverse(M, L, out):
+    """out = M⁻¹ = L⁻ᵀ L⁻¹ for a symmetric positive definite M (n, n), by Cholesky M = L Lᵀ (L (n, n) scratch,
+    lower triangle). Returns -1, or the first row k whose pivot is not > 0 (M singular there)."""
+    n = M.shape[0]
+    for k in range(n):
+        d = M[k, k]
+        for m in range(k):
+            d -= L[k, m] * L[k, m]
+        if not d > 0.0:
+            return k
+        L[k, k] = np.sqrt(d)
+        for r in range(k + 1, n):
+            x = M[r, k]
+            for m in range(k):
+                x -= L[r, m] * L[k, m]
+            L[r, k] = x / L[k, k]
+    for c in range(n):                        # column c: L y = e_c, then Lᵀ x = y
+        for r in range(n):
+            y = 1.0 if r == c else 0.0
+            for m in range(r):
+                y -= L[r, m] * out[m, c]
+            out[r, c] = y / L[r, r]
+        for r in range(n - 1, -1, -1):
+            x = out[r, c]
+            for m in range(r + 1, n):
+                x -= L[m, r] * out[m, c]
+            out[r, c] = x / L[r, r]
+    return -1
+
+
+@njit(cache=True, inline="always")
+def first_nonfinite3(D, s):
+    """The flat index (which, row, column) within D[:, s] of the first non-finite entry of the three
+    (N, nv, nv) matrices D = (dq, dv, da), or -1."""
+    nv = D[0].shape[1]
+    for w in range(3):
+        for r in range(nv):
+            for c in range(nv):
+                if not np.isfinite(D[w][s, r, c]):
+                    return (w * nv + r) * nv + c
+    return -1
+
+
+# -- the kernel: Carpentier & Mansard's two passes, nested so that they share the scratch arrays -------------
+
+@njit(cache=True)
+def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
+    """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ (N, nv, nv) into dq, dv, da for every state of Q (N, nq), V, A (N, nv), with the
+    external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``state.wrench_rows``; body axes,
+    or world axes with ``world``). Returns -1; ≥ 0 a non-finite input (its state); −2 − nb − k a non-finite
+    result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
+    R33, P3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))    # five allocations, cut into blocks
+    B6, B66, B63 = np.empty((3 * nb + 4 * nv + 3, 6)), np.empty((2 * nb + 5, 6, 6)), np.empty((nb + 1, 6, 3))
+    Rl, Rw, pl, pw = R33[:nb], R33[nb:], P3[:nb], P3[nb:]         # placements in the parent, in the world
+    vel, acc, frc = B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb]     # v_i, a_i (with −a_g), f_i
+    e = 3 * nb                                                  # J, V, A, B: one row per joint column
+    Jc, Vc, Ac, Bc = B6[e:e + nv], B6[e + nv:e + 2 * nv], B6[e + 2 * nv:e + 3 * nv], B6[e + 3 * nv:e + 4 * nv]
+    t, u, a0 = B6[e + 4 * nv], B6[e + 4 * nv + 1], B6[e + 4 * nv + 2]   # scratch; a_0 = −a_g = [−g; 0]
+    Yc, dYc, Ae, AJ = B66[:nb], B66[nb:2 * nb], B63[:nb], B63[nb]      # Y^c, Ẏ^c, A^c per body; A^cᵀ J
+    YJ, dYJ, Fq, Fv, T = B66[2 * nb], B66[2 * nb + 1], B66[2 * nb + 2], B66[2 * nb + 3], B66[2 * nb + 4]
+    for x in range(3):                                          # (per column of joint i: Y^c J, Ẏ^cᵀ J, Fq, Fv)
+        a0[x], a0[3 + x] = mg[x], 0.0
+
+    def motion(q, v, a):
+        """Forward pass (i = 1 … nb): placements, J_i, v_i, a_i, V_i, A_i, B_i, Y_i, f_i, Ẏ_i."""
+        for i in range(nb):
+            joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+            j = parent[i]
+            for x in range(3):
+                for y in range(3):
+                    Rw[i, x, y] = Rl[i, x, y] if j < 0 else \
+                        Rw[j, x, 0] * Rl[i, 0, y] + Rw[j, x, 1] * Rl[i, 1, y] + Rw[j, x, 2] * Rl[i, 2, y]
+                pw[i, x] = pl[i, x] if j < 0 else \
+                    pw[j, x] + Rw[j, x, 0] * pl[i, 0] + Rw[j, x, 1] * pl[i, 1] + Rw[j, x, 2] * pl[i, 2]
+            vl, al = vel[max(j, 0)], acc[j] if j >= 0 else a0      # v_λ (read only if j ≥ 0), a_λ
+            t[:] = 0.0
+            for x in range(6):
+                vel[i, x] = vl[x] if j >= 0 else 0.0
+                acc[i, x] = al[x]
+            for r in range(iv[i], iv[i] + nvj[i]):
+                world_motion(Rw[i], pw[i], S[r], Jc[r])             # J_i = ⁰X_i S_i
+                for x in range(6):
+                    t[x] += Jc[r, x] * v[r]                         # J_i q̇_i
+                    vel[i, x] += Jc[r, x] * v[r]                    # v_i = v_λ + J_i q̇_i
+                    acc[i, x] += Jc[r, x] * a[r]
+            cross_motion(vel[i], t, u)
+            for x in range(6):
+                acc[i, x] += u[x]                                   # a_i = a_λ + J_i q̈_i + v_i × J_i q̇_i
+            for r in range(iv[i], iv[i] + nvj[i]):
+                cross_motion(vel[i], Jc[r], Bc[r])                  # J̇_i = v_i × J_i
+                cross_motion(al, Jc[r], Ac[r])                      # A_i = a_λ × J_i + v_λ × V_i
+                Vc[r, :] = 0.0
+                if j >= 0:
+                    cross_motion(vl, Jc[r], Vc[r])                  # V_i = v_λ × J_i
+                    cross_motion(vl, Vc[r], u)
+                    for x in range(6):
+                        Ac[r, x] += u[x]
+                for x in range(6):
+                    Bc[r, x] += Vc[r, x]                            # B_i = J̇_i + V_i
+            world_inertia(mass[i], com[i], inertia[i], Rw[i], pw[i], T, Yc[i])
+            mat6(Yc[i], vel[i], t, False)                           # h_i = Y_i v_i
+            mat6(Yc[i], acc[i], frc[i], False)
+            cross_force(vel[i], t, u)
+            for x in range(6):
+                frc[i, x] += u[x]                                   # f_i = Y_i a_i + v_i ×* h_i
+            inertia_variation(Yc[i], vel[i], t, T, dYc[i])          # Ẏ_i
+            Ae[i, :, :] = 0.0
+
+    def external(x):
+        """f_b −= [f; n + p × f] (world axes, about the world origin) for each wrench x[k] = [f; n] on body
+        b = xb[k] about its point p (xp[k] in the body); "world" wrenches also add A^ext_b (module docstring)."""
+        for k in range(xb.shape[0]):
+            b = xb[k]
+            for y in range(3):                                      # t = [f; n] in world axes, u[:3] = p
+                u[y] = pw[b, y] + Rw[b, y, 0] * xp[k, 0] + Rw[b, y, 1] * xp[k, 1] + Rw[b, y, 2] * xp[k, 2]
+                for z in (0, 3):
+                    t[z + y] = x[k, z + y] if world else \
+                        Rw[b, y, 0] * x[k, z] + Rw[b, y, 1] * x[k, z + 1] + Rw[b, y, 2] * x[k, z + 2]
+            frc[b, 0] -= t[0]
+            frc[b, 1] -= t[1]
+            frc[b, 2] -= t[2]
+            frc[b, 3] -= t[3] + u[1] * t[2] - u[2] * t[1]
+            frc[b, 4] -= t[4] + u[2] * t[0] - u[0] * t[2]
+            frc[b, 5] -= t[5] + u[0] * t[1] - u[1] * t[0]
+            if world:                                               # column y: ω = e_y, g = e_y × f:
+                for y in range(3):                                  # [g; p × g + e_y × n]
+                    gx, gy, gz = (0.0, -t[2], t[1]) if y == 0 else (t[2], 0.0, -t[0]) if y == 1 else (-t[1], t[0], 0.0)
+                    ex, ey, ez = (0.0, -t[5], t[4]) if y == 0 else (t[5], 0.0, -t[3]) if y == 1 else (-t[4], t[3], 0.0)
+                    Ae[b, 0, y] += gx
+                    Ae[b, 1, y] += gy
+                    Ae[b, 2, y] += gz
+                    Ae[b, 3, y] += u[1] * gz - u[2] * gy + ex
+                    Ae[b, 4, y] += u[2] * gx - u[0] * gz + ey
+                    Ae[b, 5, y] += u[0] * gy - u[1] * gx + ez
+
+    def columns(i):
+        """Joint i's columns against the subtree (Y^c_i, Ẏ^c_i, F_i, A^c_i complete): Y^c J, Ẏ^cᵀ J, the
+        force derivatives Fq = Ẏ^c V + Y^c A + A^c ω, Fv = Ẏ^c J + Y^c B, and A^cᵀ J."""
+        for c in range(nvj[i]):
+            r = iv[i] + c
+            mat6(Yc[i], Jc[r], YJ[c], False)
+            mat6(dYc[i], Vc[r], Fq[c], False)
+            mat6(Yc[i], Ac[r], Fq[c], True)
+            mat6(dYc[i], Jc[r], Fv[c], False)
+            mat6(Yc[i], Bc[r], Fv[c], True)
+            for x in range(6):
+                dYJ[c, x] = (dYc[i, 0, x] * Jc[r, 0] + dYc[i, 1, x] * Jc[r, 1] + dYc[i, 2, x] * Jc[r, 2]
+                             + dYc[i, 3, x] * Jc[r, 3] + dYc[i, 4, x] * Jc[r, 4] + dYc[i, 5, x] * Jc[r, 5])
+                Fq[c, x] += Ae[i, x, 0] * Jc[r, 3] + Ae[i, x, 1] * Jc[r, 4] + Ae[i, x, 2] * Jc[r, 5]
+            for y in range(3):
+                AJ[c, y] = (Ae[i, 0, y] * Jc[r, 0] + Ae[i, 1, y] * Jc[r, 1] + Ae[i, 2, y] * Jc[r, 2]
+                            + Ae[i, 3, y] * Jc[r, 3] + Ae[i, 4, y] * Jc[r, 4] + Ae[i, 5, y] * Jc[r, 5])
+
+    def blocks(i, j, Dq, Dv, Da):
+        """The (j, i) and (i, j) blocks for j an ancestor of i or i itself (module docstring):
+        ∂τ_j/∂q_i = J_jᵀ Fq, ∂τ_i/∂q_j = (Y^c J_i)ᵀ A_j + (Ẏ^cᵀ J_i)ᵀ V_j + (A^cᵀ J_i)ᵀ ω_j, and for q̇, q̈."""
+        for r in range(iv[j], iv[j] + nvj[j]):
+            for c in range(nvj[i]):
+                k = iv[i] + c
+                Da[r, k] = Da[k, r] = dot6(Jc[r], YJ[c])
+                Dq[r, k] = dot6(Jc[r], Fq[c])
+                Dv[r, k] = dot6(Jc[r], Fv[c])
+                if j != i:
+                    Dq[k, r] = (dot6(YJ[c], Ac[r]) + dot6(dYJ[c], Vc[r])
+                                + AJ[c, 0] * Jc[r, 3] + AJ[c, 1] * Jc[r, 4] + AJ[c, 2] * Jc[r, 5])
+                    Dv[k, r] = dot6(YJ[c], Bc[r]) + dot6(dYJ[c], Jc[r])
+
+    def derivatives(Dq, Dv, Da):
+        """Backward pass (i = nb … 1): joint i's blocks against itself and its ancestors, then the subtree
+        sums Y^c, Ẏ^c, F, A^c handed to the parent."""
+        Dq[:, :] = 0.0                                              # different branches do not couple
+        Dv[:, :] = 0.0
+        Da[:, :] = 0.0
+        for i in range(nb - 1, -1, -1):
+            columns(i)
+            blocks(i, i, Dq, Dv, Da)
+            for c in range(nvj[i]):                                 # for the ancestors' rows: + J_i ×* F_i
+                cross_force(Jc[iv[i] + c], frc[i], t)
+                for x in range(6):
+                    Fq[c, x] += t[x]
+            j = parent[i]
+            while j >= 0:
+                blocks(i, j, Dq, Dv, Da)
+                j = parent[j]
+            j = parent[i]
+            if j >= 0:
+                for x in range(6):
+                    frc[j, x] += frc[i, x]
+                    for y in range(6):
+                        Yc[j, x, y] += Yc[i, x, y]
+                        dYc[j, x, y] += dYc[i, x, y]
+                    for y in range(3):
+                        Ae[j, x, y] += Ae[i, x, y]
+
+    for s in range(N):
+        for k in range(Q.shape[1]):
+            if not np.isfinite(Q[s, k]):
+                return s
+        for k in range(nv):
+            if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
+                return s
+        motion(Q[s], V[s], A[s])
+        external(X[s if X.shape[0] > 1 else 0])
+        derivatives(dq[s], dv[s], da[s])
+        k = first_nonfinite3((dq, dv, da), s)
+        if k >= 0:
+            return -2 - nb - (s * 3 * nv * nv + k)
+    return -1
+
+
+@njit(cache=True)
+def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv):
+    """∂q̈/∂q, ∂q̈/∂q̇ (N, nv, nv) into dq, dv and M⁻¹ into Minv: q̈ = aba (into qdd), the RNEA derivatives at
+    q̈ (M into Minv), then M⁻¹ by Cholesky and ∂q̈/∂x = −M⁻¹ ∂τ/∂x. Returns -1; aba_kernel's codes (a bad
+    input, −2 − i a singular joint i, −2 − nb − k a non-finite q̈ at flat index k < N·nv of qdd); −2 − i for
+    a pivot of M not > 0 at joint i; −2 − nb − N·nv − k for a non-finite derivative, k as in
+    rnea_derivatives_kernel (w = 0 dq, 1 dv, 2 M⁻¹)."""
+    code = aba_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd)
+    if code != -1:
+        return code
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
+    code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
+    if code != -1:
+        return code - N * nv if code <= -2 - nb else code   # non-finite entries: after q̈'s codes
+    W = np.empty((2 * nv + 1, nv))
+    L, M, T = W[:nv], W[nv:2 * nv], W[2 * nv]          # Cholesky factor (lower triangle), M, a column
+    for s in range(N):
+        M[:, :] = Minv[s]
+        k = spd_inverse(M, L, Minv[s])
+        if k >= 0:
+            i = 0
+            while I[i, 3] + I[i, 4] <= k:                 # the joint of velocity row k
+                i += 1
+            return -2 - i
+        for D in (dq[s], dv[s]):                          # D ← −M⁻¹ D, column by column
+            for c in range(nv):
+                for r in range(nv):
+                    x = 0.0
+                    for m in range(nv):
+                        x -= Minv[s, r, m] * D[m, c]
+                    T[r] = x
+                D[:, c] = T
+        k = first_nonfinite3((dq, dv, Minv), s)
+        if k >= 0:
+            return -2 - nb - N * nv - (s * 3 * nv * nv + k)
+    return -1
+
+
+@njit(cache=True)
+def rnea_derivatives_one(I, F, q, v, a, dq, dv, da):
+    """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
+    return rnea_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B,
+                                   _NO_P, False, dq[np.newaxis], dv[np.newaxis], da[np.newaxis])
+
+
+@njit(cache=True)
+def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
+    """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
+    return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_B,
+                                  _NO_P, False, qdd[np.newaxis, :], dq[np.newaxis], dv[np.newaxis],
+                                  Minv[np.newaxis])
+
+
+# -- Python entry points ----------------------------------------------------------------------------------
+
+def rnea_derivatives(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
+    """(∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈) of τ = rnea(q, q̇, q̈, f_ext), as Pinocchio's computeRNEADerivatives.
+
+    Parameters
+    ----------
+    q : (nq,) or (N, nq); v, a : (nv,) or (N, nv).
+    f_ext : as ``rnea``: {link or frame name: (force, moment)} in the frame's axes (f_ext_frame="local", the
+        wrench turns with the body, as Pinocchio's fext) or in world axes ("world": its direction is fixed
+        while its point moves with the body).
+    Returns
+    -------
+    dtau_dq, dtau_dv, dtau_da : (nv, nv) or (N, nv, nv); dtau_da = M(q). The q-derivative is in the tangent
+        space: column j is d τ(q ⊕ ε e_j)/dε (``integrate``; a free flyer's columns are body-frame twists).
+    """
+    return _call(model, q, v, a, f_ext, f_ext_frame, False)
+
+
+def aba_derivatives(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+    """(∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂τ) of q̈ = aba(q, q̇, τ, f_ext), as Pinocchio's computeABADerivatives:
+    ∂q̈/∂τ = M⁻¹, ∂q̈/∂q = −M⁻¹ ∂τ/∂q and ∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇ at q̈ (RNEA derivatives; M⁻¹ by Cholesky).
+
+    Parameters and shapes as ``rnea_derivatives`` (tau in place of a). Raises SingularError as ``aba``.
+    """
+    return _call(model, q, v, tau, f_ext, f_ext_frame, True)
+
+
+def _call(model, q, v, x, f_ext, f_ext_frame, fd):
+    """Both entry points: the one-state kernel for plain float64 input, else checked batches."""
+    names, call, outs = (_QVT, "aba_derivatives", OUT_ABA) if fd else (_QVA, "rnea_derivatives", OUT_RNEA)
+    nd = fast_shape(model, q, v, x) if f_ext is None and f_ext_frame == "local" else 0
+    if nd == 1:
+        nv = model.nv
+        D = (np.empty((nv, nv)), np.empty((nv, nv)), np.empty((nv, nv)))
+        if fd:
+            qdd = np.empty(nv)
+            code = aba_derivatives_one(*kernel_arrays(model), q, v, x, qdd, *D)
+        else:
+            code = rnea_derivatives_one(*kernel_arrays(model), q, v, x, *D)
+        if code == -1:
+            return D
+        Q, V, Xs, D = q[None], v[None], x[None], tuple(d[None] for d in D)
+    else:
+        (Q, V, Xs), single = as_batch(model, **dict(zip(names, (q, v, x))))
+        N, nv = Q.shape[0], model.nv
+        ext = wrench_rows(model, f_ext, f_ext_frame, N)
+        D = tuple(np.zeros((N, nv, nv)) for _ in range(3))
+        if model.njoints == 0:
+            return tuple(unbatch(d, single) for d in D)
+        Q, V, Xs = (np.ascontiguousarray(y) for y in (Q, V, Xs))
+        if fd:
+            qdd = np.empty((N, nv))
+            code = aba_derivatives_kernel(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", qdd, *D)
+        else:
+            code = rnea_derivatives_kernel(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", *D)
+        if code == -1:
+            return tuple(unbatch(d, single) for d in D)
+    _raise(model, code, names, (Q, V, Xs), call, outs, D, qdd if fd else None)
+
+
+def _raise(model, code, names, batches, call, outs, D, qdd):
+    """The error of a kernel's return code: a bad input (InputError), a singular M (SingularError), a
+    non-finite q̈ (aba_kernel's codes, first N·nv of the flat codes when qdd is given) or a non-finite
+    derivative entry (NumericalError naming the matrix, its row's joint and the state)."""
+    nb, nv, N = model.njoints, model.nv, batches[0].shape[0]
+    k = -2 - nb - code
+    if k < 0:                                                     # a bad input or a singular M
+        raise_kernel_error(model, code, names, batches, call)
+    if qdd is not None:
+        if k < N * nv:
+            raise_kernel_error(model, code, names, batches, call, "q̈", qdd.reshape(N, nv))
+        k -= N * nv
+    s, w, r, c = np.unravel_index(k, (N, 3, nv, nv))
+    raise_output_error(call, outs[w], D[w], (s, r, c), model, dict(zip(names, batches)))
