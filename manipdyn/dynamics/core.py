@@ -148,6 +148,18 @@ def nonfinite_input(Q, V, s):
     return -1
 
 
+@njit(cache=True, inline="always")
+def finite_state(Q, V, A, s):
+    """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry."""
+    for k in range(Q.shape[1]):
+        if not np.isfinite(Q[s, k]):
+            return False
+    for k in range(V.shape[1]):
+        if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
+            return False
+    return True
+
+
 @njit(cache=True)
 def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).

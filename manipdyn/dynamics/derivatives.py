@@ -42,7 +42,7 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_placement
 from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
-from .core import kernel_arrays, unpack
+from .core import finite_state, kernel_arrays, unpack
 from .state import (
     as_batch,
     fast_shape,
@@ -328,12 +328,8 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
                         Ae[j, x, y] += Ae[i, x, y]
 
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s
-        for k in range(nv):
-            if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
-                return s
+        if not finite_state(Q, V, A, s):
+            return s
         motion(Q[s], V[s], A[s])
         external(X[s if X.shape[0] > 1 else 0])
         derivatives(dq[s], dv[s], da[s])

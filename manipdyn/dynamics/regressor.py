@@ -44,7 +44,7 @@ import numpy as np
 from .._jit import njit
 from ..errors import InputError
 from .aba import motion_to_child
-from .core import kernel_arrays, unpack
+from .core import finite_state, kernel_arrays, unpack
 from .rnea import outward
 from .state import (
     as_batch,
@@ -167,12 +167,8 @@ def regressor_kernel(I, F, Q, V, A, Y):
     work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s
-        for k in range(nv):
-            if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
-                return s
+        if not finite_state(Q, V, A, s):
+            return s
         outward(mdl, work, Q[s], V[s], A[s], False)       # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass
         Y[s, :, :] = 0.0
         for i in range(nb):

@@ -32,7 +32,7 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from ..model import MimicModel
-from .core import kernel_arrays, unpack
+from .core import finite_state, kernel_arrays, unpack
 from .state import (as_batch, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch,
                     wrench_rows)
 
@@ -188,12 +188,8 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
     keep = T.shape[0] > 0
     for s in range(N):
-        for k in range(Q.shape[1]):
-            if not np.isfinite(Q[s, k]):
-                return s
-        for k in range(nv):
-            if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
-                return s
+        if not finite_state(Q, V, A, s):
+            return s
         outward(mdl, work, Q[s], V[s], A[s], world or keep)
         external(work, X, s, xb, xp, world)
         inward(mdl, work, tau[s])
