@@ -16,6 +16,7 @@ loaded with root_joint="free_flyer"; the closures are internal to the robot. Ref
 """
 import functools
 import json
+import re
 import warnings
 
 import numpy as np
@@ -38,7 +39,7 @@ SPECS = {**{n: (LOOPS / s["file"], s["q0"], s["rank"]) for n, s in MANIFEST.item
          "fourbar": (ROOT / "urdf" / "fourbar.urdf", [0.3, -1.3, -2.0], 2)}
 NAMES = list(SPECS)
 BASE = ('<link name="base"><inertial><origin xyz="0.05 -0.02 0.1"/><mass value="2.0"/><inertia ixx="0.02" '
-        'iyy="0.03" izz="0.04" ixy="0.001" ixz="0" iyz="0"/></inertial></link>')
+        'iyy="0.03" izz="0.04" ixy="0.001" ixz="0" iyz="0"/></inertial>')
 BASE_MASS = 2.0
 
 
@@ -50,8 +51,12 @@ def mech(name):
     src, q0, rank = SPECS[name]
     path = Path(tempfile.mkdtemp(prefix="floatloop")) / src.name
     text = src.read_text()
-    assert text.count('<link name="base"/>') == 1
-    path.write_text(text.replace('<link name="base"/>', BASE))
+    text, n = re.subn(r'<link name="base"\s*/>', BASE + "</link>", text)   # a bare base link, or one with
+    if not n:                                                                # visuals only: add the inertial
+        text, n = re.subn(r'<link name="base">', BASE, text)
+    assert n == 1 and text.count("<inertial>", text.index('<link name="base">'),
+                                 text.index("</link>", text.index('<link name="base">'))) == 1
+    path.write_text(text)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model, fixed = md.load_urdf(path, root_joint="free_flyer"), md.load_urdf(path)

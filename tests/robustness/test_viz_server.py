@@ -1,7 +1,7 @@
 """The live meshcat server of `manipdyn play` listens on loopback only and dies with the CLI.
 
 `manipdyn play urdf/aau_arm.urdf` runs as a subprocess; once it prints its URLs, both ports (web and ZMQ)
-must listen on 127.0.0.1 only. Then the CLI gets SIGTERM, SIGINT, SIGHUP or SIGKILL: within 5 s both ports
+must listen on 127.0.0.1 only. Then the CLI gets SIGTERM, SIGINT, SIGHUP or SIGKILL: within 10 s both ports
 must be free and the server process gone (a zombie left to init counts as gone: it holds no socket).
 """
 from __future__ import annotations
@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-FREE_WITHIN = 5.0      # seconds
+FREE_WITHIN = 10.0     # seconds: measured 0.2–0.4 s on an idle machine; 5 s was exceeded once under a full -n 2 run
+                       # beside other jobs (the server gets SIGTERM, then SIGKILL after STOP_TIMEOUT = 3 s)
 
 
 def listening(port):
