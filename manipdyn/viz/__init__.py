@@ -178,8 +178,8 @@ def serve(sc, out=print) -> int:
     def stop(signum, frame):
         raise KeyboardInterrupt(signal.Signals(signum).name)
 
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, stop)
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):   # SIGINT too: a shell that starts a command in
+        signal.signal(sig, stop)                                 # the background makes it ignore Ctrl-C
     live = None
     try:
         live = LiveViewer()
