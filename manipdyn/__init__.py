@@ -12,7 +12,7 @@ from .dynamics.aba import aba, forward_dynamics
 from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
-from .dynamics.rnea import rnea, rnea_terms
+from .dynamics.rnea import nonlinear_effects, rnea, rnea_terms
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
                      ManipdynError, ModelError, NumericalError, SingularError, URDFError)
 from .io.urdf import load_urdf, load_urdf_string
@@ -32,7 +32,7 @@ def dh_to_urdf(*args, **kwargs):
 
 
 __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "project", "assemble",
-           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
+           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "nonlinear_effects", "aba", "forward_dynamics", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning",

@@ -162,6 +162,55 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
             sandwich3(Rw[b], inertia[b], tmp, Iw[s, b])
 
 
+@njit(cache=True)
+def lagrange_mass_kernel(I, F, Q, M):
+    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (chapter Eq. 23) for every state of Q (N, nq) into
+    M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
+    columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
+    −2 − nb − k for a non-finite M at flat index k."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
+    Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    v0, eye, tmp, Rc, Iw = np.empty(0), np.eye(3), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    c, J, cols, ww = np.empty(3), np.empty((6, nv)), np.empty(nv, np.int64), np.empty((nb, 3))
+    for s in range(N):
+        for k in range(nq):
+            if not np.isfinite(Q[s, k]):
+                return s * nq + k
+        fk_pass(I, F, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
+        Ms = M[s]
+        Ms[:, :] = 0.0
+        for b in range(nb):
+            body_point(b, Rw, pw, eye, com[b], Rc, c)
+            point_jacobian(parent, iv, nvj, S, b, Rw, pw, c, J)
+            Iw[:, :] = 0.0
+            sandwich3(Rw[b], inertia[b], tmp, Iw)
+            n, j = 0, b                                # the columns of the joints that support b
+            while j >= 0:
+                for r in range(iv[j], iv[j] + nvj[j]):
+                    cols[n] = r
+                    n += 1
+                j = parent[j]
+            for x in range(n):
+                r = cols[x]
+                wx = Iw[0, 0] * J[3, r] + Iw[0, 1] * J[4, r] + Iw[0, 2] * J[5, r]      # I_w J_ω,r
+                wy = Iw[1, 0] * J[3, r] + Iw[1, 1] * J[4, r] + Iw[1, 2] * J[5, r]
+                wz = Iw[2, 0] * J[3, r] + Iw[2, 1] * J[4, r] + Iw[2, 2] * J[5, r]
+                for y in range(x, n):
+                    t = cols[y]
+                    Ms[t, r] += (mass[b] * (J[0, r] * J[0, t] + J[1, r] * J[1, t] + J[2, r] * J[2, t])
+                                 + wx * J[3, t] + wy * J[4, t] + wz * J[5, t])
+        for r in range(nv):                            # cols run from the body down: mirror both ways
+            for t in range(r):
+                x = Ms[r, t] + Ms[t, r]
+                Ms[r, t] = Ms[t, r] = x
+        for a in range(nv):
+            for b in range(nv):
+                if not np.isfinite(Ms[a, b]):
+                    return -2 - nb - ((s * nv + a) * nv + b)
+    return -1
+
+
 # -- Python entry points -----------------------------------------------------------------------------------
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
