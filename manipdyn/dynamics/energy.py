@@ -10,7 +10,7 @@ import numpy as np
 
 from .._jit import njit
 from .core import fk_pass, kernel_arrays, unpack
-from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+from .state import as_batch, fast_shape, raise_kernel_error
 
 
 @njit(cache=True)

@@ -32,7 +32,8 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from .core import kernel_arrays, unpack
-from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch, wrench_rows
+from .state import (as_batch, check_output, fast_shape, fast_wrench_rows, quiet, raise_kernel_error, unbatch,
+                    wrench_rows)
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -52,11 +53,20 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     -------
     tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
     """
-    nd = fast_shape(model, q, v, a) if f_ext is None and f_ext_frame == "local" else 0
+    nd = fast_shape(model, q, v, a) if f_ext_frame == "local" or f_ext is not None else 0
+    if nd == 1 and f_ext is not None:                           # one state with wrenches: rows kept per model
+        ext = fast_wrench_rows(model, f_ext, f_ext_frame)
+        if ext is not None:
+            tau = np.empty(v.shape)
+            code = rnea_kernel(*kernel_arrays(model), q[None], v[None], a[None], *ext, f_ext_frame == "world",
+                               tau[None], _NO_T)
+            if code == -1:
+                return tau
+        nd = 0                                                  # else the checked path says what is wrong
     if nd == 1:                                                 # one state, no Python-side reshapes
         tau = np.empty(v.shape)
         code = rnea_one(*kernel_arrays(model), q, v, a, tau)
-    elif nd == 2:
+    elif nd == 2 and f_ext is None:
         tau = np.empty(v.shape)
         code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, _NO_T)
     else:                                                       # checked and converted first
