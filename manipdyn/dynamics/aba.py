@@ -518,7 +518,7 @@ def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
     M, qdd = np.empty(Q.shape[:1] + (model.nv, model.nv)), np.empty(V.shape)
     code = cholesky_kernel(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world", M, qdd)
     if code != -1:
-        if code >= 0 and f_ext is not None:                    # a wrench may be what is not finite
+        if f_ext is not None:                                  # a non-finite wrench is the cause to report
             check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
         raise_kernel_error(model, code, ("q", "v", "tau"), tuple(unbatch(x, single) for x in (Q, V, T)),
                            "forward_dynamics", "q̈", unbatch(qdd, single))
