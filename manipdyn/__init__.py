@@ -16,7 +16,7 @@ from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from .dynamics import mimic as _mimic  # noqa: F401  (registers the MimicModel versions of rnea, aba, ...)
-from .dynamics.rnea import rnea, rnea_terms
+from .dynamics.rnea import nonlinear_effects, rnea, rnea_terms
 from .dynamics.regressor import dynamic_parameters, joint_torque_regressor, model_with_parameters
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
                      ManipdynError, ModelError, NumericalError, QuirkWarning, SingularError, URDFError)
@@ -37,8 +37,8 @@ def dh_to_urdf(*args, **kwargs):
 
 
 __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "project", "assemble",
-           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms", "aba", "forward_dynamics",
-           "rnea_derivatives", "aba_derivatives", "mass_matrix", "coriolis_matrix",
+           "complete_state", "simulate", "SimResult", "kinetic_energy", "potential_energy", "reduce", "rnea", "rnea_terms",
+           "nonlinear_effects", "aba", "forward_dynamics", "rnea_derivatives", "aba_derivatives", "mass_matrix", "coriolis_matrix",
            "gravity_torques", "frame_placement", "frame_jacobian", "frame_jacobian_dot", "load_urdf", "load_urdf_string", "dh_to_urdf", "Model", "Frame",
            "MimicModel", "Quirk", "QuirkWarning",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",

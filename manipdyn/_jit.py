@@ -28,7 +28,7 @@ import numba
 
 PACKAGE = Path(__file__).resolve().parent
 KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
-                  "dynamics/derivatives.py", "dynamics/regressor.py",
+                  "dynamics/derivatives.py", "dynamics/regressor.py", "dynamics/coriolis.py", "dynamics/energy.py",
                   "dynamics/kinematics.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
 _FOLDER = re.compile(r"numba-[0-9a-f]{16}")

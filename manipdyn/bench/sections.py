@@ -7,11 +7,13 @@ import warnings
 import numpy as np
 
 from ..constraints import constrained_forward_dynamics
-from ..dynamics.aba import aba
+from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
+from ..dynamics.energy import kinetic_energy, potential_energy
+from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
 from ..dynamics.regressor import joint_torque_regressor
-from ..dynamics.rnea import rnea
+from ..dynamics.rnea import nonlinear_effects, rnea
 from ..io.urdf import load_urdf
 from ..validation.compare import random_states
 from ..validation.measure import error
@@ -67,6 +69,98 @@ def latency(paths, quick=False):
             err = max(error(*[np.array(x) for x in pair(s)]) for s in range(len(Q)))
             rows.append(dict(robot=model.name, call=name, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                              ratio=t_ours / t_pin, err=err))
+    return rows + compiled_term_latency(paths, quick)
+
+
+def _pin_fext(P, pm, pd, pq, f_ext):
+    """Pinocchio's per-joint fext (StdVec_Force) of our {frame: (force, moment)} in the frames' axes."""
+    P.framesForwardKinematics(pm, pd, pq)
+    out = [P.Force.Zero() for _ in range(pm.njoints)]
+    for name, (f, m) in f_ext.items():
+        fid = pm.getFrameId(name)
+        out[pm.frames[fid].parentJoint] += pm.frames[fid].placement.act(P.Force(f, m))
+    vec = P.StdVec_Force()
+    for f in out:
+        vec.append(f)
+    return vec
+
+
+def compiled_term_latency(paths, quick=False, chain=32):
+    """a (continued). The other public calls, one state, against Pinocchio's cheapest Python route to the same
+    numbers (conversions — q, fext — outside the timing): on each arm of ``paths`` and a random chain of
+    ``chain`` joints. Errors: the worst over the states (Cholesky route and aba with f_ext: divided by cond(M))."""
+    P, rows = pin(), []
+    setups = []
+    for path in paths:
+        model = _load(path)
+        ref = Reference(model, path)
+        setups.append((model, ref.pm, ref.to_pin_q))
+    model, pm = random_chain(chain, seed=chain)
+    setups.append((model, pm, lambda q: q))
+    for model, pm, to_pin in setups:
+        pd = pm.createData()
+        Q, V, A = random_states(model, 5 if quick else 20, np.random.default_rng(0))
+        frame = model.body_names[-1]
+        fid = pm.getFrameId(frame)
+        wrench = (np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.4]))
+        fx = {frame: wrench}
+        PQ = [to_pin(q) for q in Q]
+        PF = [_pin_fext(P, pm, pd, pq, fx) for pq in PQ]
+        LWA = P.LOCAL_WORLD_ALIGNED
+
+        def sym(M):
+            return np.triu(M) + np.triu(M, 1).T
+
+        def placement(pq):
+            P.forwardKinematics(pm, pd, pq)
+            return P.updateFramePlacement(pm, pd, fid)
+
+        def jdot(pq, v):
+            P.computeJointJacobiansTimeVariation(pm, pd, pq, v)
+            return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
+
+        def cond(s):
+            return np.linalg.cond(P.crba(pm, pd, PQ[s]))
+
+        # name: (ours(s), Pinocchio's(s), error scale(s))
+        cases = {
+            "coriolis_matrix": (lambda s: coriolis_matrix(model, Q[s], V[s]),
+                                lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), None),
+            "nonlinear_effects": (lambda s: nonlinear_effects(model, Q[s], V[s]),
+                                  lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), None),
+            "gravity_torques": (lambda s: gravity_torques(model, Q[s]),
+                                lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), None),
+            "mass_matrix (lagrange)": (lambda s: mass_matrix(model, Q[s], method="lagrange"),
+                                       lambda s: P.crba(pm, pd, PQ[s]), None),
+            "frame_placement": (lambda s: frame_placement(model, Q[s], frame), lambda s: placement(PQ[s]), None),
+            "frame_jacobian": (lambda s: frame_jacobian(model, Q[s], frame),
+                               lambda s: P.computeFrameJacobian(pm, pd, PQ[s], fid, LWA), None),
+            "frame_jacobian_dot": (lambda s: frame_jacobian_dot(model, Q[s], V[s], frame),
+                                   lambda s: jdot(PQ[s], V[s]), None),
+            "kinetic_energy": (lambda s: kinetic_energy(model, Q[s], V[s]),
+                               lambda s: P.computeKineticEnergy(pm, pd, PQ[s], V[s]), None),
+            "potential_energy": (lambda s: potential_energy(model, Q[s]),
+                                 lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), None),
+            "forward_dynamics (cholesky) vs aba": (
+                lambda s: forward_dynamics(model, Q[s], V[s], A[s], method="cholesky"),
+                lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), cond),
+            "rnea with f_ext": (lambda s: rnea(model, Q[s], V[s], A[s], f_ext=fx),
+                                lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), None),
+            "aba with f_ext": (lambda s: aba(model, Q[s], V[s], A[s], f_ext=fx),
+                               lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), cond),
+        }
+        # the results as arrays, for the errors only (outside the timing)
+        as_ours = {"frame_placement": lambda x: np.r_[x[0].ravel(), x[1]]}
+        as_pin = {"frame_placement": lambda X: np.r_[X.rotation.ravel(), X.translation], "mass_matrix (lagrange)": sym}
+        for name, (ours, theirs, scale) in cases.items():
+            ours(0), theirs(0)
+            t_ours = per_call(lambda: ours(0), repeat=3 if quick else 7)
+            t_pin = per_call(lambda: theirs(0), repeat=3 if quick else 7)
+            fo, fp = as_ours.get(name, np.asarray), as_pin.get(name, np.asarray)
+            err = max(error(np.atleast_1d(np.asarray(fo(ours(s)), float)), np.atleast_1d(np.asarray(fp(theirs(s)), float)))
+                      / (scale(s) if scale else 1.0) for s in range(len(Q)))
+            rows.append(dict(robot=model.name, call=name + (" (err / cond M)" if scale else ""), ours_us=t_ours * 1e6,
+                             pin_us=t_pin * 1e6, ratio=t_ours / t_pin, err=err))
     return rows
 
 

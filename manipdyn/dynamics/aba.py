@@ -32,13 +32,13 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..errors import InputError, NumericalError, SingularError
+from ..errors import InputError
 from ..joints import joint_placement
 from ..model import MimicModel
 from .core import kernel_arrays, unpack
-from .lagrange import mass_matrix
-from .rnea import rnea
-from .state import (as_batch, check_f_ext, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch,
+from .crba import crba_kernel
+from .rnea import NT, rnea_kernel
+from .state import (as_batch, check_f_ext, fast_shape, fast_wrench_rows, mimic_call, raise_kernel_error, unbatch,
                     wrench_rows)
 
 
@@ -423,6 +423,13 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     moving subtree without mass or inertia: M is singular there).
     """
     nd = fast_shape(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else 0
+    if f_ext is not None and fast_shape(model, q, v, tau) == 1:  # one state with wrenches: rows kept per model
+        ext = fast_wrench_rows(model, f_ext, f_ext_frame)
+        if ext is not None:
+            qdd = np.empty(v.shape)
+            if aba_kernel(*kernel_arrays(model), q[None], v[None], tau[None], *ext, f_ext_frame == "world",
+                          qdd[None]) == -1:
+                return qdd                                      # else the checked path says what is wrong
     if nd == 1:
         Q, V, T = q, v, tau
         qdd = np.empty(v.shape)
@@ -448,6 +455,44 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     return qdd
 
 
+@njit(cache=True)
+def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, M, out):
+    """q̈ = M⁻¹ (τ − h) for every state (the M⁻¹ route): M (N, nv, nv) by the CRBA (crba.crba_kernel), then
+    factored in place, M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_kernel) into
+    out, then out ← L⁻ᵀ L⁻¹ (τ − h). Wrenches as ``aba_kernel``'s. Returns -1; ≥ 0 a non-finite input; -2 - i
+    a pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat
+    index k."""
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
+    for s in range(N):
+        if first_nonfinite(Tau, s) >= 0:
+            return s
+    code = crba_kernel(I, F, Q, M)
+    if code <= -2 - nb:                                       # a non-finite M: reported in its state's q̈
+        s = (-2 - nb - code) // (nv * nv)
+        out[s, 0] = np.nan
+        return -2 - nb - s * nv
+    if code == -1:                                            # h into out
+        code = rnea_kernel(I, F, Q, V, np.zeros((N, nv)), X, body, point, world, out, np.zeros((0, 0, NT)))
+    if code != -1:
+        return code                                           # a non-finite input, or h (in out)
+    iv, nvj = I[:, 3], I[:, 4]
+    for s in range(N):
+        for r in range(nv):                                   # τ − h
+            out[s, r] = Tau[s, r] - out[s, r]
+        k = cholesky(M[s], nv, 0.0)
+        if k >= 0:
+            if not np.isfinite(M[s, k, k]):
+                return -2 - nb - (s * nv + k)
+            for i in range(nb):                               # the joint whose row lost its pivot
+                if iv[i] <= k < iv[i] + nvj[i]:
+                    return -2 - i
+        cholesky_solve(M[s], nv, out[s])
+        k = first_nonfinite(out, s)
+        if k >= 0:
+            return -2 - nb - (s * nv + k)
+    return -1
+
+
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
@@ -460,25 +505,26 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
     return _cholesky(model, q, v, tau, f_ext, f_ext_frame)
 
 
-@quiet
 def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
-    """q̈ by the M⁻¹ route: Cholesky of the CRBA mass matrix, right-hand side τ − rnea(q, q̇, 0, f_ext)."""
-    (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
-    check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
-    if model.nv == 0:
-        return unbatch(np.zeros(V.shape), single)
-    try:
-        h = rnea(model, Q, V, np.zeros(V.shape), f_ext=f_ext, f_ext_frame=f_ext_frame)
-    except NumericalError as exc:
-        raise NumericalError(f"forward_dynamics (method='cholesky'), in {exc}") from None
-    rhs = check_output("forward_dynamics", "τ − h", T - h, model, dict(q=Q, v=V, tau=T))
-    M = mass_matrix(model, Q)
-    try:
-        L = np.linalg.cholesky(M)
-    except np.linalg.LinAlgError:
-        bad = [model.v_names[k] for k in range(model.nv) if np.any(M[:, k, k] <= 0)]
-        raise SingularError(f"mass matrix is not positive definite (joints with zero diagonal: "
-                            f"{', '.join(bad) or 'none; a dependent column'})") from None
-    y = np.linalg.solve(L, rhs[..., None])
-    qdd = np.linalg.solve(np.swapaxes(L, 1, 2), y)[..., 0]
-    return unbatch(check_output("forward_dynamics", "q̈", qdd, model, dict(q=Q, v=V, tau=T)), single)
+    """q̈ by the M⁻¹ route (cholesky_kernel): Cholesky of the CRBA mass matrix, right-hand side
+    τ − rnea(q, q̇, 0, f_ext)."""
+    ext = fast_wrench_rows(model, f_ext, f_ext_frame) if f_ext is not None else None
+    if fast_shape(model, q, v, tau) == 1 and (f_ext is None and f_ext_frame == "local" or ext is not None):
+        Q, V, T = q[None], v[None], tau[None]                  # one state: no checks or conversions needed
+        if ext is None:
+            ext = wrench_rows(model, None, "local", 1)
+        single = True
+    else:
+        (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
+        ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
+        if model.nv == 0:
+            return unbatch(np.zeros(V.shape), single)
+        Q, V, T = (np.ascontiguousarray(x) for x in (Q, V, T))
+    M, qdd = np.empty(Q.shape[:1] + (model.nv, model.nv)), np.empty(V.shape)
+    code = cholesky_kernel(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world", M, qdd)
+    if code != -1:
+        if f_ext is not None:                                  # a non-finite wrench is the cause to report
+            check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
+        raise_kernel_error(model, code, ("q", "v", "tau"), tuple(unbatch(x, single) for x in (Q, V, T)),
+                           "forward_dynamics", "q̈", unbatch(qdd, single))
+    return unbatch(qdd, single)

@@ -1,30 +1,90 @@
 """Energies, from the links' motion (not from M): the physical laws the tests check the dynamics against.
-Both read the one forward kinematics (core.forward_kinematics), for any joint type."""
+Both read the one forward kinematics (core.fk_pass), compiled, for any joint type:
+
+    T = Σ_links ½ m |v_C|² + ½ ω'ᵀ I ω',   v_C = v_o + ω × R c (world),  ω' = Rᵀ ω (body axes)
+    V = −Σ_links m gᵀ c_world  (= Σ m (−g)ᵀ c_world)
+"""
 from __future__ import annotations
 
 import numpy as np
 
-from .core import forward_kinematics
-from .state import as_batch, check_output, quiet, unbatch
+from .._jit import njit
+from .core import fk_pass, kernel_arrays, unpack
+from .state import as_batch, fast_shape, raise_kernel_error
 
 
-@quiet
+@njit(cache=True)
+def energy_kernel(I, F, Q, V, out):
+    """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
+    −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], V.shape[1]
+    Rl, pl, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    ww, vw = np.empty((nb, 3)), np.empty((nb, 3))
+    for s in range(N):
+        for k in range(nq):
+            if not np.isfinite(Q[s, k]):
+                return s * nq + k
+        for k in range(nv):
+            if not np.isfinite(V[s, k]):
+                return N * nq + s * nv + k
+        fk_pass(I, F, Q[s], V[s], Rl, pl, Rw, pw, ww, vw)
+        e = 0.0
+        for b in range(nb):
+            R = Rw[b]
+            cx = R[0, 0] * com[b, 0] + R[0, 1] * com[b, 1] + R[0, 2] * com[b, 2]     # R c: CoM from the origin
+            cy = R[1, 0] * com[b, 0] + R[1, 1] * com[b, 1] + R[1, 2] * com[b, 2]
+            cz = R[2, 0] * com[b, 0] + R[2, 1] * com[b, 1] + R[2, 2] * com[b, 2]
+            if nv == 0:                                                            # V: m (−g)ᵀ c_world
+                e += mass[b] * (mg[0] * (pw[b, 0] + cx) + mg[1] * (pw[b, 1] + cy) + mg[2] * (pw[b, 2] + cz))
+                continue
+            wx, wy, wz = ww[b, 0], ww[b, 1], ww[b, 2]
+            ux = vw[b, 0] + wy * cz - wz * cy                                      # v_C = v_o + ω × R c
+            uy = vw[b, 1] + wz * cx - wx * cz
+            uz = vw[b, 2] + wx * cy - wy * cx
+            ax = R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz                        # ω' = Rᵀ ω
+            ay = R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz
+            az = R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz
+            Ii = inertia[b]
+            e += 0.5 * (mass[b] * (ux * ux + uy * uy + uz * uz)
+                        + ax * (Ii[0, 0] * ax + Ii[0, 1] * ay + Ii[0, 2] * az)
+                        + ay * (Ii[1, 0] * ax + Ii[1, 1] * ay + Ii[1, 2] * az)
+                        + az * (Ii[2, 0] * ax + Ii[2, 1] * ay + Ii[2, 2] * az))
+        out[s] = e
+        if not np.isfinite(e):
+            return -2 - nb - s
+    return -1
+
+
+def _energy(model, call, *arrays):
+    """The kernel on (q,) (potential) or (q, v) (kinetic): float for one state, (N,) for a batch; anything but
+    float64 arrays is checked and converted first."""
+    kinetic = len(arrays) == 2
+    nd = fast_shape(model, *arrays)
+    if nd == 1:
+        batches = tuple(x[None] for x in arrays)
+    elif nd == 2:
+        batches = arrays
+    else:
+        batches, single = as_batch(model, **dict(zip(("q", "v"), arrays)))
+        nd = 1 if single else 2
+        if not model.njoints:
+            return 0.0 if single else np.zeros(batches[0].shape[0])
+    Q = batches[0]
+    Vb = batches[1] if kinetic else np.empty((Q.shape[0], 0))
+    out = np.empty(Q.shape[0])
+    code = energy_kernel(*kernel_arrays(model), Q, Vb, out)
+    if code != -1:
+        raise_kernel_error(model, code, ("q", "v")[:len(arrays)], batches, call, "T" if kinetic else "V",
+                           out)
+    return float(out[0]) if nd == 1 else out
+
+
 def kinetic_energy(model, q, v):
     """T = Σ_links ½ m |v_C|² + ½ ωᵀ (R I Rᵀ) ω, v_C = v_o + ω × R c (world), float or (N,)."""
-    (Q, V), single = as_batch(model, q=q, v=v)
-    R, p, w, vo = forward_kinematics(model, Q, V)                      # (nb, N, ...) world
-    c = np.einsum("bnij,bj->bni", R, model.com)                        # CoM offset from the origin, world
-    vc = vo + np.cross(w, c)
-    wl = np.einsum("bnji,bnj->bni", R, w)                              # ω in body axes: ωᵀ R I Rᵀ ω = ω'ᵀ I ω'
-    T = 0.5 * np.einsum("b,bni,bni->n", model.mass, vc, vc) + 0.5 * np.einsum("bni,bij,bnj->n", wl, model.inertia, wl)
-    return unbatch(check_output("kinetic_energy", "T", T, model, dict(q=Q, v=V)), single)
+    return _energy(model, "kinetic_energy", q, v)
 
 
-@quiet
 def potential_energy(model, q):
     """V = −Σ_links m gᵀ c (gravity g in the base frame, CoM c in world coordinates), float or (N,)."""
-    (Q,), single = as_batch(model, q=q)
-    R, p = forward_kinematics(model, Q)
-    c = p + np.einsum("bnij,bj->bni", R, model.com)
-    V = -np.einsum("b,bni,i->n", model.mass, c, model.gravity)
-    return unbatch(check_output("potential_energy", "V", V, model, dict(q=Q)), single)
+    return _energy(model, "potential_energy", q)

@@ -24,7 +24,7 @@ import numpy as np
 from .._jit import njit
 from ..errors import InputError
 from .core import fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
-from .state import as_batch, check_output, frame_of, quiet, raise_kernel_error, unbatch
+from .state import as_batch, check_output, fast_shape, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
 
@@ -145,6 +145,43 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
 
 
 @njit(cache=True)
+def frame_one(I, F, q, v, b, X, want, local, out):
+    """One state q (nq,) [v (nv,)]: the frame X = [R; p] (4, 3) on body b — want = 0: its world placement into
+    out (4, 3) (rows R, then p); want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out (6, nv); local:
+    in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a non-finite out (flat k)."""
+    parent, kind, iq, iv, nvj, S = unpack(I, F)[:6]
+    nb, nv = I.shape[0], S.shape[0]
+    for k in range(q.shape[0]):
+        if not np.isfinite(q[k]):
+            return 0
+    for k in range(v.shape[0]):
+        if not np.isfinite(v[k]):
+            return 0
+    B3, R3 = np.zeros((4 * nb + 4, 3)), np.empty((2 * nb + 2, 3, 3))       # two allocations, cut below
+    Rp, Rw, Rf, pp, pw, ww, vw = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], \
+        B3[3 * nb:4 * nb]
+    pf, xd, w0 = B3[4 * nb], B3[4 * nb + 1], B3[4 * nb + 2]
+    fk_pass(I, F, q, v, Rp, pp, Rw, pw, ww, vw)
+    body_point(b, Rw, pw, X[:3], X[3], Rf, pf)
+    if want == 0:
+        out[:3, :] = Rf
+        out[3, :] = pf
+    else:
+        J = out if want == 1 else np.empty((6, nv))
+        point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf, J)
+        if want == 2:
+            point_velocity(b, pw, ww, vw, pf, xd)
+            point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf, xd, out)
+        if local:
+            _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
+    for r in range(out.shape[0]):
+        for c in range(out.shape[1]):
+            if not np.isfinite(out[r, c]):
+                return -2 - nb - (r * out.shape[1] + c)
+    return -1
+
+
+@njit(cache=True)
 def com_jacobians_kernel(I, F, Q, c, J, Iw):
     """For every state and body b: world CoM c (N, nb, 3), its world-aligned Jacobian J (N, nb, 6, nv) and
     the world inertia about the CoM Iw = R I Rᵀ (N, nb, 3, 3) — what the Lagrange route sums over."""
@@ -162,47 +199,151 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
             sandwich3(Rw[b], inertia[b], tmp, Iw[s, b])
 
 
+@njit(cache=True)
+def lagrange_mass_kernel(I, F, Q, M):
+    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (chapter Eq. 23) for every state of Q (N, nq) into
+    M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
+    columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
+    −2 − nb − k for a non-finite M at flat index k."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
+    Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    v0, eye, tmp, Rc, Iw = np.empty(0), np.eye(3), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    c, J, cols, ww = np.empty(3), np.empty((6, nv)), np.empty(nv, np.int64), np.empty((nb, 3))
+    for s in range(N):
+        for k in range(nq):
+            if not np.isfinite(Q[s, k]):
+                return s * nq + k
+        fk_pass(I, F, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
+        Ms = M[s]
+        Ms[:, :] = 0.0
+        for b in range(nb):
+            body_point(b, Rw, pw, eye, com[b], Rc, c)
+            point_jacobian(parent, iv, nvj, S, b, Rw, pw, c, J)
+            Iw[:, :] = 0.0
+            sandwich3(Rw[b], inertia[b], tmp, Iw)
+            n, j = 0, b                                # the columns of the joints that support b
+            while j >= 0:
+                for r in range(iv[j], iv[j] + nvj[j]):
+                    cols[n] = r
+                    n += 1
+                j = parent[j]
+            for x in range(n):
+                r = cols[x]
+                wx = Iw[0, 0] * J[3, r] + Iw[0, 1] * J[4, r] + Iw[0, 2] * J[5, r]      # I_w J_ω,r
+                wy = Iw[1, 0] * J[3, r] + Iw[1, 1] * J[4, r] + Iw[1, 2] * J[5, r]
+                wz = Iw[2, 0] * J[3, r] + Iw[2, 1] * J[4, r] + Iw[2, 2] * J[5, r]
+                for y in range(x, n):
+                    t = cols[y]
+                    Ms[t, r] += (mass[b] * (J[0, r] * J[0, t] + J[1, r] * J[1, t] + J[2, r] * J[2, t])
+                                 + wx * J[3, t] + wy * J[4, t] + wz * J[5, t])
+        for r in range(nv):                            # cols run from the body down: mirror both ways
+            for t in range(r):
+                x = Ms[r, t] + Ms[t, r]
+                Ms[r, t] = Ms[t, r] = x
+        for a in range(nv):
+            for b in range(nv):
+                if not np.isfinite(Ms[a, b]):
+                    return -2 - nb - ((s * nv + a) * nv + b)
+    return -1
+
+
 # -- Python entry points -----------------------------------------------------------------------------------
+
+_NO_V = np.empty(0)
+_LOCAL = {"local_world_aligned": False, "local": True}
+
+
+def frame_row(model, frame):
+    """(body, X (4, 3) = [R; p]) of a link or frame name: the frame's placement in its body, kept per model
+    (the lookup and the array are built once per name); InputError lists the closest names."""
+    rows = model.__dict__.get("_frame_rows")
+    if rows is None:
+        rows = {}
+        object.__setattr__(model, "_frame_rows", rows)      # a cache, not model data (Model is frozen)
+    row = rows.get(frame) if type(frame) is str else None
+    if row is None:
+        fr = frame_of(model, frame)
+        row = (int(fr.body), np.ascontiguousarray(np.vstack([fr.R, fr.p]), float))
+        rows[frame] = row
+    return row
+
+
+def _frame_fast(model, call, q, v, frame, want, local):
+    """frame_one on one float64 state (``fast_shape`` == 1): out (4, 3) or (6, nv)."""
+    b, X = frame_row(model, frame)
+    out = np.empty((4, 3) if want == 0 else (6, model.nv))
+    code = frame_one(*kernel_arrays(model), q, _NO_V if v is None else v, b, X, want, local, out)
+    if code != -1:
+        inputs = dict(q=q) if v is None else dict(q=q, v=v)
+        if code >= 0:                                            # a non-finite input
+            raise_kernel_error(model, code, tuple(inputs), tuple(inputs.values()), call)
+        with np.errstate(invalid="ignore"):                      # a non-finite result
+            check_output(call, "J" if want == 1 else "J̇" if want == 2 else "placement", out[None], model,
+                         {k: x[None] for k, x in inputs.items()}, axis=2 if want else 1)
+    return out
+
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
     """Run frame_kernel on checked batches; returns Rf, pf, J, J̇ (batch form; J, J̇ empty when not wanted)."""
-    fr = frame_of(model, frame)
+    b, X = frame_row(model, frame)
     N, nv = Q.shape[0], model.nv
     Rf, pf = np.empty((N, 3, 3)), np.empty((N, 3))
     J = np.zeros((N, 6, nv)) if want >= 1 else np.empty((N, 0, 0))
     dJ = np.zeros((N, 6, nv)) if want == 2 else np.empty((N, 0, 0))
     Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V)
-    code = frame_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), Vk, int(fr.body), np.asarray(fr.R, float),
-                        np.asarray(fr.p, float), want, reference == "local", Rf, pf, J, dJ)
+    code = frame_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), Vk, b, X[:3], X[3], want,
+                        reference == "local", Rf, pf, J, dJ)
     if code != -1:
         names, batches = ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, V)
         raise_kernel_error(model, code, names, batches, call)
     return Rf, pf, J, dJ
 
 
-@quiet
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
+    if fast_shape(model, q) == 1:
+        out = _frame_fast(model, "frame_placement", q, None, frame, 0, False)
+        return out[:3], out[3]
+    return _frame_placement(model, q, frame)
+
+
+@quiet
+def _frame_placement(model, q, frame):
     (Q,), single = as_batch(model, q=q)
     Rf, pf, _, _ = _frame_terms(model, "frame_placement", frame, Q, None, 0, "local_world_aligned")
     Rf, pf = (check_output("frame_placement", k, x, model, dict(q=Q)) for k, x in (("R", Rf), ("p", pf)))
     return unbatch(Rf, single), unbatch(pf, single)
 
 
-@quiet
 def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
+    local = _LOCAL.get(reference) if type(reference) is str else None
+    if local is not None and fast_shape(model, q) == 1:
+        return _frame_fast(model, "frame_jacobian", q, None, frame, 1, local)
+    return _frame_jacobian(model, q, frame, reference)
+
+
+@quiet
+def _frame_jacobian(model, q, frame, reference):
     _check_reference(reference)
     (Q,), single = as_batch(model, q=q)
     J = _frame_terms(model, "frame_jacobian", frame, Q, None, 1, reference)[2]
     return unbatch(check_output("frame_jacobian", "J", J, model, dict(q=Q), axis=2), single)
 
 
-@quiet
 def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
     docstring gives the columns)."""
+    local = _LOCAL.get(reference) if type(reference) is str else None
+    if local is not None and fast_shape(model, q, v) == 1:
+        return _frame_fast(model, "frame_jacobian_dot", q, v, frame, 2, local)
+    return _frame_jacobian_dot(model, q, v, frame, reference)
+
+
+@quiet
+def _frame_jacobian_dot(model, q, v, frame, reference):
     _check_reference(reference)
     (Q, V), single = as_batch(model, q=q, v=v)
     dJ = _frame_terms(model, "frame_jacobian_dot", frame, Q, V, 2, reference)[3]

@@ -1,15 +1,17 @@
 """Lagrange's equations of the 2nd kind: τ = M(q) q̈ + C(q, q̇) q̇ + g(q) (chapter Eqs. 22–25).
 
-M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23) — summed over links from their Jacobians
-("lagrange") or by the composite-rigid-body algorithm ("crba", the fast route). C comes from the
-Christoffel symbols of M with ∂M/∂q derived analytically from the derivatives of the link Jacobians; g
-from the potential energy V = −Σ m_b gᵀ c_b. None of these calls the Newton–Euler code: the Lagrange
-route reads the CoM Jacobians of kinematics.com_jacobians (the one forward kinematics), for any joint type.
+M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23) — summed over links from their CoM Jacobians
+("lagrange", compiled: kinematics.lagrange_mass_kernel) or by the composite-rigid-body algorithm ("crba",
+the fast route). C (``coriolis_matrix``) is computed in O(n²) by ``coriolis.py``; g = ∂V/∂q, V = −Σ m_b gᵀ
+c_b, by the Newton–Euler recursion at rest (``rnea.gravity_torques``).
 
-With a free-flyer root, v is not q̇: its six entries are the root's twist in its own frame, and q moves on
-a Lie group. "∂M/∂q_k" is then the derivative along the k-th velocity direction (X_k; for a 1-dof joint
-∂/∂q_k), and the free flyer's directions do not commute, [X_i, X_j] = X_[e_i, e_j] (the se(3) bracket):
-the Christoffel symbols of the kinetic metric in this frame gain the bracket terms (Koszul's formula),
+The chapter's own route to C, the Christoffel symbols of M, stays here as ``christoffel_coriolis`` (with
+∂M/∂q derived analytically from the derivatives of the link Jacobians, ``mass_matrix_derivatives``): O(n⁴)
+in numpy, the tests' second route to C. With a free-flyer root, v is not q̇: its six entries are the root's
+twist in its own frame, and q moves on a Lie group. "∂M/∂q_k" is then the derivative along the k-th
+velocity direction (X_k; for a 1-dof joint ∂/∂q_k), and the free flyer's directions do not commute,
+[X_i, X_j] = X_[e_i, e_j] (the se(3) bracket): the Christoffel symbols of the kinetic metric in this frame
+gain the bracket terms (Koszul's formula),
     2Γ_kij = X_i M_jk + X_j M_ik − X_k M_ij + ⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩,
 C_kj = Σ_i Γ_kij v_i, and Ṁ − 2C stays skew-symmetric (Ṁ = Σ_k X_k(M) v_k).
 """
@@ -20,9 +22,14 @@ import numpy as np
 from ..errors import InputError
 from ..model import MimicModel
 from ..spatial import skew
+from .coriolis import coriolis_matrix
+from .core import kernel_arrays
 from .crba import crba
-from .kinematics import com_jacobians, supports
-from .state import as_batch, check_output, mimic_call, quiet, unbatch
+from .kinematics import com_jacobians, lagrange_mass_kernel, supports
+from .rnea import gravity_torques
+from .state import as_batch, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch
+
+__all__ = ["mass_matrix", "coriolis_matrix", "gravity_torques", "christoffel_coriolis", "mass_matrix_derivatives"]
 
 
 def mass_matrix(model, q, method="crba"):
@@ -31,35 +38,32 @@ def mass_matrix(model, q, method="crba"):
 
     method="crba" (default, O(n²)): the composite-rigid-body algorithm (dynamics/crba.py, compiled).
     method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
-    (costly, as the chapter warns).
+    (O(n³), compiled: kinematics.lagrange_mass_kernel).
     """
     if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
         return mimic_call("mass_matrix", model, q, method)
-    if method == "crba":
+    if isinstance(method, str) and method == "crba":
         return crba(model, q)
-    (Q,), single = as_batch(model, q=q)
-    if method == "lagrange":
-        M = _lagrange_mass_matrix(model, *com_jacobians(model, Q)[1:])
-    else:
+    if method != "lagrange":
         raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
-    return unbatch(check_output("mass_matrix", "M", M, model, dict(q=Q)), single)
+    nd = fast_shape(model, q)
+    if nd == 0:
+        (Q,), single = as_batch(model, q=q)
+        if not model.njoints:
+            return unbatch(np.zeros((Q.shape[0], 0, 0)), single)
+        q, nd = unbatch(Q, single), 1 if single else 2
+    M = np.empty(q.shape[:-1] + (model.nv, model.nv))
+    code = lagrange_mass_kernel(*kernel_arrays(model), q[None] if nd == 1 else q, M[None] if nd == 1 else M)
+    if code != -1:
+        raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
+    return M
 
 
 def _lagrange_mass_matrix(model, J, Iw):
-    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3)."""
+    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3) (numpy:
+    the Christoffel route's own M)."""
     Jv, Jw = J[:, :, :3], J[:, :, 3:]
     return np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
-
-
-@quiet
-def gravity_torques(model, q):
-    """g(q) = ∂V/∂q with V = −Σ_b m_b gᵀ c_b(q): g = −Σ_b m_b J_vbᵀ g (nv,) or (N, nv)."""
-    if type(model) is MimicModel:                   # g = Gᵀ g_full (dynamics/mimic.py)
-        return mimic_call("gravity_torques", model, q)
-    (Q,), single = as_batch(model, q=q)
-    J = com_jacobians(model, Q)[1]
-    g = -np.einsum("b,bnki,k->ni", model.mass, J[:, :, :3], model.gravity)
-    return unbatch(check_output("gravity_torques", "g", g, model, dict(q=Q)), single)
 
 
 def mass_matrix_derivatives(model, Q, terms=None):
@@ -99,8 +103,9 @@ def mass_matrix_derivatives(model, Q, terms=None):
 
 
 @quiet
-def coriolis_matrix(model, q, v):
-    """C(q, q̇) (nv, nv) or (N, nv, nv) from the Christoffel symbols of M:
+def christoffel_coriolis(model, q, v):
+    """C(q, q̇) (nv, nv) or (N, nv, nv) from the Christoffel symbols of M (the chapter's route, O(n⁴) in
+    numpy; ``coriolis_matrix`` is the fast one):
 
     C_ij = Σ_k ½ (∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k, so that Ṁ − 2C is skew-symmetric; with a
     free flyer, plus its bracket terms (module docstring, ``_bracket_terms``).
@@ -112,7 +117,7 @@ def coriolis_matrix(model, q, v):
                - np.einsum("nijk,nk->nij", dM, V))
     if model.floating:
         C += _bracket_terms(_lagrange_mass_matrix(model, *terms[1:]), V)
-    return unbatch(check_output("coriolis_matrix", "C", C, model, dict(q=Q, v=V)), single)
+    return unbatch(check_output("christoffel_coriolis", "C", C, model, dict(q=Q, v=V)), single)
 
 
 def _ad(x):

@@ -59,6 +59,12 @@ def gravity_torques(mm, q):
     return rnea(mm, q, z, z)
 
 
+def nonlinear_effects(mm, q, v):
+    """h = Gᵀ h_full(q_full, q̇_full) = rnea(q, q̇, 0) in the independent coordinates."""
+    v = _check(mm, "v", v, mm.nv)
+    return rnea(mm, q, v, np.zeros_like(v))
+
+
 def aba(mm, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     """q̈ = M⁻¹ (τ − Gᵀ h_full): forward dynamics in the independent coordinates (Cholesky of M = Gᵀ M_full G;
     no articulated-body recursion exists for the mapped model)."""
@@ -83,5 +89,6 @@ def forward_dynamics(mm, q, v, tau, *, f_ext=None, f_ext_frame="local", method="
     return aba(mm, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
 
 
-MIMIC.update(rnea=rnea, mass_matrix=mass_matrix, gravity_torques=gravity_torques, aba=aba,
+MIMIC.update(rnea=rnea, mass_matrix=mass_matrix, gravity_torques=gravity_torques,
+             nonlinear_effects=nonlinear_effects, aba=aba,
              forward_dynamics=forward_dynamics)   # the public functions send a MimicModel here (state.mimic_call)

@@ -33,7 +33,8 @@ from .._jit import njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from ..model import MimicModel
 from .core import finite_state, kernel_arrays, unpack
-from .state import (as_batch, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch,
+from .state import (as_batch, check_output, fast_shape, fast_wrench_rows, mimic_call, quiet, raise_kernel_error,
+                    unbatch,
                     wrench_rows)
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
@@ -54,11 +55,20 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     -------
     tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
     """
-    nd = fast_shape(model, q, v, a) if f_ext is None and f_ext_frame == "local" else 0
+    nd = fast_shape(model, q, v, a) if f_ext_frame == "local" or f_ext is not None else 0
+    if nd == 1 and f_ext is not None:                           # one state with wrenches: rows kept per model
+        ext = fast_wrench_rows(model, f_ext, f_ext_frame)
+        if ext is not None:
+            tau = np.empty(v.shape)
+            code = rnea_kernel(*kernel_arrays(model), q[None], v[None], a[None], *ext, f_ext_frame == "world",
+                               tau[None], _NO_T)
+            if code == -1:
+                return tau
+        nd = 0                                                  # else the checked path says what is wrong
     if nd == 1:                                                 # one state, no Python-side reshapes
         tau = np.empty(v.shape)
         code = rnea_one(*kernel_arrays(model), q, v, a, tau)
-    elif nd == 2:
+    elif nd == 2 and f_ext is None:
         tau = np.empty(v.shape)
         code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, _NO_T)
     elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
@@ -68,6 +78,38 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
         return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea")[0], single)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
+    return tau
+
+
+def nonlinear_effects(model, q, v):
+    """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
+    nonLinearEffects), τ = M q̈ + h."""
+    return _bias(model, q, v, "nonlinear_effects")
+
+
+def gravity_torques(model, q):
+    """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0."""
+    return _bias(model, q, None, "gravity_torques")
+
+
+def _bias(model, q, v, call):
+    """rnea(q, v, 0) (v = None: rnea(q, 0, 0)) through bias_one / bias_kernel; anything but float64 arrays
+    is checked and converted first."""
+    arrays = (q,) if v is None else (q, v)
+    nd = fast_shape(model, *arrays)
+    if nd == 0 and type(model) is MimicModel:                 # Gᵀ h_full, Gᵀ g_full (dynamics/mimic.py)
+        return mimic_call(call, model, *arrays)
+    if nd == 0:
+        batches, single = as_batch(model, **dict(zip(_QVA, arrays)))
+        if not model.njoints:
+            return unbatch(np.zeros((batches[0].shape[0], model.nv)), single)
+        arrays, nd = tuple(unbatch(x, single) for x in batches), 1 if single else 2
+    q = arrays[0]
+    v = arrays[1] if len(arrays) > 1 else np.empty(q.shape[:-1] + (0,))
+    tau = np.empty(q.shape[:-1] + (model.nv,))
+    code = (bias_one if nd == 1 else bias_kernel)(*kernel_arrays(model), q, v, tau)
+    if code != -1:
+        raise_kernel_error(model, code, _QVA[:len(arrays)], arrays, call, "g" if len(arrays) == 1 else "h", tau)
     return tau
 
 
@@ -169,6 +211,22 @@ def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` with N = 1."""
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B, _NO_P, False,
                        tau[np.newaxis, :], np.zeros((0, 0, NT)))
+
+
+@njit(cache=True)
+def bias_kernel(I, F, Q, V, tau):
+    """τ = rnea(q, v, 0) for every state of Q (N, nq), V (N, nv) — or rnea(q, 0, 0) when V has no columns —
+    into tau (N, nv): ``rnea_kernel`` with zero accelerations."""
+    Z = np.zeros((Q.shape[0], tau.shape[1]))
+    if V.shape[1] == 0:
+        return rnea_kernel(I, F, Q, Z, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
+    return rnea_kernel(I, F, Q, V, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
+
+
+@njit(cache=True)
+def bias_one(I, F, q, v, tau):
+    """One state: q (nq,), v (nv,) or (0,), tau (nv,), through bias_kernel."""
+    return bias_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :])
 
 
 @njit(cache=True, inline="always")

@@ -199,6 +199,42 @@ def wrench_rows(model, f_ext, f_ext_frame, N):
     return X, body, point
 
 
+def fast_wrench_rows(model, f_ext, f_ext_frame):
+    """``wrench_rows`` for one state, when f_ext is a dict {frame name: (force (3,), moment (3,))} of float64
+    values: X (1, K, 6), body (K,), point (K, 3), with each name set's lookups (bodies, points, frame→body
+    rotations) built once and kept on the model. None when anything is unusual (then ``wrench_rows`` checks
+    and converts, and raises the error). Finiteness is left to the kernel: a non-finite wrench makes a
+    non-finite result, and the caller then takes the checked path."""
+    if type(f_ext) is not dict or not f_ext or type(f_ext_frame) is not str:
+        return None
+    key = (tuple(f_ext), f_ext_frame)
+    cache = model.__dict__.get("_wrench_rows")
+    if cache is None:
+        cache = {}
+        object.__setattr__(model, "_wrench_rows", cache)     # a cache, not model data (Model is frozen)
+    rows = cache.get(key)
+    if rows is None:
+        if f_ext_frame not in ("local", "world") or not all(type(k) is str and k in model.frames for k in key[0]):
+            return None
+        frs = [model.frames[k] for k in key[0]]
+        keep = np.array([k for k, fr in enumerate(frs) if fr.body >= 0], np.int64)
+        RT = np.array([frs[k].R.T if f_ext_frame == "local" else np.eye(3) for k in keep]).reshape(-1, 3, 3)
+        rows = (keep, None if len(keep) == len(frs) else keep, np.array([frs[k].body for k in keep], np.int64),
+                np.array([frs[k].p for k in keep], float).reshape(-1, 3), RT, f_ext_frame == "local")
+        cache[key] = rows
+    keep, pick, body, point, RT, local = rows
+    try:
+        W = np.array(list(f_ext.values()))
+    except (TypeError, ValueError):
+        return None
+    if W.dtype != np.float64 or W.shape != (len(key[0]), 2, 3):
+        return None
+    if pick is not None:
+        W = W[pick]
+    X = np.matmul(W, RT) if local else W                   # frame axes -> body axes: x_body = R x_frame
+    return X.reshape(1, len(keep), 6), body, point
+
+
 def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     """Convert f_ext = {frame: (force, moment)} to per-body (force, moment about the body origin) in body axes.
 

@@ -1,0 +1,200 @@
+"""The Coriolis matrix C(q, q̇) of τ = M q̈ + C q̇ + g (chapter Eq. 24), in O(n²), compiled: the
+Christoffel-consistent factorisation of Echeandia & Wensing (2021, "Numerical methods to compute the
+Coriolis matrix and Christoffel symbols for rigid-body systems", Alg. 1) — the matrix Pinocchio's
+computeCoriolisMatrix returns — instead of Christoffel sums over ∂M/∂q (O(n⁴); ``lagrange.py`` keeps that
+route as the chapter's reference).
+
+Everything is in world axes about the world origin (6-vectors [linear; angular], as ``aba.py``): joint j's
+columns J_j = ⁰X_j S_j (a motion-subspace column (l, a) of body j's frame becomes [R l + p × R a; R a]), body k
+moves at v_k = Σ_{j ⪯ k} J_j q̇_j, and since S_j is constant in body j's frame, J̇_j = v_j × J_j. With I_k the
+body's spatial inertia about the world origin, M = Σ_k J_kᵀ I_k J_k (J_k: the columns of the joints that
+support k) and
+
+    C = Σ_k J_kᵀ (I_k J̇_k + B_k J_k),   B_k = ½ (v_k ×* I_k − I_k v_k× + (I_k v_k) ×̄),      (E&W Eq. 22)
+
+where (h ×̄) m = m ×* h. B_k + B_kᵀ = İ_k = v_k ×* I_k − I_k v_k× makes Ṁ − 2C skew-symmetric, and B_k v_k
+= v_k ×* I_k v_k makes C q̇ the Newton–Euler bias forces (Eqs. 13–18 with q̈ = 0, no gravity). The sum over
+bodies k is a sum over subtrees: with composites I^c_i = Σ_{k ⪰ i} I_k, B^c_i = Σ_{k ⪰ i} B_k, for joint i
+and each joint j ⪯ i (itself and its ancestors):
+    C[j, i] = J_jᵀ F_i,              F_i = I^c_i J̇_i + B^c_i J_i,
+    C[i, j] = (I^c_i J_i)ᵀ J̇_j + (B^c_iᵀ J_i)ᵀ J_j     (j ≠ i),
+and bodies on different branches do not couple. A free-flyer root is joint 0 with six columns (S = 1₆ in
+its body frame): the formula is the same, and so is Pinocchio's C (its tangent-space Christoffel symbols,
+the bracket terms of ``lagrange.christoffel_coriolis``, come out of J̇ = v × J).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from .core import fk_pass, kernel_arrays, sandwich3, unpack
+from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+
+
+# 6-vectors inside the kernel are 6-tuples (values: no array views, no allocation in the loops).
+
+@njit(cache=True, inline="always")
+def row6(X, i):
+    """Row i of X (n, 6) as a 6-tuple."""
+    return X[i, 0], X[i, 1], X[i, 2], X[i, 3], X[i, 4], X[i, 5]
+
+
+@njit(cache=True, inline="always")
+def dot6(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+
+
+@njit(cache=True, inline="always")
+def motion_cross(v, m):
+    """v × m = [ω × m_lin + v_lin × m_ang; ω × m_ang] (RBDA §2.9)."""
+    return (v[4] * m[2] - v[5] * m[1] + v[1] * m[5] - v[2] * m[4],
+            v[5] * m[0] - v[3] * m[2] + v[2] * m[3] - v[0] * m[5],
+            v[3] * m[1] - v[4] * m[0] + v[0] * m[4] - v[1] * m[3],
+            v[4] * m[5] - v[5] * m[4], v[5] * m[3] - v[3] * m[5], v[3] * m[4] - v[4] * m[3])
+
+
+@njit(cache=True, inline="always")
+def force_cross(v, f):
+    """v ×* f = [ω × f_lin; ω × f_ang + v_lin × f_lin] (RBDA §2.9)."""
+    return (v[4] * f[2] - v[5] * f[1], v[5] * f[0] - v[3] * f[2], v[3] * f[1] - v[4] * f[0],
+            v[4] * f[5] - v[5] * f[4] + v[1] * f[2] - v[2] * f[1],
+            v[5] * f[3] - v[3] * f[5] + v[2] * f[0] - v[0] * f[2],
+            v[3] * f[4] - v[4] * f[3] + v[0] * f[1] - v[1] * f[0])
+
+
+@njit(cache=True)
+def coriolis_kernel(I, F, Q, V, C):
+    """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns −1, the flat index
+    of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[0]
+    R3, P3, M6, B6 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3)), np.empty((2 * nb, 6, 6)), \
+        np.empty((2 * nv, 6))                          # four allocations, cut into the scratch arrays
+    Rl, Rw, pl, pw, ww, vw = R3[:nb], R3[nb:], P3[:nb], P3[nb:2 * nb], P3[2 * nb:3 * nb], P3[3 * nb:]
+    Ic, Bc, J, dJ = M6[:nb], M6[nb:], B6[:nv], B6[nv:]
+
+    def bodies(q, v):
+        """Outward: forward kinematics (core.fk_pass); each body's velocity v_i about the world origin
+        (v_P + p × ω), its columns J_r = [R l + p × R a; R a] and J̇_r = v_i × J_r, its spatial inertia I_i about
+        the world origin and B_i = ½ (v ×* I − I v× + (I v) ×̄) (E&W Eq. 22). I is symmetric and (v×)ᵀ = −v×*,
+        so −I v× = (v ×* I)ᵀ: B = ½ (Z + Zᵀ + h ×̄) with Z = v ×* I (column by column), h = I v, and
+        (h ×̄) m = m ×* h = [−[h_l]× ω_m; −[h_l]× v_m − [h_a]× ω_m]."""
+        fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+        for i in range(nb):
+            R, p, w = Rw[i], pw[i], ww[i]
+            vi = (vw[i, 0] + p[1] * w[2] - p[2] * w[1], vw[i, 1] + p[2] * w[0] - p[0] * w[2],
+                  vw[i, 2] + p[0] * w[1] - p[1] * w[0], w[0], w[1], w[2])
+            for r in range(iv[i], iv[i] + nvj[i]):
+                ax = R[0, 0] * S[r, 3] + R[0, 1] * S[r, 4] + R[0, 2] * S[r, 5]
+                ay = R[1, 0] * S[r, 3] + R[1, 1] * S[r, 4] + R[1, 2] * S[r, 5]
+                az = R[2, 0] * S[r, 3] + R[2, 1] * S[r, 4] + R[2, 2] * S[r, 5]
+                Jr = (R[0, 0] * S[r, 0] + R[0, 1] * S[r, 1] + R[0, 2] * S[r, 2] + p[1] * az - p[2] * ay,
+                      R[1, 0] * S[r, 0] + R[1, 1] * S[r, 1] + R[1, 2] * S[r, 2] + p[2] * ax - p[0] * az,
+                      R[2, 0] * S[r, 0] + R[2, 1] * S[r, 1] + R[2, 2] * S[r, 2] + p[0] * ay - p[1] * ax, ax, ay, az)
+                dJr = motion_cross(vi, Jr)
+                for k in range(6):
+                    J[r, k], dJ[r, k] = Jr[k], dJr[k]
+            m, Y, Z = mass[i], Ic[i], Bc[i]
+            cx = p[0] + R[0, 0] * com[i, 0] + R[0, 1] * com[i, 1] + R[0, 2] * com[i, 2]    # world CoM
+            cy = p[1] + R[1, 0] * com[i, 0] + R[1, 1] * com[i, 1] + R[1, 2] * com[i, 2]
+            cz = p[2] + R[2, 0] * com[i, 0] + R[2, 1] * com[i, 1] + R[2, 2] * com[i, 2]
+            Y[:, :] = 0.0                              # I_i = [[m 1, −m [c]×], [m [c]×, R I_C Rᵀ − m [c]×²]]
+            sandwich3(R, inertia[i], Z, Y[3:, 3:])     # (Z: scratch here)
+            cc = (cx, cy, cz)
+            for a in range(3):
+                Y[a, a] = m
+                for b in range(3):
+                    Y[3 + a, 3 + b] += m * ((cx * cx + cy * cy + cz * cz if a == b else 0.0) - cc[a] * cc[b])
+            Y[3, 1], Y[3, 2], Y[4, 0], Y[4, 2], Y[5, 0], Y[5, 1] = -m * cz, m * cy, m * cz, -m * cx, -m * cy, m * cx
+            Y[1, 3], Y[2, 3], Y[0, 4], Y[2, 4], Y[0, 5], Y[1, 5] = -m * cz, m * cy, m * cz, -m * cx, -m * cy, m * cx
+            for b in range(6):                         # Z = v ×* I, column b (= row b: I symmetric)
+                zb = force_cross(vi, row6(Y, b))
+                for a in range(6):
+                    Z[a, b] = zb[a]
+            h = (dot6(row6(Y, 0), vi), dot6(row6(Y, 1), vi), dot6(row6(Y, 2), vi), dot6(row6(Y, 3), vi),
+                 dot6(row6(Y, 4), vi), dot6(row6(Y, 5), vi))
+            for a in range(6):                         # B = ½ (Z + Zᵀ), in place
+                for b in range(a):
+                    Z[a, b] = Z[b, a] = 0.5 * (Z[a, b] + Z[b, a])
+            for o, q0, k in ((0, 3, 0), (3, 0, 0), (3, 3, 3)):   # + ½ (h ×̄): −[h_l]× at (0, 3), (3, 0); −[h_a]× at (3, 3)
+                hx, hy, hz = 0.5 * h[k], 0.5 * h[k + 1], 0.5 * h[k + 2]
+                Z[o, q0 + 1] += hz
+                Z[o, q0 + 2] -= hy
+                Z[o + 1, q0] -= hz
+                Z[o + 1, q0 + 2] += hx
+                Z[o + 2, q0] += hy
+                Z[o + 2, q0 + 1] -= hx
+
+    def composites():
+        """Inward: I^c_λ += I^c_i, B^c_λ += B^c_i (leaves → root; parent[i] < i)."""
+        for i in range(nb - 1, -1, -1):
+            j = parent[i]
+            if j >= 0:
+                for a in range(6):
+                    for b in range(6):
+                        Ic[j, a, b] += Ic[i, a, b]
+                        Bc[j, a, b] += Bc[i, a, b]
+
+    def blocks(Cs):
+        """For every column r of joint i: F = I^c J̇_r + B^c J_r, G = I^c J_r, H = B^cᵀ J_r; then for joint i
+        and each ancestor k: C[x, r] = J_xᵀ F, and for k ≠ i C[r, x] = Gᵀ J̇_x + Hᵀ J_x (module docstring)."""
+        Cs[:, :] = 0.0                                 # bodies on different branches do not couple
+        for i in range(nb):
+            for r in range(iv[i], iv[i] + nvj[i]):
+                Jr, dJr = row6(J, r), row6(dJ, r)
+                Fr = (dot6(row6(Ic[i], 0), dJr) + dot6(row6(Bc[i], 0), Jr), dot6(row6(Ic[i], 1), dJr) + dot6(row6(Bc[i], 1), Jr),
+                      dot6(row6(Ic[i], 2), dJr) + dot6(row6(Bc[i], 2), Jr), dot6(row6(Ic[i], 3), dJr) + dot6(row6(Bc[i], 3), Jr),
+                      dot6(row6(Ic[i], 4), dJr) + dot6(row6(Bc[i], 4), Jr), dot6(row6(Ic[i], 5), dJr) + dot6(row6(Bc[i], 5), Jr))
+                G = (dot6(row6(Ic[i], 0), Jr), dot6(row6(Ic[i], 1), Jr), dot6(row6(Ic[i], 2), Jr),
+                     dot6(row6(Ic[i], 3), Jr), dot6(row6(Ic[i], 4), Jr), dot6(row6(Ic[i], 5), Jr))
+                H = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                for b in range(6):                     # H = B^cᵀ J_r
+                    H = (H[0] + Bc[i, b, 0] * Jr[b], H[1] + Bc[i, b, 1] * Jr[b], H[2] + Bc[i, b, 2] * Jr[b],
+                         H[3] + Bc[i, b, 3] * Jr[b], H[4] + Bc[i, b, 4] * Jr[b], H[5] + Bc[i, b, 5] * Jr[b])
+                k = i
+                while k >= 0:                          # joint i itself, then its ancestors
+                    for x in range(iv[k], iv[k] + nvj[k]):
+                        Cs[x, r] = dot6(row6(J, x), Fr)
+                        if k != i:
+                            Cs[r, x] = dot6(G, row6(dJ, x)) + dot6(H, row6(J, x))
+                    k = parent[k]
+
+    for s in range(N):
+        for k in range(nq):
+            if not np.isfinite(Q[s, k]):
+                return s * nq + k
+        for k in range(nv):
+            if not np.isfinite(V[s, k]):
+                return N * nq + s * nv + k
+        bodies(Q[s], V[s])
+        composites()
+        blocks(C[s])
+        for a in range(nv):
+            for b in range(nv):
+                if not np.isfinite(C[s, a, b]):
+                    return -2 - nb - ((s * nv + a) * nv + b)
+    return -1
+
+
+@njit(cache=True)
+def coriolis_one(I, F, q, v, C):
+    """One state: q (nq,), v (nv,), C (nv, nv), through coriolis_kernel."""
+    return coriolis_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], C[np.newaxis, :, :])
+
+
+def coriolis_matrix(model, q, v):
+    """C(q, q̇) (nv, nv) or (N, nv, nv): the Christoffel-consistent Coriolis matrix (module docstring;
+    Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew.
+    Float64 arrays go straight to the kernel; anything else is checked and converted first."""
+    nd = fast_shape(model, q, v)
+    if nd == 0:
+        (Q, Vb), single = as_batch(model, q=q, v=v)
+        if not model.njoints:
+            return unbatch(np.zeros((Q.shape[0], 0, 0)), single)
+        q, v, nd = unbatch(Q, single), unbatch(Vb, single), 1 if single else 2
+    nv = model.nv
+    C = np.empty(q.shape[:-1] + (nv, nv))
+    code = (coriolis_one if nd == 1 else coriolis_kernel)(*kernel_arrays(model), q, v, C)
+    if code != -1:
+        raise_kernel_error(model, code, ("q", "v"), (q, v), "coriolis_matrix", "C", C)
+    return C
