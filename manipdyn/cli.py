@@ -51,8 +51,6 @@ def _validate(args) -> int:
         return _referee(args)
     if args.markdown:
         raise InputError("--markdown needs --against (the engines referee)")
-    if args.jobs is not None:
-        raise InputError("--jobs needs --against (the engines referee over many files)")
     from tqdm import tqdm
 
     from .validation import format_report, validate
@@ -549,6 +547,8 @@ def _check_output_dir(path, option):
 
 def _preflight(args):
     """Check input files and output paths before a subcommand starts any long work."""
+    if getattr(args, "jobs", None) is not None and not args.against:
+        raise InputError("--jobs needs --against (the engines referee over many files)")
     urdf = getattr(args, "urdf", None)
     sweep = args.command == "validate" and _sweep_mode(args)
     for path in urdf if isinstance(urdf, list) else [urdf] if urdf else []:
