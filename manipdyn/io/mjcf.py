@@ -7,11 +7,12 @@ What is written (MuJoCo's XML reference, "MJCF"), so that MuJoCo's open-tree dyn
 - One ``<body>`` per moving body of the Model (fixed links already merged), nested as ``parent``: ``pos`` and
   ``quat`` = the joint frame in the parent body at q = 0 (``p0``, ``R0``), so the body frame is the joint frame
   after its motion, as ours. ``<inertial pos mass fullinertia>``: the merged CoM and the inertia about the CoM
-  in body axes (ixx iyy izz ixy ixz iyz).
+  in body axes (ixx iyy izz ixy ixz iyz); an inertia that is not positive definite (a zero moment, a massless
+  body), which MuJoCo refuses as fullinertia, is written as principal axes ``quat`` + ``diaginertia``.
 - ``<joint type="hinge"|"slide" axis>`` at the body origin, ``range`` only for a limited joint (not a
   continuous one); no damping, armature, friction or stiffness (MuJoCo's defaults are zero). A free-flyer
-  root becomes ``<freejoint>`` (MuJoCo's q is [x y z qw qx qy qz] and its v is [linear (world); angular
-  (body)], not ours: map states before comparing).
+  root becomes ``<freejoint>`` (MuJoCo's q is [x y z qw qx qy qz], its v [linear (world); angular (body)]
+  and its linear acceleration the origin's p̈, not ours: map states before comparing).
 - ``<option gravity>``: the Model's gravity.
 - Closures (``Model.constraints``) as ``<equality>`` elements between sites placed on the closure frames, so
   no assumption is made about q = 0 (MuJoCo computes a ``connect``'s or ``weld``'s relative pose at qpos0
@@ -80,8 +81,15 @@ def _body(parent_el, model, i) -> ET.Element:
     b = ET.SubElement(parent_el, "body", name=model.body_names[i], pos=_vec(model.p0[i]),
                       quat=_vec(_quat(model.R0[i])))
     I = model.inertia[i]
-    ET.SubElement(b, "inertial", pos=_vec(model.com[i]), mass=_num(model.mass[i]),
-                  fullinertia=_vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))
+    el = ET.SubElement(b, "inertial", pos=_vec(model.com[i]), mass=_num(model.mass[i]))
+    moments, axes = np.linalg.eigh(I)
+    if moments[0] > 0:                               # MuJoCo diagonalises fullinertia itself
+        el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))
+    else:                                            # fullinertia must be positive definite: principal axes
+        if np.linalg.det(axes) < 0:                  # (a zero moment, a massless body) given as quat + diag
+            axes[:, 0] = -axes[:, 0]
+        el.set("quat", _vec(_quat(axes)))
+        el.set("diaginertia", _vec(np.maximum(moments, 0.0)))
     if model.kind[i] == FREEFLYER:
         ET.SubElement(b, "freejoint", name=model.joint_names[i])
         return b
