@@ -1,4 +1,4 @@
-"""The ``manipdyn`` command: validate, inspect, play, example, bench.
+"""The ``manipdyn`` command: validate, inspect, export, play, example, bench.
 
 Exit codes: 0 success, 1 a validated term failed, 2 bad input (file, URDF, arguments).
 """
@@ -21,6 +21,8 @@ BUNDLED = bundled_dir()
 MAX_STATES = 100_000       # validate --states: at the cap ~4 min (AAU arm), 0.6 GiB of terms (baxter, 19 joints)
 MAX_SAMPLES = 10_001       # example --samples: about 2 min for the AAU arm at the cap
 MAX_SEED = 2**32 - 1       # validate --seed: the range every numpy generator accepts
+MAX_JOBS = 64              # validate --against --jobs: worker processes
+MAX_SWEEP_FILES = 10_000   # validate --against DIR: URDF files one sweep takes
 
 EPILOG = f"""\
 exit codes:
@@ -31,7 +33,9 @@ exit codes:
      ("manipdyn <command>: error: ..."), no traceback unless --debug
 
 limits (checked before any work starts): validate --states 1..{MAX_STATES}, --tol finite and > 0,
---seed 0..{MAX_SEED}; example --samples 2..{MAX_SAMPLES}; --json / --html must be a writable file in
+--seed 0..{MAX_SEED}, --jobs 1..{MAX_JOBS}, at most {MAX_SWEEP_FILES} URDF files under the folders of a
+sweep (--against with a folder or --jobs: --json is then a folder, created if missing); example --samples
+2..{MAX_SAMPLES}; --json / --html / --mjcf must be a writable file in
 an existing folder, --out a folder (created if missing), not a file; trajectory files (play --traj)
 are .csv or .npz of at most {MAX_TRAJECTORY_BYTES // 2**20} MiB.
 """
@@ -84,12 +88,14 @@ def _referee(args) -> int:
     if args.root_joint or args.reference or args.lock or args.root or args.tips or args.prune or args.mimic:
         raise InputError("--against compares the file as written, fixed base: --root-joint, --reference, --mimic "
                          "and the reduction options do not apply")
-    if args.markdown and not args.zoo:
-        raise InputError("--markdown writes the --zoo --against summary: add --zoo")
+    if args.markdown and not args.zoo and not _sweep_mode(args):
+        raise InputError("--markdown writes the --against sweep summary: add --zoo, a folder or --jobs")
     if args.zoo:
         if args.urdf:
             raise InputError("--zoo --against runs over every example-robot-data URDF: give no URDF files")
         return _referee_zoo(args, engines, states)
+    if _sweep_mode(args):
+        return _referee_zoo(args, engines, states, given=True)
     from .io.urdf import load_urdf
     reports = []
     for path in [Path(p) for p in args.urdf] or bundled_models():
@@ -104,9 +110,17 @@ def _referee(args) -> int:
     return 0 if all(r.explained for r in reports) else 1
 
 
-def _referee_zoo(args, engines, states) -> int:
-    """validate --zoo --against: the sweep over example-robot-data, its summary (and --markdown)."""
-    from .validation.referee_zoo import markdown, sweep
+def _sweep_mode(args) -> bool:
+    """validate --against over folders or with --jobs: the sweep (one summary table, --json a folder)."""
+    return bool(getattr(args, "against", None) and not args.zoo and
+                (args.jobs is not None or any(Path(p).is_dir() for p in args.urdf)))
+
+
+def _referee_zoo(args, engines, states, given=False) -> int:
+    """validate --zoo --against (example-robot-data), or --against over the folders and files given (a folder:
+    its *.urdf files) with --jobs worker processes: the summary table, --markdown, --json (given: per-file
+    JSON files and summary.json in that folder)."""
+    from .validation.referee_zoo import json_name, markdown, sweep, urdf_files
 
     def show(row):
         cells = ", ".join(f"{e} {x.get('status')}" + (f" {x['worst']:.1e}->{x['worst_neutral']:.1e}"
@@ -115,12 +129,27 @@ def _referee_zoo(args, engines, states) -> int:
                           for e, x in row["engines"].items())
         print(f"{row['file']}: manipdyn {'loaded' if row['manipdyn'] == 'loaded' else 'refused'}; {cells}",
               flush=True)
-    rows = sweep(engines, n_states=states, seed=args.seed, progress=show)
-    md = markdown(rows, engines, states, args.seed)
+    kw = {}
+    if given:
+        paths = urdf_files(args.urdf, MAX_SWEEP_FILES)
+        dirs = [Path(p) for p in args.urdf if Path(p).is_dir()]
+        kw = dict(paths=paths, root=dirs[0] if len(dirs) == 1 else Path.cwd())
+        print(f"manipdyn validate --against {','.join(engines)}: {len(paths)} URDF file(s), "
+              f"{args.jobs or 1} job(s), {states} states each, seed {args.seed}", flush=True)
+    rows = sweep(engines, n_states=states, seed=args.seed, progress=show, jobs=args.jobs or 1, **kw)
+    md = markdown(rows, engines, states, args.seed, **(dict(
+        title=", ".join(map(str, args.urdf))[:200], command="manipdyn " + " ".join(sys.argv[1:])[:400])
+        if given else {}))
     print(md.split("## Causes named")[0])
     if args.markdown:
         Path(args.markdown).write_text(md, encoding="utf-8")
-    if args.json:
+    if args.json and given:
+        out = Path(args.json)
+        for k, row in enumerate(rows):
+            (out / json_name(k, row)).write_text(json.dumps(row, indent=1, default=_jsonable), encoding="utf-8")
+        (out / "summary.json").write_text(json.dumps(rows, indent=1, default=_jsonable), encoding="utf-8")
+        print(f"wrote {len(rows)} per-file JSON files and summary.json to {out}")
+    elif args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1, default=_jsonable))
     ok = all(x.get("explained", True) for r in rows for x in r["engines"].values())
     return 0 if ok else 1
@@ -266,6 +295,23 @@ def inspect_dict(model, warnings_seen=()) -> dict:
     return out
 
 
+def _export(args) -> int:
+    """export URDF --mjcf OUT: the model (closures as equality constraints) as MuJoCo MJCF."""
+    from .io.mjcf import to_mjcf
+    from .io.urdf import load_urdf
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = load_urdf(args.urdf, root_joint=args.root_joint, mimic=args.mimic, **reduction(args))
+    text = to_mjcf(model)
+    Path(args.mjcf).write_text(text, encoding="utf-8")
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    full = getattr(model, "full", model)
+    print(f"wrote {args.mjcf}: {full.njoints} bodies and joints, {len(full.constraints)} closure(s)"
+          + (f", {len(full.mimic)} mimic equalit{'y' if len(full.mimic) == 1 else 'ies'}" if args.mimic else ""))
+    return 0
+
+
 def _play(args) -> int:
     from . import viz
     from .io.urdf import load_urdf
@@ -344,7 +390,8 @@ def build_parser() -> argparse.ArgumentParser:
                            parser_class=_subparser_class(common, EPILOG))
     p.commands = sub.choices              # name -> subcommand parser (for errors in its own name)
     v = sub.add_parser("validate", help="compare every Newton-Euler term with Pinocchio")
-    v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/)")
+    v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/); with --against, "
+                                           "also folders (searched for *.urdf)")
     v.add_argument("--zoo", action="store_true",
                    help="also validate example-robot-data's arms (fixed base) and its legged robots, humanoids "
                         "and drones (free-flyer root, whatever --root-joint says)")
@@ -360,7 +407,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "comma-separated: pinocchio,mujoco,pybullet,drake (pip install manipdyn[engines]); a "
                         "missing engine is skipped with a note; each disagreement above 1e-9 is explained by "
                         "the engine's read-back link parameters and checked again with them (exit 1 if not)")
-    v.add_argument("--markdown", help="with --zoo --against: write the summary as markdown to this file")
+    v.add_argument("--markdown", help="with --zoo --against (or a folder, or --jobs): write the summary as "
+                                      "markdown to this file")
+    v.add_argument("--jobs", type=_int_in(1, MAX_JOBS), default=None,
+                   help=f"with --against: run the files in 1..{MAX_JOBS} worker processes, one summary table; "
+                        "URDF arguments may then be folders (their *.urdf files, at most "
+                        f"{MAX_SWEEP_FILES}) and --json is a folder (one JSON file per URDF and summary.json)")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
     add_mimic_option(v)
     add_root_joint_option(v)
@@ -375,6 +427,15 @@ def build_parser() -> argparse.ArgumentParser:
     add_root_joint_option(i)
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
+    x = sub.add_parser("export", help="write the model in another format (MuJoCo MJCF)")
+    x.add_argument("urdf")
+    x.add_argument("--mjcf", required=True, metavar="FILE",
+                   help="write MuJoCo MJCF to FILE (a writable file in an existing folder): merged bodies and "
+                        "inertials, hinge/slide joints, closures as equality constraints (connect/weld/joint)")
+    add_mimic_option(x)
+    add_root_joint_option(x)
+    add_reduction_options(x)
+    x.set_defaults(func=_export)
     pl = sub.add_parser("play", help="3-D playback in the browser (meshcat): live, or one HTML file")
     pl.add_argument("urdf")
     pl.add_argument("--traj", help="CSV (t, q_<joint>...) or NPZ (t, q, joint_names); default: a built-in demo")
@@ -486,12 +547,20 @@ def _check_output_dir(path, option):
 
 def _preflight(args):
     """Check input files and output paths before a subcommand starts any long work."""
+    if getattr(args, "jobs", None) is not None and not args.against:
+        raise InputError("--jobs needs --against (the engines referee over many files)")
     urdf = getattr(args, "urdf", None)
+    sweep = args.command == "validate" and _sweep_mode(args)
     for path in urdf if isinstance(urdf, list) else [urdf] if urdf else []:
-        _check_input_file(path, "URDF")
+        if not (sweep and Path(path).is_dir()):        # a sweep's folders are searched for *.urdf
+            _check_input_file(path, "URDF")
     if getattr(args, "reference", None):
         _check_input_file(args.reference, "--reference URDF")
-    for option in ("json", "html", "markdown"):
+    if sweep and args.json:
+        _check_output_dir(args.json, "--json")
+    for option in ("json", "html", "markdown", "mjcf"):
+        if option == "json" and sweep:
+            continue
         if getattr(args, option, None) and not (args.command == "inspect" and getattr(args, option) == "-"):
             _check_output_file(getattr(args, option), f"--{option}")
     if getattr(args, "out", None) is not None:

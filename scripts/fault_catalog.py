@@ -58,6 +58,7 @@ _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 _REGRESSOR = "tests/crosscheck/test_regressor.py"
 _DERIV = "tests/crosscheck/test_derivatives.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
+_MJCF = "tests/crosscheck/test_mjcf_export.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -528,6 +529,15 @@ FAULTS = (
           "Rw[b, y, 0] * x[k, z] + Rw[b, y, 1] * x[k, z + 1] + Rw[b, y, 2] * x[k, z + 2]",
           "Rw[b, 0, y] * x[k, z] + Rw[b, 1, y] * x[k, z + 1] + Rw[b, 2, y] * x[k, z + 2]",
           (_DERIV,), "a body-axes f_ext turned into world axes by Rwᵀ instead of Rw"),
+    Fault("mjcf-fullinertia-products-swapped", "validation", "manipdyn/io/mjcf.py",
+          "fullinertia=_vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])",
+          "fullinertia=_vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]])",
+          (_MJCF,), "the MJCF export writes ixz and iyz in each other's place (MuJoCo's order is ixx iyy izz "
+                    "ixy ixz iyz)"),
+    Fault("mjcf-revolute-axis-wrong-frame", "validation", "manipdyn/io/mjcf.py",
+          "c.pc + s * revolute_arm * c.axis_c)", "c.pc + s * revolute_arm * c.axis_p)",
+          (_MJCF,), "the MJCF export places a revolute closure's child-side axis point along the parent's "
+                    "axis vector (parent-frame coordinates read in the child's frame)"),
     Fault("deriv-minv-upper-triangle", "derivatives", "manipdyn/dynamics/derivatives.py",
           "x -= L[m, r] * out[m, c]",
           "x -= L[r, m] * out[m, c]",

@@ -1,4 +1,5 @@
-"""The engines referee over every URDF that example-robot-data ships (fixed base, root welded).
+"""The engines referee over many URDFs: every file example-robot-data ships (``--zoo``), or the *.urdf files of
+folders and files given (``manipdyn validate DIR --against ... --jobs N``), fixed base, root welded.
 
 For each file: does manipdyn load it (or why not), does each engine load it (or why not), each engine's worst
 error against manipdyn and the named causes, and whether the disagreement vanishes once neutralised. The
@@ -6,11 +7,15 @@ markdown summary is docs/referee/zoo.md (``manipdyn validate --zoo --against muj
 """
 from __future__ import annotations
 
+import multiprocessing
+import os
+import re
 import tempfile
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from ..errors import ManipdynError
+from ..errors import InputError, ManipdynError
 from .engines import ADAPTERS, EngineMissing, EngineRefused, available, referee, stripped_urdf, _one_line, _quiet
 from .zoo import robots_dir
 
@@ -18,6 +23,41 @@ from .zoo import robots_dir
 def zoo_urdfs() -> list[Path]:
     """Every .urdf file under example-robot-data's robots/ folder, sorted."""
     return sorted(robots_dir().rglob("*.urdf"))
+
+
+MAX_FILES = 10_000        # URDF files one sweep takes (a folder is searched no further)
+MAX_JOBS = 64             # worker processes
+
+
+def urdf_files(items, limit=MAX_FILES) -> list[Path]:
+    """The files given and the *.urdf files under the folders given (sorted per folder, symlinked folders not
+    followed), at most ``limit``; InputError names a missing path, an empty folder or too many files."""
+    out = []
+    for item in map(Path, items):
+        if item.is_dir():
+            found = []
+            for top, dirs, files in os.walk(item, followlinks=False):
+                dirs.sort()
+                found += [Path(top) / f for f in sorted(files) if f.lower().endswith(".urdf")
+                          and (Path(top) / f).is_file()]
+                if len(out) + len(found) > limit:
+                    raise InputError(f"{item}: more than {limit} URDF files; give fewer folders or files")
+            if not found:
+                raise InputError(f"{item}: folder holds no *.urdf file")
+            out += found
+        elif item.is_file():
+            out.append(item)
+        else:
+            raise InputError(f"{item}: no such URDF file or folder")
+        if len(out) > limit:
+            raise InputError(f"more than {limit} URDF files; give fewer folders or files")
+    return out
+
+
+def json_name(k, row) -> str:
+    """A safe file name for row k's JSON (the URDF's path with every other character than [A-Za-z0-9._-]
+    replaced: names on disk are untrusted)."""
+    return f"{k:04d}_{re.sub(r'[^A-Za-z0-9._-]', '_', row['file'])[-120:]}.json"
 
 
 def engine_loads(name, path) -> tuple:
@@ -69,48 +109,72 @@ def _load_only(name, path):
         plant.Finalize()
 
 
-def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None) -> list[dict]:
-    """One row per file: {"file", "nv", "manipdyn": "loaded" | why, "engines": {name: result dict}}."""
-    from ..io.urdf import load_urdf
-    root = robots_dir()
+def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None, jobs=1, root=None) -> list[dict]:
+    """One row per file, in the order given: {"file", "nv", "manipdyn": "loaded" | why, "engines": {name: result
+    dict}}; ``jobs`` > 1 runs the files in that many worker processes (spawned: each compiles its kernels).
+    File names in rows and messages are shown relative to ``root`` (default: example-robot-data's robots/)."""
+    root = Path(root) if root is not None else robots_dir()
+    paths = list(paths if paths is not None else zoo_urdfs())
+    jobs = max(1, min(int(jobs), MAX_JOBS, len(paths) or 1))
+    work = [(p, tuple(engines), n_states, seed, root) for p in paths]
     rows = []
-    for path in paths if paths is not None else zoo_urdfs():
-        row = {"file": str(Path(path).relative_to(root)) if Path(path).is_relative_to(root) else str(path),
-               "nv": None, "manipdyn": "loaded", "engines": {}}
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                model = load_urdf(path)
-            row["nv"] = model.nv
-        except ManipdynError as exc:
-            row["manipdyn"] = _one_line(exc, 600).replace(f"{root}/", "")
-            for e in engines:
-                ok = engine_loads(e, path)
-                row["engines"][e] = {"status": "missing" if ok is None else "loaded only" if ok[0] else "refused",
-                                     "reason": "" if ok is None or ok[0] else ok[1].replace(f"{root}/", "")}
+    if jobs == 1:
+        results = map(_row_of, work)
+        for row in results:
             rows.append(row)
-            continue
-        rep = referee(model, path, engines, n_states=n_states, seed=seed)
-        for r in rep.engines:
-            row["engines"][r.engine] = {"status": r.status, "reason": r.reason.replace(f"{root}/", ""), "err": r.err,
-                                        "neutral": r.neutral, "worst": r.worst, "worst_neutral": r.worst_neutral,
-                                        "causes": r.causes, "notes": r.notes, "explained": r.explained}
-        row["notes"] = rep.notes
-        rows.append(row)
-        if progress is not None:
-            progress(row)
+            if progress is not None:
+                progress(row)
+        return rows
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for row in pool.map(_row_of, work):
+            rows.append(row)
+            if progress is not None:
+                progress(row)
     return rows
+
+
+def _row_of(item) -> dict:
+    """One file's row (a worker's task): manipdyn's load, then each engine; any failure kept in the row."""
+    path, engines, n_states, seed, root = item
+    from ..io.urdf import load_urdf
+
+    def shown(text):                     # messages without the sweep's folder
+        return str(text).replace(f"{root}/", "")
+    row = {"file": str(Path(path).relative_to(root)) if Path(path).is_relative_to(root) else str(path),
+           "nv": None, "manipdyn": "loaded", "engines": {}}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = load_urdf(path)
+        row["nv"] = model.nv
+    except Exception as exc:             # ManipdynError: refused; anything else: our bug, named as such
+        why = _one_line(exc, 600) if isinstance(exc, ManipdynError) else \
+            f"internal error: {type(exc).__name__}: {_one_line(exc, 600)}"
+        row["manipdyn"] = shown(why)
+        for e in engines:
+            ok = engine_loads(e, path)
+            row["engines"][e] = {"status": "missing" if ok is None else "loaded only" if ok[0] else "refused",
+                                 "reason": "" if ok is None or ok[0] else shown(ok[1])}
+        return row
+    rep = referee(model, path, engines, n_states=n_states, seed=seed)
+    for r in rep.engines:
+        row["engines"][r.engine] = {"status": r.status, "reason": shown(r.reason), "err": r.err,
+                                    "neutral": r.neutral, "worst": r.worst, "worst_neutral": r.worst_neutral,
+                                    "causes": r.causes, "notes": r.notes, "explained": r.explained}
+    row["notes"] = rep.notes
+    return row
 
 
 def _e(x):
     return "-" if x is None else f"{x:.1e}"
 
 
-def markdown(rows, engines, n_states, seed) -> str:
+def markdown(rows, engines, n_states, seed, *, title="example-robot-data", command=None) -> str:
     """The summary: per engine loaded/refused counts, worst errors, causes; then one line per file."""
-    out = [f"# Engines referee over example-robot-data ({len(rows)} URDF files, fixed base)", "",
-           f"Generated by `manipdyn validate --zoo --against {','.join(engines)} --states {n_states} "
-           f"--seed {seed} --markdown docs/referee/zoo.md`. Errors: the measure of DESIGN.md §3 over τ "
+    command = command or (f"manipdyn validate --zoo --against {','.join(engines)} --states {n_states} "
+                          f"--seed {seed} --markdown docs/referee/zoo.md")
+    out = [f"# Engines referee over {title} ({len(rows)} URDF files, fixed base)", "",
+           f"Generated by `{command}`. Errors: the measure of DESIGN.md §3 over τ "
            "(inverse dynamics), M and q̈ (forward dynamics, err/cond(M)), worst over the states; 'neutralised': "
            "the same after rebuilding manipdyn's model with the engine's own read-back masses, CoMs, inertias, "
            "armature and damping. A disagreement above 1e-9 must carry a named cause.", "", "## Summary", "",
@@ -173,4 +237,4 @@ def markdown(rows, engines, n_states, seed) -> str:
     return "\n".join(out) + "\n"
 
 
-__all__ = ["zoo_urdfs", "engine_loads", "sweep", "markdown", "ADAPTERS", "EngineMissing", "EngineRefused"]
+__all__ = ["zoo_urdfs", "urdf_files", "json_name", "engine_loads", "sweep", "markdown", "ADAPTERS", "EngineMissing", "EngineRefused"]
