@@ -530,8 +530,8 @@ FAULTS = (
           "Rw[b, 0, y] * x[k, z] + Rw[b, 1, y] * x[k, z + 1] + Rw[b, 2, y] * x[k, z + 2]",
           (_DERIV,), "a body-axes f_ext turned into world axes by Rwᵀ instead of Rw"),
     Fault("mjcf-fullinertia-products-swapped", "validation", "manipdyn/io/mjcf.py",
-          "fullinertia=_vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])",
-          "fullinertia=_vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]])",
+          'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))',
+          'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]))',
           (_MJCF,), "the MJCF export writes ixz and iyz in each other's place (MuJoCo's order is ixx iyy izz "
                     "ixy ixz iyz)"),
     Fault("mjcf-revolute-axis-wrong-frame", "validation", "manipdyn/io/mjcf.py",
