@@ -42,7 +42,7 @@ TERMS = {
 # Lagrange route and forward dynamics (no per-link fault location: they are whole-robot terms)
 DYN_TERMS = {
     "M_crba": "M (CRBA) vs crba", "M_lagrange": "M (Lagrange, Eq. 23) vs crba",
-    "C": "C (Christoffel) vs computeCoriolisMatrix", "g": "g vs computeGeneralizedGravity",
+    "C": "C (O(n²) recursion) vs computeCoriolisMatrix", "g": "g vs computeGeneralizedGravity",
     "nle": "C q̇ + g vs nonLinearEffects", "lagrange_ne": "M q̈ + C q̇ + g vs our Newton–Euler τ",
     "qdd_aba": "q̈ (ABA) vs aba, err/cond(M)", "qdd_cholesky": "q̈ (Cholesky) vs aba, err/cond(M)",
     "J_local_world_aligned": "J world-aligned vs getFrameJacobian", "J_local": "J local vs getFrameJacobian",
