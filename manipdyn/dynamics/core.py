@@ -150,14 +150,14 @@ def nonfinite_input(Q, V, s):
 
 @njit(cache=True, inline="always")
 def finite_state(Q, V, A, s):
-    """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry."""
+    """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry
+    (branch-free, without an early exit: numba then keeps the batch loop as fast as the bare recursion)."""
+    ok = True
     for k in range(Q.shape[1]):
-        if not np.isfinite(Q[s, k]):
-            return False
+        ok &= np.isfinite(Q[s, k])
     for k in range(V.shape[1]):
-        if not (np.isfinite(V[s, k]) and np.isfinite(A[s, k])):
-            return False
-    return True
+        ok &= np.isfinite(V[s, k]) & np.isfinite(A[s, k])
+    return ok
 
 
 @njit(cache=True)
