@@ -197,8 +197,7 @@ FAULTS = (
           (_PROPS, _FLOAT), "∂J_j/∂q_k without [a_j × J_v,k; 0] for j supporting k (the CoM moving under joint j's axis)"),
     # ---------------------------------------------------------------- compiled terms (coriolis.py, energy.py, ...)
     Fault("coriolis-bias-h-term-dropped", "lagrange", "manipdyn/dynamics/coriolis.py",
-          "hx, hy, hz = 0.5 * h[k], 0.5 * h[k + 1], 0.5 * h[k + 2]",
-          "hx, hy, hz = 0.0 * h[k], 0.0 * h[k + 1], 0.0 * h[k + 2]",
+          "add_force_cross(Z, h, 0.5)", "add_force_cross(Z, h, 0.0)",
           (_TERMS,), "Coriolis matrix: B = ½ (v ×* I − I v×) without the (I v) ×̄ term (C q̇ loses half the bias)"),
     Fault("coriolis-lower-block-jdot", "lagrange", "manipdyn/dynamics/coriolis.py",
           "Cs[r, x] = dot6(G, row6(dJ, x)) + dot6(H, row6(J, x))",
@@ -509,9 +508,8 @@ FAULTS = (
           "Ac[r, x] -= u[x]",
           (_DERIV,), "∂a/∂q_j = a_λ × J_j − v_λ × V_j (the velocity term's sign)"),
     Fault("deriv-force-cross-angular-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
-          "hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], h[3], h[4], h[5]",
-          "hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], -h[3], -h[4], -h[5]",
-          (_DERIV,), "Ẏ: the angular block of h ×̄ is +[h_a]× instead of −[h_a]×"),
+          "add_force_cross(out, h, 1.0)", "add_force_cross(out, h, -1.0)",
+          (_DERIV,), "Ẏ: h ×̄ with the wrong sign (+[h]× blocks instead of −[h]×)"),
     Fault("deriv-ancestor-rigid-term-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
           "Fq[c, x] += t[x]",
           "Fq[c, x] -= t[x]",
@@ -542,6 +540,10 @@ FAULTS = (
           "x -= L[m, r] * out[m, c]",
           "x -= L[r, m] * out[m, c]",
           (_DERIV,), "M⁻¹ by Cholesky: the back substitution reads L's upper triangle (never written) instead of Lᵀ"),
+    Fault("force-cross-angular-block-sign", "derivatives", "manipdyn/dynamics/core.py",
+          "        out[r0 + 2, c0] += y\n", "        out[r0 + 2, c0] -= y\n",
+          (_DERIV, _TERMS), "h ×̄ with one entry of each −[h]× block of the wrong sign (the RNEA derivatives' "
+                            "inertia variation and the Coriolis recursion's ½ h ×̄ share it)"),
 )
 
 

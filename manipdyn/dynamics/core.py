@@ -138,7 +138,15 @@ def fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
 
 @njit(cache=True, inline="always")
 def nonfinite_input(Q, V, s):
-    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V."""
+    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V.
+    The common case (all finite) is one branch-free pass; only a bad state is searched for its entry."""
+    ok = True
+    for k in range(Q.shape[1]):
+        ok &= np.isfinite(Q[s, k])
+    for k in range(V.shape[1]):
+        ok &= np.isfinite(V[s, k])
+    if ok:
+        return -1
     for k in range(Q.shape[1]):
         if not np.isfinite(Q[s, k]):
             return s * Q.shape[1] + k
@@ -146,6 +154,20 @@ def nonfinite_input(Q, V, s):
         if not np.isfinite(V[s, k]):
             return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
     return -1
+
+
+@njit(cache=True, inline="always")
+def add_force_cross(out, h, scale):
+    """out (6, 6) += scale · h ×̄, h ×̄ = [[0, −[h_l]×], [−[h_l]×, −[h_a]×]] for the momentum h = [h_l; h_a]
+    (Pinocchio's addForceCrossMatrix: h ×̄ m = −m ×* h)."""
+    for r0, c0, k in ((0, 3, 0), (3, 0, 0), (3, 3, 3)):
+        x, y, z = scale * h[k], scale * h[k + 1], scale * h[k + 2]
+        out[r0, c0 + 1] += z
+        out[r0, c0 + 2] -= y
+        out[r0 + 1, c0] -= z
+        out[r0 + 1, c0 + 2] += x
+        out[r0 + 2, c0] += y
+        out[r0 + 2, c0 + 1] -= x
 
 
 @njit(cache=True, inline="always")

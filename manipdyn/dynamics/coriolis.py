@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from .core import fk_pass, kernel_arrays, sandwich3, unpack
+from .core import add_force_cross, fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, fast_shape, raise_kernel_error, unbatch
 
 
@@ -67,7 +67,7 @@ def coriolis_kernel(I, F, Q, V, C):
     """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns −1, the flat index
     of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
-    N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[0]
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
     R3, P3, M6, B6 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3)), np.empty((2 * nb, 6, 6)), \
         np.empty((2 * nv, 6))                          # four allocations, cut into the scratch arrays
     Rl, Rw, pl, pw, ww, vw = R3[:nb], R3[nb:], P3[:nb], P3[nb:2 * nb], P3[2 * nb:3 * nb], P3[3 * nb:]
@@ -116,14 +116,7 @@ def coriolis_kernel(I, F, Q, V, C):
             for a in range(6):                         # B = ½ (Z + Zᵀ), in place
                 for b in range(a):
                     Z[a, b] = Z[b, a] = 0.5 * (Z[a, b] + Z[b, a])
-            for o, q0, k in ((0, 3, 0), (3, 0, 0), (3, 3, 3)):   # + ½ (h ×̄): −[h_l]× at (0, 3), (3, 0); −[h_a]× at (3, 3)
-                hx, hy, hz = 0.5 * h[k], 0.5 * h[k + 1], 0.5 * h[k + 2]
-                Z[o, q0 + 1] += hz
-                Z[o, q0 + 2] -= hy
-                Z[o + 1, q0] -= hz
-                Z[o + 1, q0 + 2] += hx
-                Z[o + 2, q0] += hy
-                Z[o + 2, q0 + 1] -= hx
+            add_force_cross(Z, h, 0.5)                 # + ½ (h ×̄)
 
     def composites():
         """Inward: I^c_λ += I^c_i, B^c_λ += B^c_i (leaves → root; parent[i] < i)."""
@@ -160,12 +153,9 @@ def coriolis_kernel(I, F, Q, V, C):
                     k = parent[k]
 
     for s in range(N):
-        for k in range(nq):
-            if not np.isfinite(Q[s, k]):
-                return s * nq + k
-        for k in range(nv):
-            if not np.isfinite(V[s, k]):
-                return N * nq + s * nv + k
+        bad = nonfinite_input(Q, V, s)
+        if bad >= 0:
+            return bad
         bodies(Q[s], V[s])
         composites()
         blocks(C[s])

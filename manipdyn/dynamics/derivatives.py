@@ -42,7 +42,7 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_placement
 from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
-from .core import finite_state, kernel_arrays, unpack
+from .core import add_force_cross, finite_state, kernel_arrays, unpack
 from .state import (
     as_batch,
     fast_shape,
@@ -114,20 +114,7 @@ def inertia_variation(Y, v, h, P, out):
     for a in range(6):
         for k in range(6):
             out[a, k] = -P[a, k] - P[k, a]
-    hx, hy, hz, nx, ny, nz = h[0], h[1], h[2], h[3], h[4], h[5]
-    for r0, c0 in ((0, 3), (3, 0)):          # −[h_l]× in the two off-diagonal blocks
-        out[r0, c0 + 1] += hz
-        out[r0, c0 + 2] -= hy
-        out[r0 + 1, c0] -= hz
-        out[r0 + 1, c0 + 2] += hx
-        out[r0 + 2, c0] += hy
-        out[r0 + 2, c0 + 1] -= hx
-    out[3, 4] += nz                          # −[h_a]× in the angular block
-    out[3, 5] -= ny
-    out[4, 3] -= nz
-    out[4, 5] += nx
-    out[5, 3] += ny
-    out[5, 4] -= nx
+    add_force_cross(out, h, 1.0)             # + h ×̄
 
 
 @njit(cache=True, inline="always")

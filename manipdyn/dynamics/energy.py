@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from .core import fk_pass, kernel_arrays, unpack
+from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
 from .state import as_batch, fast_shape, raise_kernel_error
 
 
@@ -18,16 +18,13 @@ def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
     −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], V.shape[1]
+    N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
     Rl, pl, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw = np.empty((nb, 3)), np.empty((nb, 3))
     for s in range(N):
-        for k in range(nq):
-            if not np.isfinite(Q[s, k]):
-                return s * nq + k
-        for k in range(nv):
-            if not np.isfinite(V[s, k]):
-                return N * nq + s * nv + k
+        bad = nonfinite_input(Q, V, s)
+        if bad >= 0:
+            return bad
         fk_pass(I, F, Q[s], V[s], Rl, pl, Rw, pw, ww, vw)
         e = 0.0
         for b in range(nb):

@@ -12,17 +12,13 @@ the error measured on correct code (written beside it).
 """
 import dataclasses
 import functools
-import json
-import os
-import subprocess
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import AAU, ROOT, err, inertial_xml, urdf, zoo_paths
+from conftest import AAU, err, inertial_xml, urdf, zoo_paths
+from nojit import assert_uncompiled_equals_compiled
 
 import manipdyn as md
 from manipdyn.validation import random_states, robots_dir
@@ -252,19 +248,6 @@ print(json.dumps(out))
 """
 
 
-def _probe(nojit):
-    env = {k: x for k, x in os.environ.items() if not k.startswith("MANIPDYN_")}
-    env.update(PYTHONPATH=str(ROOT), **({"MANIPDYN_NOJIT": "1"} if nojit else {}))
-    code = PROBE.format(tests=str(ROOT / "tests"), here=str(Path(__file__).parent), names=NOJIT_CASES)
-    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
-                         timeout=900)
-    assert run.returncode == 0, run.stderr[-3000:]
-    return json.loads(run.stdout.splitlines()[-1])
-
 
 def test_uncompiled_source_gives_the_compiled_numbers():
-    plain, compiled = _probe(True), _probe(False)
-    assert plain["nojit"] and not compiled["nojit"]
-    for name in NOJIT_CASES:
-        for x, y in zip(plain[name], compiled[name]):
-            assert err(np.array(x), np.array(y)) <= 1e-14, name      # measured 0 (bit-identical)
+    assert_uncompiled_equals_compiled(PROBE, __file__, NOJIT_CASES, tol=1e-14)   # measured 0 (bit-identical)

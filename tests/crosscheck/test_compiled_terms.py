@@ -9,16 +9,12 @@ zoo arms, random trees and solo12 on a free-flyer root; one single-state call an
 second route to C (the chapter's Christoffel symbols, lagrange.christoffel_coriolis), and the same kernels run
 uncompiled (MANIPDYN_NOJIT=1) against the compiled ones.
 """
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import ROOT, err
+from conftest import err
+from nojit import assert_uncompiled_equals_compiled
 from test_aba import _wrenches, case, pin_fext
 
 import manipdyn as md
@@ -171,19 +167,6 @@ print(json.dumps(out))
 """
 
 
-def _probe(nojit):
-    env = {k: x for k, x in os.environ.items() if not k.startswith("MANIPDYN_")}
-    env.update(PYTHONPATH=str(ROOT), **({"MANIPDYN_NOJIT": "1"} if nojit else {}))
-    code = PROBE.format(tests=str(ROOT / "tests"), here=str(Path(__file__).parent), names=NOJIT_CASES)
-    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
-                         timeout=1800)
-    assert run.returncode == 0, run.stderr[-3000:]
-    return json.loads(run.stdout.splitlines()[-1])
-
 
 def test_uncompiled_source_gives_the_compiled_numbers():
-    plain, compiled = _probe(True), _probe(False)
-    assert plain["nojit"] and not compiled["nojit"]
-    for name in NOJIT_CASES:
-        for k, (x, y) in enumerate(zip(plain[name], compiled[name])):
-            assert err(np.array(x), np.array(y)) <= 1e-14, (name, k)     # measured 2.2e-16 (fma/ordering)
+    assert_uncompiled_equals_compiled(PROBE, __file__, NOJIT_CASES, tol=1e-14)   # measured 2.2e-16 (fma/ordering)

@@ -16,17 +16,15 @@ Error measure of DESIGN §3 (``err``); q̈ derivatives (from a solve) scaled by 
 within 100× of the worst error measured on correct code over its cases (written beside it).
 """
 import functools
-import json
 import os
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import AAU, ROOT, err, inertial_xml, urdf, zoo_paths
+from conftest import AAU, ROOT, err, zoo_paths
+from nojit import assert_uncompiled_equals_compiled
 from test_aba import _random_tree_text
 
 import manipdyn as md
@@ -248,49 +246,6 @@ print(json.dumps(out))
 """
 
 
-def _probe(nojit):
-    env = {k: x for k, x in os.environ.items() if not k.startswith("MANIPDYN_")}
-    env.update(PYTHONPATH=str(ROOT), **({"MANIPDYN_NOJIT": "1"} if nojit else {}))
-    code = PROBE.format(tests=str(ROOT / "tests"), here=str(Path(__file__).parent), names=NOJIT_CASES)
-    run = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
-                         timeout=900, check=False)
-    assert run.returncode == 0, run.stderr[-3000:]
-    return json.loads(run.stdout.splitlines()[-1])
-
 
 def test_uncompiled_source_gives_the_compiled_numbers():
-    plain, compiled = _probe(True), _probe(False)
-    assert plain["nojit"] and not compiled["nojit"]
-    for name in NOJIT_CASES:
-        for x, y in zip(plain[name], compiled[name]):
-            assert err(np.array(x), np.array(y)) <= 1e-14, name      # measured 0 (bit-identical)
-
-
-# ---- bad input ---------------------------------------------------------------------------------------------
-
-def test_bad_input_raises_typed_errors():
-    model, _ = ref("solo12")
-    q, v, a = (x[0] for x in random_states(model, 1, np.random.default_rng(16)))
-    for fn in (md.rnea_derivatives, md.aba_derivatives):
-        with pytest.raises(md.InputError, match=r"shape"):
-            fn(model, v, v, a)                                    # q has nq = 19 entries
-        bad = q.copy()
-        bad[4] = np.nan
-        with pytest.raises(md.InputError, match="root_joint.qy"):
-            fn(model, bad, v, a)
-        with pytest.raises(md.InputError, match="FL_KFE"):
-            fn(model, q, np.where(np.arange(18) == model.v_names.index("FL_KFE"), np.inf, v), a)
-        with pytest.raises(md.InputError, match="f_ext_frame"):
-            fn(model, q, v, a, f_ext_frame="body")
-        with pytest.raises(md.InputError, match="no link or frame named"):
-            fn(model, q, v, a, f_ext={"nowhere": (np.ones(3), np.ones(3))})
-        with pytest.raises(md.NumericalError, match=r"dtau_d|dqdd_d|q̈"):
-            fn(model, q, v * 1e200, a)                            # the products overflow
-
-
-def test_singular_mass_matrix_raises_in_aba_derivatives():
-    model = md.load_urdf_string(urdf({"ball": inertial_xml(2.0)}, []), root_joint="free_flyer")
-    q, z = np.r_[0.0, 0, 0, 0, 0, 0, 1], np.zeros(6)
-    with pytest.raises(md.SingularError, match="'root_joint'"):
-        md.aba_derivatives(model, q, z, z)
-    assert err(md.rnea_derivatives(model, q, z, z)[2], np.diag([2.0, 2, 2, 0, 0, 0])) == 0.0   # M, exactly
+    assert_uncompiled_equals_compiled(PROBE, __file__, NOJIT_CASES, tol=1e-14)   # measured 0 (bit-identical)
