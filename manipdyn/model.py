@@ -190,6 +190,11 @@ class Model:
         return int(np.sum(self.nvs))
 
     @cached_property
+    def state_shapes(self) -> tuple:
+        """((nq,), (nv,)): the shapes of one state, read by the single-state fast paths on every call."""
+        return (self.nq,), (self.nv,)
+
+    @cached_property
     def q_names(self) -> tuple:
         """(nq,) a name for every entry of q: the joint's name, or "root_joint.qx" for a free flyer's."""
         return _dof_names(self, FREE_COORDS)

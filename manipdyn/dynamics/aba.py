@@ -35,10 +35,10 @@ from .._jit import njit
 from ..errors import InputError
 from ..joints import joint_placement
 from ..model import MimicModel
-from .core import kernel_arrays, unpack
+from .core import kernel_arrays, unpack, wrench_rows_of
 from .crba import crba_kernel
 from .rnea import NT, rnea_kernel
-from .state import (as_batch, check_f_ext, fast_shape, fast_wrench_rows, mimic_call, raise_kernel_error, unbatch,
+from .state import (as_batch, check_f_ext, fast3, fast_shape, fast_wrench_rows, fast_wrenches, mimic_call, raise_kernel_error, unbatch,
                     wrench_rows)
 
 
@@ -404,6 +404,13 @@ def aba_one(I, F, q, v, tau, out):
                       False, out[np.newaxis, :])
 
 
+@njit(cache=True)
+def aba_fext_one(I, F, q, v, tau, ws, keep, R, xb, xp, world, out):
+    """One state with external wrenches in ``state.fast_wrenches``' form: aba_kernel with N = 1."""
+    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], wrench_rows_of(ws, keep, R),
+                      xb, xp, world, out[np.newaxis, :])
+
+
 # -- Python entry points ----------------------------------------------------------------------------------
 
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
@@ -422,13 +429,20 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     Raises SingularError naming the joint whose articulated inertia D_i = S_iᵀ I^A_i S_i is singular (a
     moving subtree without mass or inertia: M is singular there).
     """
+    k = fast3(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
+    if k is not None:                                           # one float64 state: straight into the kernel
+        qdd = np.empty(v.shape)
+        code = aba_one(k[0], k[1], q, v, tau, qdd)
+        if code == -1:
+            return qdd
+        raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau), "aba", "q̈", qdd)
     nd = fast_shape(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else 0
-    if f_ext is not None and fast_shape(model, q, v, tau) == 1:  # one state with wrenches: rows kept per model
-        ext = fast_wrench_rows(model, f_ext, f_ext_frame)
+    if f_ext is not None:                                       # one state with wrenches: rows kept per model
+        k = fast3(model, q, v, tau)
+        ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
         if ext is not None:
             qdd = np.empty(v.shape)
-            if aba_kernel(*kernel_arrays(model), q[None], v[None], tau[None], *ext, f_ext_frame == "world",
-                          qdd[None]) == -1:
+            if aba_fext_one(k[0], k[1], q, v, tau, *ext, f_ext_frame == "world", qdd) == -1:
                 return qdd                                      # else the checked path says what is wrong
     if nd == 1:
         Q, V, T = q, v, tau
@@ -493,6 +507,14 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, M, out):
     return -1
 
 
+@njit(cache=True)
+def cholesky_one(I, F, q, v, tau, out):
+    """One state without external wrenches: cholesky_kernel with N = 1 (M is scratch)."""
+    nv = v.shape[0]
+    return cholesky_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_BODY, _NO_POINT,
+                           False, np.empty((1, nv, nv)), out[np.newaxis, :])
+
+
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
@@ -508,6 +530,11 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
 def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
     """q̈ by the M⁻¹ route (cholesky_kernel): Cholesky of the CRBA mass matrix, right-hand side
     τ − rnea(q, q̇, 0, f_ext)."""
+    k = fast3(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
+    if k is not None:                                          # one float64 state: straight into the kernel
+        qdd = np.empty(v.shape)
+        if cholesky_one(k[0], k[1], q, v, tau, qdd) == -1:
+            return qdd
     ext = fast_wrench_rows(model, f_ext, f_ext_frame) if f_ext is not None else None
     if fast_shape(model, q, v, tau) == 1 and (f_ext is None and f_ext_frame == "local" or ext is not None):
         Q, V, T = q[None], v[None], tau[None]                  # one state: no checks or conversions needed

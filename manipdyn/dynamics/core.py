@@ -3,10 +3,12 @@ kinematics — the one pass that places the bodies in the world (and gives their
 placements, Jacobians, J̇, energies, playback and the loop closures all read.
 
 Kernel form (``kernel_arrays``, built once per model): two arrays instead of many (each array argument
-of a compiled call costs ~80 ns of dispatch):
-  I (nb, 5) int64  = [parent, kind, idx_q, idx_v, nv_j] per joint
-  F (float64)      = [S (nv, 6), axis (nb, 3), R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3),
-                      inertia (nb, 3, 3), −g (3,)], viewed again by ``unpack`` inside the kernels.
+of a compiled call costs ~30 ns of dispatch, each reshape inside a kernel as much again):
+  I (nb, 5) int64        = [parent, kind, idx_q, idx_v, nv_j] per joint
+  F (4 nb + 1 + m, 3, 3) = blocks of 3×3 numbers:  F[0:nb] R0,  F[nb:2nb] inertia (about the CoM, body axes),
+                           F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[4nb, 0] −g,
+                           F[4nb+1:] S (nv, 6), padded to whole blocks,
+viewed again by ``unpack`` inside the kernels (slices, one reshape).
 S holds one row per joint velocity, [linear; angular] in the body frame (``joints.motion_subspace``).
 
 Placement convention (owned here): R maps body coordinates into the parent's (or the world's), x_parent
@@ -22,19 +24,28 @@ from ..joints import joint_placement, joint_velocity, motion_subspace
 
 def kernel_arrays(model):
     """(I, F) of the model (see the module docstring), built once and kept on the model."""
-    arr = model.__dict__.get("_core_arrays")
-    if arr is None:
+    try:
+        return model._core_arrays
+    except AttributeError:
+        pass
+    if True:
         nb = model.njoints
         I = np.zeros((nb, 5), np.int64)
         if nb:
             I[:] = np.column_stack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
         S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
             else np.zeros((0, 6))
-        F = np.concatenate([np.ravel(x) for x in (S, model.axis, model.R0, model.p0, model.mass, model.com,
-                                                   model.inertia, -np.asarray(model.gravity, float))])
+        nv = S.shape[0]
+        m = max(2, 2 * ((nv + 2) // 3))              # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
+        F = np.zeros((4 * nb + 1 + m, 3, 3))
+        F[:nb], F[nb:2 * nb] = model.R0, model.inertia
+        F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = model.axis, model.p0, model.com
+        F[3 * nb:4 * nb, 0, 0] = model.mass
+        F[4 * nb, 0] = -np.asarray(model.gravity, float)
+        F[4 * nb + 1:].reshape(-1, 6)[:nv] = S
         arr = (I, F)
         object.__setattr__(model, "_core_arrays", arr)   # a cache, not model data (Model is frozen)
-    return arr
+        return arr
 
 
 @njit(cache=True, inline="always")
@@ -42,17 +53,12 @@ def unpack(I, F):
     """Views of the model arrays: parent, kind, iq, iv, nvj (nb,), S (nv, 6), axis (nb, 3),
     R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3), inertia (nb, 3, 3), mg = −g (3,)."""
     nb = I.shape[0]
-    nv = (F.shape[0] - 3 - 28 * nb) // 6          # F holds 6 nv + 28 nb + 3 numbers
-    k1 = 6 * nv
-    k2 = k1 + 3 * nb
-    k3 = k2 + 9 * nb
-    k4 = k3 + 3 * nb
-    k5 = k4 + nb
-    k6 = k5 + 3 * nb
-    k7 = k6 + 9 * nb
-    return (I[:, 0], I[:, 1], I[:, 2], I[:, 3], I[:, 4], F[:k1].reshape(nv, 6),
-            F[k1:k2].reshape(nb, 3), F[k2:k3].reshape(nb, 3, 3), F[k3:k4].reshape(nb, 3),
-            F[k4:k5], F[k5:k6].reshape(nb, 3), F[k6:k7].reshape(nb, 3, 3), F[k7:k7 + 3])
+    nv = 0
+    for i in range(nb):
+        nv = max(nv, I[i, 3] + I[i, 4])
+    B = F[2 * nb:3 * nb]
+    return (I[:, 0], I[:, 1], I[:, 2], I[:, 3], I[:, 4], F[4 * nb + 1:].reshape(-1, 6)[:nv],
+            B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0])
 
 
 # -- 3-vector helpers (inlined into every kernel) -------------------------------------------------------
@@ -154,6 +160,25 @@ def nonfinite_input(Q, V, s):
         if not np.isfinite(V[s, k]):
             return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
     return -1
+
+
+@njit(cache=True, inline="always")
+def wrench_rows_of(ws, keep, R):
+    """X (1, K, 6) = [R_k f; R_k m] of the (force, moment) pairs ws[keep[k]]: one state's external wrenches
+    as the kernels read them (state.fast_wrenches; R_k turns the frame's axes into the body's)."""
+    X = np.empty((1, keep.shape[0], 6))
+    for k in range(keep.shape[0]):
+        f, m = ws[keep[k]]
+        for r in range(3):
+            X[0, k, r] = R[k, r, 0] * f[0] + R[k, r, 1] * f[1] + R[k, r, 2] * f[2]
+            X[0, k, 3 + r] = R[k, r, 0] * m[0] + R[k, r, 1] * m[1] + R[k, r, 2] * m[2]
+    return X
+
+
+@njit(cache=True)
+def wrench_block(ws, keep, R):
+    """``wrench_rows_of``, called from Python."""
+    return wrench_rows_of(ws, keep, R)
 
 
 @njit(cache=True, inline="always")

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from .core import add_force_cross, fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
-from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+from .state import as_batch, fast2, fast_shape, raise_kernel_error, unbatch
 
 
 # 6-vectors inside the kernel are 6-tuples (values: no array views, no allocation in the loops).
@@ -176,6 +176,14 @@ def coriolis_matrix(model, q, v):
     """C(q, q̇) (nv, nv) or (N, nv, nv): the Christoffel-consistent Coriolis matrix (module docstring;
     Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew.
     Float64 arrays go straight to the kernel; anything else is checked and converted first."""
+    k = fast2(model, q, v)
+    if k is not None:                                 # one float64 state
+        nv = model.nv
+        C = np.empty((nv, nv))
+        code = coriolis_one(k[0], k[1], q, v, C)
+        if code == -1:
+            return C
+        raise_kernel_error(model, code, ("q", "v"), (q, v), "coriolis_matrix", "C", C)
     nd = fast_shape(model, q, v)
     if nd == 0:
         (Q, Vb), single = as_batch(model, q=q, v=v)

@@ -24,7 +24,7 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_placement
 from .core import kernel_arrays, rot3, sandwich3, unpack
-from .state import as_batch, fast_shape, raise_kernel_error, unbatch
+from .state import as_batch, fast1, fast_shape, raise_kernel_error, unbatch
 
 
 @njit(cache=True, inline="always")
@@ -172,6 +172,14 @@ def crba_one(I, F, q, M):
 def crba(model, q):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above).
     Float64 arrays go straight to the kernel; anything else is checked and converted first."""
+    k = fast1(model, q)
+    if k is not None:                                 # one float64 state
+        nv = model.nv
+        M = np.empty((nv, nv))
+        code = crba_one(k[0], k[1], q, M)
+        if code == -1:
+            return M
+        raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
     nd = fast_shape(model, q)
     if nd == 0:
         (Q,), single = as_batch(model, q=q)

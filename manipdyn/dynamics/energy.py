@@ -10,47 +10,63 @@ import numpy as np
 
 from .._jit import njit
 from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
-from .state import as_batch, fast_shape, raise_kernel_error
+from .state import as_batch, fast1, fast2, fast_shape, raise_kernel_error
+
+
+@njit(cache=True, inline="always")
+def energy_of(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
+    """T of one state (v (nv,)) or V (v with no entries: potential energy); Rl … vw are core.fk_pass's
+    scratch arrays. Non-finite input gives a non-finite energy."""
+    mass, com, inertia, mg = unpack(I, F)[9:]
+    fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+    kinetic = v.shape[0] > 0
+    e = 0.0
+    for b in range(I.shape[0]):
+        R = Rw[b]
+        cx = R[0, 0] * com[b, 0] + R[0, 1] * com[b, 1] + R[0, 2] * com[b, 2]     # R c: CoM from the origin
+        cy = R[1, 0] * com[b, 0] + R[1, 1] * com[b, 1] + R[1, 2] * com[b, 2]
+        cz = R[2, 0] * com[b, 0] + R[2, 1] * com[b, 1] + R[2, 2] * com[b, 2]
+        if not kinetic:                                                        # V: m (−g)ᵀ c_world
+            e += mass[b] * (mg[0] * (pw[b, 0] + cx) + mg[1] * (pw[b, 1] + cy) + mg[2] * (pw[b, 2] + cz))
+            continue
+        wx, wy, wz = ww[b, 0], ww[b, 1], ww[b, 2]
+        ux = vw[b, 0] + wy * cz - wz * cy                                      # v_C = v_o + ω × R c
+        uy = vw[b, 1] + wz * cx - wx * cz
+        uz = vw[b, 2] + wx * cy - wy * cx
+        ax = R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz                        # ω' = Rᵀ ω
+        ay = R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz
+        az = R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz
+        Ii = inertia[b]
+        e += 0.5 * (mass[b] * (ux * ux + uy * uy + uz * uz)
+                    + ax * (Ii[0, 0] * ax + Ii[0, 1] * ay + Ii[0, 2] * az)
+                    + ay * (Ii[1, 0] * ax + Ii[1, 1] * ay + Ii[1, 2] * az)
+                    + az * (Ii[2, 0] * ax + Ii[2, 1] * ay + Ii[2, 2] * az))
+    return e
 
 
 @njit(cache=True)
 def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
     −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
-    N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
-    Rl, pl, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
-    ww, vw = np.empty((nb, 3)), np.empty((nb, 3))
-    for s in range(N):
+    nb = I.shape[0]
+    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
+    for s in range(Q.shape[0]):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
             return bad
-        fk_pass(I, F, Q[s], V[s], Rl, pl, Rw, pw, ww, vw)
-        e = 0.0
-        for b in range(nb):
-            R = Rw[b]
-            cx = R[0, 0] * com[b, 0] + R[0, 1] * com[b, 1] + R[0, 2] * com[b, 2]     # R c: CoM from the origin
-            cy = R[1, 0] * com[b, 0] + R[1, 1] * com[b, 1] + R[1, 2] * com[b, 2]
-            cz = R[2, 0] * com[b, 0] + R[2, 1] * com[b, 1] + R[2, 2] * com[b, 2]
-            if nv == 0:                                                            # V: m (−g)ᵀ c_world
-                e += mass[b] * (mg[0] * (pw[b, 0] + cx) + mg[1] * (pw[b, 1] + cy) + mg[2] * (pw[b, 2] + cz))
-                continue
-            wx, wy, wz = ww[b, 0], ww[b, 1], ww[b, 2]
-            ux = vw[b, 0] + wy * cz - wz * cy                                      # v_C = v_o + ω × R c
-            uy = vw[b, 1] + wz * cx - wx * cz
-            uz = vw[b, 2] + wx * cy - wy * cx
-            ax = R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz                        # ω' = Rᵀ ω
-            ay = R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz
-            az = R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz
-            Ii = inertia[b]
-            e += 0.5 * (mass[b] * (ux * ux + uy * uy + uz * uz)
-                        + ax * (Ii[0, 0] * ax + Ii[0, 1] * ay + Ii[0, 2] * az)
-                        + ay * (Ii[1, 0] * ax + Ii[1, 1] * ay + Ii[1, 2] * az)
-                        + az * (Ii[2, 0] * ax + Ii[2, 1] * ay + Ii[2, 2] * az))
-        out[s] = e
-        if not np.isfinite(e):
+        out[s] = energy_of(I, F, Q[s], V[s], R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb],
+                           B3[3 * nb:])
+        if not np.isfinite(out[s]):
             return -2 - nb - s
     return -1
+
+
+@njit(cache=True)
+def energy_one(I, F, q, v):
+    """The energy of one state (``energy_of``): q (nq,), v (nv,) or (0,); non-finite for a non-finite input."""
+    nb = I.shape[0]
+    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
+    return energy_of(I, F, q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
 
 
 def _energy(model, call, *arrays):
@@ -79,9 +95,22 @@ def _energy(model, call, *arrays):
 
 def kinetic_energy(model, q, v):
     """T = Σ_links ½ m |v_C|² + ½ ωᵀ (R I Rᵀ) ω, v_C = v_o + ω × R c (world), float or (N,)."""
+    k = fast2(model, q, v)
+    if k is not None:                             # one float64 state: a finite result is the answer
+        e = energy_one(k[0], k[1], q, v)
+        if e - e == 0.0:
+            return e
     return _energy(model, "kinetic_energy", q, v)
 
 
 def potential_energy(model, q):
     """V = −Σ_links m gᵀ c (gravity g in the base frame, CoM c in world coordinates), float or (N,)."""
+    k = fast1(model, q)
+    if k is not None:
+        e = energy_one(k[0], k[1], q, _NO_V)
+        if e - e == 0.0:
+            return e
     return _energy(model, "potential_energy", q)
+
+
+_NO_V = np.empty(0)

@@ -24,7 +24,7 @@ import numpy as np
 from .._jit import njit
 from ..errors import InputError
 from .core import fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
-from .state import as_batch, check_output, fast_shape, frame_of, quiet, raise_kernel_error, unbatch
+from .state import as_batch, check_output, fast1, fast2, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
 
@@ -269,11 +269,14 @@ def frame_row(model, frame):
     return row
 
 
-def _frame_fast(model, call, q, v, frame, want, local):
-    """frame_one on one float64 state (``fast_shape`` == 1): out (4, 3) or (6, nv)."""
-    b, X = frame_row(model, frame)
+def _frame_fast(model, k, call, q, v, frame, want, local):
+    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): out (4, 3) or (6, nv)."""
+    try:
+        b, X = model._frame_rows[frame]
+    except (AttributeError, KeyError, TypeError):
+        b, X = frame_row(model, frame)
     out = np.empty((4, 3) if want == 0 else (6, model.nv))
-    code = frame_one(*kernel_arrays(model), q, _NO_V if v is None else v, b, X, want, local, out)
+    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, b, X, want, local, out)
     if code != -1:
         inputs = dict(q=q) if v is None else dict(q=q, v=v)
         if code >= 0:                                            # a non-finite input
@@ -302,8 +305,9 @@ def _frame_terms(model, call, frame, Q, V, want, reference):
 
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
-    if fast_shape(model, q) == 1:
-        out = _frame_fast(model, "frame_placement", q, None, frame, 0, False)
+    k = fast1(model, q)
+    if k is not None:
+        out = _frame_fast(model, k, "frame_placement", q, None, frame, 0, False)
         return out[:3], out[3]
     return _frame_placement(model, q, frame)
 
@@ -319,9 +323,9 @@ def _frame_placement(model, q, frame):
 def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
-    local = _LOCAL.get(reference) if type(reference) is str else None
-    if local is not None and fast_shape(model, q) == 1:
-        return _frame_fast(model, "frame_jacobian", q, None, frame, 1, local)
+    k = fast1(model, q)
+    if k is not None and type(reference) is str and reference in _LOCAL:
+        return _frame_fast(model, k, "frame_jacobian", q, None, frame, 1, _LOCAL[reference])
     return _frame_jacobian(model, q, frame, reference)
 
 
@@ -336,9 +340,9 @@ def _frame_jacobian(model, q, frame, reference):
 def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
     docstring gives the columns)."""
-    local = _LOCAL.get(reference) if type(reference) is str else None
-    if local is not None and fast_shape(model, q, v) == 1:
-        return _frame_fast(model, "frame_jacobian_dot", q, v, frame, 2, local)
+    k = fast2(model, q, v)
+    if k is not None and type(reference) is str and reference in _LOCAL:
+        return _frame_fast(model, k, "frame_jacobian_dot", q, v, frame, 2, _LOCAL[reference])
     return _frame_jacobian_dot(model, q, v, frame, reference)
 
 

@@ -32,8 +32,8 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from ..model import MimicModel
-from .core import finite_state, kernel_arrays, unpack
-from .state import (as_batch, check_output, fast_shape, fast_wrench_rows, mimic_call, quiet, raise_kernel_error,
+from .core import finite_state, kernel_arrays, unpack, wrench_rows_of
+from .state import (as_batch, check_output, fast1, fast2, fast3, fast_shape, fast_wrenches, mimic_call, quiet, raise_kernel_error,
                     unbatch,
                     wrench_rows)
 
@@ -41,6 +41,7 @@ TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
 _NO_X, _NO_B, _NO_P, _NO_T = np.zeros((0, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 0, NT))
 _QVA = ("q", "v", "a")
+_NO_V = np.empty(0)
 
 
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -55,22 +56,29 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     -------
     tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
     """
-    nd = fast_shape(model, q, v, a) if f_ext_frame == "local" or f_ext is not None else 0
-    if nd == 1 and f_ext is not None:                           # one state with wrenches: rows kept per model
-        ext = fast_wrench_rows(model, f_ext, f_ext_frame)
+    k = fast3(model, q, v, a) if f_ext is None and f_ext_frame == "local" else None
+    if k is not None:                                           # one float64 state: straight into the kernel
+        tau = np.empty(v.shape)
+        code = rnea_one(k[0], k[1], q, v, a, tau)
+        if code == -1:
+            return tau
+        raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
+    if f_ext is not None:                                       # one state with wrenches: rows kept per model
+        k = fast3(model, q, v, a)
+        ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
         if ext is not None:
             tau = np.empty(v.shape)
-            code = rnea_kernel(*kernel_arrays(model), q[None], v[None], a[None], *ext, f_ext_frame == "world",
-                               tau[None], _NO_T)
-            if code == -1:
+            if rnea_fext_one(k[0], k[1], q, v, a, *ext, f_ext_frame == "world", tau) == -1:
                 return tau
         nd = 0                                                  # else the checked path says what is wrong
+    else:
+        nd = fast_shape(model, q, v, a) if f_ext_frame == "local" else 0
     if nd == 1:                                                 # one state, no Python-side reshapes
         tau = np.empty(v.shape)
         code = rnea_one(*kernel_arrays(model), q, v, a, tau)
     elif nd == 2 and f_ext is None:
         tau = np.empty(v.shape)
-        code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, _NO_T)
+        code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
     elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
         return mimic_call("rnea", model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
     else:                                                       # checked and converted first
@@ -95,6 +103,12 @@ def gravity_torques(model, q):
 def _bias(model, q, v, call):
     """rnea(q, v, 0) (v = None: rnea(q, 0, 0)) through bias_one / bias_kernel; anything but float64 arrays
     is checked and converted first."""
+    k = fast1(model, q) if v is None else fast2(model, q, v)
+    if k is not None:                                         # one float64 state: straight into the kernel
+        tau = np.empty(model.state_shapes[1])
+        code = bias_one(k[0], k[1], q, _NO_V if v is None else v, tau)
+        if code == -1:
+            return tau
     arrays = (q,) if v is None else (q, v)
     nd = fast_shape(model, *arrays)
     if nd == 0 and type(model) is MimicModel:                 # Gᵀ h_full, Gᵀ g_full (dynamics/mimic.py)
@@ -211,6 +225,13 @@ def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` with N = 1."""
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B, _NO_P, False,
                        tau[np.newaxis, :], np.zeros((0, 0, NT)))
+
+
+@njit(cache=True)
+def rnea_fext_one(I, F, q, v, a, ws, keep, R, xb, xp, world, tau):
+    """τ (nv,) of one state with external wrenches in ``state.fast_wrenches``' form: ``rnea_kernel`` with N = 1."""
+    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], wrench_rows_of(ws, keep, R),
+                       xb, xp, world, tau[np.newaxis, :], np.zeros((0, 0, NT)))
 
 
 @njit(cache=True)

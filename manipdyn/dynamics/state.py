@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InputError, NumericalError, SingularError
 from ..model import MimicModel, Model
+from .core import kernel_arrays, wrench_block
 
 _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
 
@@ -199,40 +200,62 @@ def wrench_rows(model, f_ext, f_ext_frame, N):
     return X, body, point
 
 
-def fast_wrench_rows(model, f_ext, f_ext_frame):
-    """``wrench_rows`` for one state, when f_ext is a dict {frame name: (force (3,), moment (3,))} of float64
-    values: X (1, K, 6), body (K,), point (K, 3), with each name set's lookups (bodies, points, frame→body
-    rotations) built once and kept on the model. None when anything is unusual (then ``wrench_rows`` checks
-    and converts, and raises the error). Finiteness is left to the kernel: a non-finite wrench makes a
-    non-finite result, and the caller then takes the checked path."""
+def fast_wrenches(model, f_ext, f_ext_frame):
+    """One state's f_ext in the kernels' compact form, when it is a dict {frame name: (force (3,), moment (3,))}
+    of float64 arrays in tuples: (ws, keep, R, body, point) — ws = the (force, moment) pairs as given, keep
+    (K,) the indices of those on moving bodies (a wrench on the fixed base changes no torque), R (K, 3, 3) the
+    rotation frame → body axes for "local" (identity for "world"), body (K,) and point (K, 3) as
+    ``wrench_rows``'. The name lookups are kept on the model per name set; the kernel (core.wrench_block)
+    turns the pairs into rows. None when anything is unusual (then ``wrench_rows`` checks and converts, and
+    raises the error). Finiteness is left to the kernel: a non-finite wrench makes a non-finite result, and
+    the caller then takes the checked path."""
     if type(f_ext) is not dict or not f_ext or type(f_ext_frame) is not str:
         return None
+    ws = tuple(f_ext.values())
+    for pair in ws:
+        if type(pair) is not tuple or len(pair) != 2:
+            return None
+        for x in pair:
+            if type(x) is not _ND or x.dtype is not _F64 or x.shape != (3,):
+                return None
     key = (tuple(f_ext), f_ext_frame)
+    try:
+        rows = model._wrench_rows[key]
+    except (AttributeError, KeyError, TypeError):
+        rows = _wrench_lookup(model, key)
+        if rows is None:
+            return None
+    return (ws,) + rows
+
+
+def _wrench_lookup(model, key):
+    """(keep, R, body, point) of a (names, f_ext_frame) key, kept in model._wrench_rows; None for an unknown
+    name or frame word."""
+    names, frame = key
+    if type(model) is not Model or frame not in ("local", "world") or \
+            not all(type(k) is str and k in model.frames for k in names):
+        return None
     cache = model.__dict__.get("_wrench_rows")
     if cache is None:
         cache = {}
         object.__setattr__(model, "_wrench_rows", cache)     # a cache, not model data (Model is frozen)
-    rows = cache.get(key)
-    if rows is None:
-        if f_ext_frame not in ("local", "world") or not all(type(k) is str and k in model.frames for k in key[0]):
-            return None
-        frs = [model.frames[k] for k in key[0]]
-        keep = np.array([k for k, fr in enumerate(frs) if fr.body >= 0], np.int64)
-        RT = np.array([frs[k].R.T if f_ext_frame == "local" else np.eye(3) for k in keep]).reshape(-1, 3, 3)
-        rows = (keep, None if len(keep) == len(frs) else keep, np.array([frs[k].body for k in keep], np.int64),
-                np.array([frs[k].p for k in keep], float).reshape(-1, 3), RT, f_ext_frame == "local")
-        cache[key] = rows
-    keep, pick, body, point, RT, local = rows
-    try:
-        W = np.array(list(f_ext.values()))
-    except (TypeError, ValueError):
+    frs = [model.frames[k] for k in names]
+    keep = np.array([k for k, fr in enumerate(frs) if fr.body >= 0], np.int64)
+    R = np.array([frs[k].R if frame == "local" else np.eye(3) for k in keep], float).reshape(-1, 3, 3)
+    rows = (keep, R, np.array([frs[k].body for k in keep], np.int64),
+            np.array([frs[k].p for k in keep], float).reshape(-1, 3))
+    cache[key] = rows
+    return rows
+
+
+def fast_wrench_rows(model, f_ext, f_ext_frame):
+    """``wrench_rows`` for one state from ``fast_wrenches``: X (1, K, 6), body (K,), point (K, 3); None when
+    ``fast_wrenches`` is."""
+    fw = fast_wrenches(model, f_ext, f_ext_frame)
+    if fw is None:
         return None
-    if W.dtype != np.float64 or W.shape != (len(key[0]), 2, 3):
-        return None
-    if pick is not None:
-        W = W[pick]
-    X = np.matmul(W, RT) if local else W                   # frame axes -> body axes: x_body = R x_frame
-    return X.reshape(1, len(keep), 6), body, point
+    ws, keep, R, body, point = fw
+    return wrench_block(ws, keep, R), body, point
 
 
 def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
@@ -257,31 +280,63 @@ def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
     return F, Mo
 
 
-_F64 = np.dtype(np.float64)
+_F64, _ND = np.dtype(np.float64), np.ndarray
 
 
 def fast_shape(model, *arrays):
     """1 or 2 when the arrays are float64 ndarrays q (nq,) or (N, nq) and then (nv,) or (N, nv) of the
     same N, with nv ≥ 1 — the compiled kernels then take them as they are (any memory layout) and check
     finiteness themselves; 0 otherwise (take as_batch's checks and conversions). (Written for speed: it
-    runs before every single-state call.)"""
+    runs before every single-state call; one state costs ~100 ns here.)"""
     x0 = arrays[0]
-    if type(x0) is not np.ndarray or x0.dtype is not _F64 or type(model) is not Model:
+    if type(x0) is not _ND or x0.dtype is not _F64 or type(model) is not Model:
         return 0
-    shape = x0.shape
-    nd = len(shape)
-    if nd == 1:
-        want = (model.nv,)
-    elif nd == 2:
-        want = (shape[0], model.nv)
-    else:
-        return 0
-    if shape[-1] != model.nq or not want[-1]:
-        return 0
-    for x in arrays[1:]:
-        if type(x) is not np.ndarray or x.dtype is not _F64 or x.shape != want:
+    sq, sv = model.state_shapes
+    if x0.shape == sq:
+        if not sv[0]:
             return 0
-    return nd
+        for x in arrays[1:]:
+            if type(x) is not _ND or x.dtype is not _F64 or x.shape != sv:
+                return 0
+        return 1
+    shape = x0.shape
+    if len(shape) != 2 or shape[1] != sq[0] or not sv[0]:
+        return 0
+    want = (shape[0], sv[0])
+    for x in arrays[1:]:
+        if type(x) is not _ND or x.dtype is not _F64 or x.shape != want:
+            return 0
+    return 2
+
+
+def fast1(model, q):
+    """The model's kernel arrays (I, F) when q is one float64 configuration (nq,) of a plain Model with nv ≥ 1:
+    the single-state kernels then take it as it is and check finiteness themselves. None otherwise (the
+    caller takes the checked path, which raises the right error). ~60 ns: it runs before every one-state call."""
+    if type(q) is _ND and q.dtype is _F64 and type(model) is Model:
+        sq, sv = model.state_shapes
+        if q.shape == sq and sv[0]:
+            return kernel_arrays(model)
+    return None
+
+
+def fast2(model, q, v):
+    """``fast1`` for (q, v): v a float64 (nv,)."""
+    if type(v) is _ND and v.dtype is _F64 and type(q) is _ND and q.dtype is _F64 and type(model) is Model:
+        sq, sv = model.state_shapes
+        if q.shape == sq and v.shape == sv and sv[0]:
+            return kernel_arrays(model)
+    return None
+
+
+def fast3(model, q, v, a):
+    """``fast1`` for (q, v, a): v and a float64 (nv,)."""
+    if (type(a) is _ND and a.dtype is _F64 and type(v) is _ND and v.dtype is _F64 and type(q) is _ND
+            and q.dtype is _F64 and type(model) is Model):
+        sq, sv = model.state_shapes
+        if q.shape == sq and v.shape == sv and a.shape == sv and sv[0]:
+            return kernel_arrays(model)
+    return None
 
 
 def raise_kernel_error(model, code, names, batches, call="", out_name="", out=None):
