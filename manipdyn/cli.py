@@ -27,7 +27,7 @@ MAX_SWEEP_FILES = 10_000   # validate --against DIR: URDF files one sweep takes
 EPILOG = f"""\
 exit codes:
   0  success
-  1  a validated term failed (validate only)
+  1  a validated term failed (validate), or a target was missed (bench --check)
   2  bad input or usage: a bad argument, a missing or unreadable file, a URDF or trajectory manipdyn
      refuses, an interrupted run (Ctrl-C), or an internal error; one line on stderr
      ("manipdyn <command>: error: ..."), no traceback unless --debug
@@ -346,11 +346,40 @@ def _play(args) -> int:
     return viz.serve(sc)
 
 
+MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
+
+
 def _bench(args) -> int:
-    from .bench import run
-    run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
-    print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
-    return 0
+    from .bench import targets
+    if args.from_report is not None:
+        if args.out is not None or args.quick:
+            raise InputError("--from checks an existing report: --out and --quick do not apply")
+        data = _read_bench_report(args.from_report)
+    else:
+        if args.out is None:
+            raise InputError("--out FOLDER is required (or --from REPORT.json to check an existing report)")
+        from .bench import run
+        data = run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
+        print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
+        if not args.check:
+            return 0
+    results = targets.evaluate(data)
+    print(targets.text(results))
+    return 1 if any(r.misses for r in results) else 0
+
+
+def _read_bench_report(path) -> dict:
+    """A report.json written by `manipdyn bench` (JSON object), size-capped; InputError otherwise."""
+    path = Path(path)
+    if path.stat().st_size > MAX_REPORT_BYTES:
+        raise InputError(f"{path}: larger than {MAX_REPORT_BYTES // 2**20} MiB, not a bench report")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(f"{path}: not a bench report (invalid JSON: {exc})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: not a bench report (a JSON {type(data).__name__}, not an object)")
+    return data
 
 
 def _example(args) -> int:
@@ -456,8 +485,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"time samples, 2..{MAX_SAMPLES} (default 401; spm uses at most 101)")
     e.set_defaults(func=_example)
     b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
-    b.add_argument("--out", required=True, help="folder for report.md, report.json and PNG plots")
-    b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (about a minute)")
+    b.add_argument("--out", help="folder for report.md, report.json and PNG plots (required unless --from)")
+    b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (a few minutes)")
+    b.add_argument("--check", action="store_true",
+                   help="then check the report against the issue's targets (manipdyn/bench/targets.py): print "
+                        "them, exit 1 if any is missed")
+    b.add_argument("--from", dest="from_report", metavar="REPORT.json",
+                   help="check this existing report.json against the targets, without running the bench "
+                        "(implies --check)")
     b.set_defaults(func=_bench)
     return p
 
@@ -563,6 +598,8 @@ def _preflight(args):
             continue
         if getattr(args, option, None) and not (args.command == "inspect" and getattr(args, option) == "-"):
             _check_output_file(getattr(args, option), f"--{option}")
+    if getattr(args, "from_report", None) is not None:
+        _check_input_file(args.from_report, "bench report")
     if getattr(args, "out", None) is not None:
         _check_output_dir(args.out, "--out")
 

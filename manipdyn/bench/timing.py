@@ -12,10 +12,13 @@ from ..io.urdf import load_urdf_string
 
 
 def per_call(f, repeat=5, min_time=0.05) -> float:
-    """Seconds per call of f(): autoranged loop count, best of ``repeat`` runs."""
+    """Seconds per call of f(): autoranged loop count, best of ``repeat`` runs (``min_time`` ≤ 0: one call per
+    run, no autoranging — for calls that are long already, such as a whole batch)."""
     timer = timeit.Timer(f)
-    number, _ = timer.autorange()
-    number = max(1, int(number * min_time / 0.2))
+    number = 1
+    if min_time > 0:
+        number, _ = timer.autorange()
+        number = max(1, int(number * min_time / 0.2))
     return min(timer.repeat(repeat=repeat, number=number)) / number
 
 
