@@ -216,16 +216,20 @@ def advice(d) -> str:
         text = "- **Forward dynamics: ABA or Cholesky (M⁻¹).**"
         if pairs:
             r = [p for p, _ in pairs]
-            word = "slower than" if min(r) > 1 else "faster than" if max(r) < 1 else "within reach of"
-            text += f" One state, the Cholesky route costs {_span(r)}× ABA's time ({word} ABA on every robot here)."
+            word = ("slower on every robot here" if min(r) > 1 else "faster on every robot here" if max(r) < 1
+                    else "faster on some robots here, slower on others")
+            text += f" One state, the Cholesky route costs {_span(r)}× ABA's time ({word})."
         if hard:
             worst = max({c for c, _ in hard}, key=lambda c: hard[(c, "ABA")]["cond_median"])
             a, ch = hard[(worst, "ABA")], hard[(worst, "Cholesky (M⁻¹)")]
+            p = hard.get((worst, "Pinocchio aba"))
             better = "ABA" if a["p95"] < ch["p95"] else "Cholesky (M⁻¹)"
             other = "Cholesky (M⁻¹)" if better == "ABA" else "ABA"
             text += (f" On the worst-conditioned hard case ({worst}, median cond(M) {a['cond_median']:.0e}) the q̈ "
                      f"error is {a['median']:.0e} median / {a['p95']:.0e} p95 with ABA and {ch['median']:.0e} / "
-                     f"{ch['p95']:.0e} with Cholesky: on ill-conditioned models use {better}"
+                     f"{ch['p95']:.0e} with Cholesky"
+                     + (f" (Pinocchio's aba: {p['median']:.0e} / {p['p95']:.0e})" if p else "")
+                     + f": on ill-conditioned models use {better}"
                      + (", which never forms M." if better == "ABA" else f" ({other} loses accuracy here)."))
         out.append(text)
     crba = [(lat[(rob, "mass_matrix (lagrange)")]["ours_us"] / lat[(rob, "mass_matrix (crba)")]["ours_us"], rob)
