@@ -352,12 +352,8 @@ MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 def _bench(args) -> int:
     from .bench import targets
     if args.from_report is not None:
-        if args.out is not None or args.quick:
-            raise InputError("--from checks an existing report: --out and --quick do not apply")
         data = _read_bench_report(args.from_report)
     else:
-        if args.out is None:
-            raise InputError("--out FOLDER is required (or --from REPORT.json to check an existing report)")
         from .bench import run
         data = run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
         print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
@@ -486,7 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.set_defaults(func=_example)
     b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
     b.add_argument("--out", help="folder for report.md, report.json and PNG plots (required unless --from)")
-    b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (a few minutes)")
+    b.add_argument("--quick", action="store_true", help="fewer sizes, states and repeats (about a minute once the kernels are compiled)")
     b.add_argument("--check", action="store_true",
                    help="then check the report against the issue's targets (manipdyn/bench/targets.py): print "
                         "them, exit 1 if any is missed")
@@ -604,6 +600,16 @@ def _preflight(args):
         _check_output_dir(args.out, "--out")
 
 
+def _usage_problem(args) -> str | None:
+    """Options that do not go together (argparse cannot say it): refused with the subcommand's usage."""
+    if args.command == "bench":
+        if args.from_report is not None and (args.out is not None or args.quick):
+            return "--from checks an existing report: --out and --quick do not apply"
+        if args.from_report is None and args.out is None:
+            return "--out FOLDER is required (or --from REPORT.json to check an existing report)"
+    return None
+
+
 def _one_line(text) -> str:
     """A message on one line (line breaks become ' | ')."""
     return " | ".join(line.strip() for line in str(text).splitlines() if line.strip()) or "(no message)"
@@ -623,6 +629,8 @@ def main(argv=None) -> int:
         args, extra = parser.parse_known_args(argv)
         if extra:                         # refused by the subcommand, with its usage
             parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+        if _usage_problem(args):
+            parser.commands[args.command].error(_usage_problem(args))
     except SystemExit as exc:           # argparse: usage + one error line (2), or --help (0)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:
