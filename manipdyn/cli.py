@@ -27,7 +27,7 @@ MAX_SWEEP_FILES = 10_000   # validate --against DIR: URDF files one sweep takes
 EPILOG = f"""\
 exit codes:
   0  success
-  1  a validated term failed (validate only)
+  1  a validated term failed (validate), or a target was missed (bench --check)
   2  bad input or usage: a bad argument, a missing or unreadable file, a URDF or trajectory manipdyn
      refuses, an interrupted run (Ctrl-C), or an internal error; one line on stderr
      ("manipdyn <command>: error: ..."), no traceback unless --debug
@@ -346,11 +346,36 @@ def _play(args) -> int:
     return viz.serve(sc)
 
 
+MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
+
+
 def _bench(args) -> int:
-    from .bench import run
-    run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
-    print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
-    return 0
+    from .bench import targets
+    if args.from_report is not None:
+        data = _read_bench_report(args.from_report)
+    else:
+        from .bench import run
+        data = run(args.out, quick=args.quick, progress=lambda msg: print(msg, file=sys.stderr))
+        print(f"wrote {Path(args.out) / 'report.md'}, report.json and plots")
+        if not args.check:
+            return 0
+    results = targets.evaluate(data)
+    print(targets.text(results))
+    return 1 if any(r.misses for r in results) else 0
+
+
+def _read_bench_report(path) -> dict:
+    """A report.json written by `manipdyn bench` (JSON object), size-capped; InputError otherwise."""
+    path = Path(path)
+    if path.stat().st_size > MAX_REPORT_BYTES:
+        raise InputError(f"{path}: larger than {MAX_REPORT_BYTES // 2**20} MiB, not a bench report")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(f"{path}: not a bench report (invalid JSON: {exc})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: not a bench report (a JSON {type(data).__name__}, not an object)")
+    return data
 
 
 def _example(args) -> int:
@@ -456,8 +481,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"time samples, 2..{MAX_SAMPLES} (default 401; spm uses at most 101)")
     e.set_defaults(func=_example)
     b = sub.add_parser("bench", help="speed against error, side by side with Pinocchio")
-    b.add_argument("--out", required=True, help="folder for report.md, report.json and PNG plots")
-    b.add_argument("--quick", action="store_true", help="fewer sizes and repeats (about a minute)")
+    b.add_argument("--out", help="folder for report.md, report.json and PNG plots (required unless --from)")
+    b.add_argument("--quick", action="store_true", help="fewer sizes, states and repeats (about a minute once the kernels are compiled)")
+    b.add_argument("--check", action="store_true",
+                   help="then check the report against the issue's targets (manipdyn/bench/targets.py): print "
+                        "them, exit 1 if any is missed")
+    b.add_argument("--from", dest="from_report", metavar="REPORT.json",
+                   help="check this existing report.json against the targets, without running the bench "
+                        "(implies --check)")
     b.set_defaults(func=_bench)
     return p
 
@@ -563,8 +594,20 @@ def _preflight(args):
             continue
         if getattr(args, option, None) and not (args.command == "inspect" and getattr(args, option) == "-"):
             _check_output_file(getattr(args, option), f"--{option}")
+    if getattr(args, "from_report", None) is not None:
+        _check_input_file(args.from_report, "bench report")
     if getattr(args, "out", None) is not None:
         _check_output_dir(args.out, "--out")
+
+
+def _usage_problem(args) -> str | None:
+    """Options that do not go together (argparse cannot say it): refused with the subcommand's usage."""
+    if args.command == "bench":
+        if args.from_report is not None and (args.out is not None or args.quick):
+            return "--from checks an existing report: --out and --quick do not apply"
+        if args.from_report is None and args.out is None:
+            return "--out FOLDER is required (or --from REPORT.json to check an existing report)"
+    return None
 
 
 def _one_line(text) -> str:
@@ -586,6 +629,8 @@ def main(argv=None) -> int:
         args, extra = parser.parse_known_args(argv)
         if extra:                         # refused by the subcommand, with its usage
             parser.commands[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+        if _usage_problem(args):
+            parser.commands[args.command].error(_usage_problem(args))
     except SystemExit as exc:           # argparse: usage + one error line (2), or --help (0)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:

@@ -3,10 +3,12 @@ from __future__ import annotations
 
 import time
 import warnings
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from ..constraints import constrained_forward_dynamics
+from ..errors import ManipdynError
 from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
 from ..dynamics.energy import kinetic_energy, potential_energy
@@ -27,49 +29,38 @@ def _load(path, **kw):
         return load_urdf(path, **kw)
 
 
-def latency(paths, quick=False):
-    """a. Single-state latency of the public, input-checked calls vs Pinocchio's Python calls, with errors."""
-    P, rows = pin(), []
-    for path in paths:
+class Setup(NamedTuple):
+    """One robot to time: our model, Pinocchio's model of the same file, and our q -> Pinocchio's q."""
+    label: str
+    model: object
+    pm: object
+    to_pin: Callable
+
+
+def setups(paths=(), chain=None, open_trees=()):
+    """The robots of the latency and batched sections: each URDF of ``paths``, the random serial chain of
+    ``chain`` joints (timing.random_chain(chain, seed=chain)), and the open tree of each closed model in
+    ``open_trees`` (its loop closures ignored: the tree calls apply to it, Pinocchio loads the same tree)."""
+    out = []
+    for path, suffix in [(p, "") for p in paths] + [(p, " (open tree)") for p in open_trees]:
         model = _load(path)
         ref = Reference(model, path)
-        pm, pd = ref.pm, ref.pd
-        Q, V, A = random_states(model, 50 if quick else 200, np.random.default_rng(0))
-        q, v, a = Q[0], V[0], A[0]
-        pq = ref.to_pin_q(q)
-        cases = [
-            ("rnea", lambda: rnea(model, q, v, a), lambda: P.rnea(pm, pd, pq, v, a),
-             lambda s: (rnea(model, Q[s], V[s], A[s]), P.rnea(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
-            ("mass_matrix (crba)", lambda: mass_matrix(model, q), lambda: P.crba(pm, pd, pq),
-             lambda s: (mass_matrix(model, Q[s]), P.crba(pm, pd, ref.to_pin_q(Q[s])))),
-            ("mass_matrix (lagrange)", lambda: mass_matrix(model, q, method="lagrange"), lambda: P.crba(pm, pd, pq),
-             lambda s: (mass_matrix(model, Q[s], method="lagrange"), P.crba(pm, pd, ref.to_pin_q(Q[s])))),
-            ("coriolis_matrix", lambda: coriolis_matrix(model, q, v),
-             lambda: P.computeCoriolisMatrix(pm, pd, pq, v),
-             lambda s: (coriolis_matrix(model, Q[s], V[s]), P.computeCoriolisMatrix(pm, pd, ref.to_pin_q(Q[s]), V[s]))),
-            ("gravity_torques", lambda: gravity_torques(model, q), lambda: P.computeGeneralizedGravity(pm, pd, pq),
-             lambda s: (gravity_torques(model, Q[s]), P.computeGeneralizedGravity(pm, pd, ref.to_pin_q(Q[s])))),
-            ("aba", lambda: aba(model, q, v, a), lambda: P.aba(pm, pd, pq, v, a),
-             lambda s: (aba(model, Q[s], V[s], A[s]), P.aba(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
-            ("joint_torque_regressor", lambda: joint_torque_regressor(model, q, v, a),
-             lambda: P.computeJointTorqueRegressor(pm, pd, pq, v, a),
-             lambda s: (joint_torque_regressor(model, Q[s], V[s], A[s]), ref.regressor(Q[s], V[s], A[s]))),
-            ("rnea_derivatives", lambda: rnea_derivatives(model, q, v, a),
-             lambda: P.computeRNEADerivatives(pm, pd, pq, v, a),
-             lambda s: (rnea_derivatives(model, Q[s], V[s], A[s]),
-                        P.computeRNEADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
-            ("aba_derivatives", lambda: aba_derivatives(model, q, v, a),
-             lambda: P.computeABADerivatives(pm, pd, pq, v, a),
-             lambda s: (aba_derivatives(model, Q[s], V[s], A[s]),
-                        P.computeABADerivatives(pm, pd, ref.to_pin_q(Q[s]), V[s], A[s]))),
-        ]
-        for name, ours, theirs, pair in cases:
-            ours(), theirs()
-            t_ours, t_pin = per_call(ours, repeat=3 if quick else 7), per_call(theirs, repeat=3 if quick else 7)
-            err = max(error(*[np.array(x) for x in pair(s)]) for s in range(len(Q)))
-            rows.append(dict(robot=model.name, call=name, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
-                             ratio=t_ours / t_pin, err=err))
-    return rows + compiled_term_latency(paths, quick)
+        out.append(Setup(model.name + suffix, model, ref.pm, ref.to_pin_q))
+    if chain:
+        model, pm = random_chain(chain, seed=chain)
+        out.append(Setup(model.name, model, pm, lambda q: q))   # revolute and prismatic only: same q
+    return out
+
+
+class Case(NamedTuple):
+    """One public call against Pinocchio's cheapest route to the same numbers."""
+    ours: Callable          # (q, v, a) -> result: one state or a batch (N, nv), as the user calls it
+    theirs: Callable        # s -> Pinocchio's result for state s (its q and fext converted beforehand)
+    route: str              # Pinocchio's route, as timed
+    parallel: str | None    # pin.<parallel>InParallel exists for this call (batches)
+    as_ours: Callable = np.asarray      # result -> array, for the error only
+    as_pin: Callable = np.asarray
+    by_cond: bool = False   # a solve: the error is divided by cond(M)
 
 
 def _pin_fext(P, pm, pd, pq, f_ext):
@@ -85,82 +76,151 @@ def _pin_fext(P, pm, pd, pq, f_ext):
     return vec
 
 
-def compiled_term_latency(paths, quick=False, chain=32):
-    """a (continued). The other public calls, one state, against Pinocchio's cheapest Python route to the same
-    numbers (conversions — q, fext — outside the timing): on each arm of ``paths`` and a random chain of
-    ``chain`` joints. Errors: the worst over the states (Cholesky route and aba with f_ext: divided by cond(M))."""
-    P, rows = pin(), []
-    setups = []
-    for path in paths:
-        model = _load(path)
-        ref = Reference(model, path)
-        setups.append((model, ref.pm, ref.to_pin_q))
-    model, pm = random_chain(chain, seed=chain)
-    setups.append((model, pm, lambda q: q))
-    for model, pm, to_pin in setups:
-        pd = pm.createData()
-        Q, V, A = random_states(model, 5 if quick else 20, np.random.default_rng(0))
-        frame = model.body_names[-1]
-        fid = pm.getFrameId(frame)
-        wrench = (np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.4]))
-        fx = {frame: wrench}
-        PQ = [to_pin(q) for q in Q]
+def _sym(M):
+    return np.triu(M) + np.triu(M, 1).T
+
+
+def cases(P, st, Q, V, A, f_ext=True):
+    """Every public call that takes a state, with Pinocchio's route for states Q, V, A (A is τ for the forward
+    calls); the conversions (q in Pinocchio's order, fext per joint) are made here, outside any timing.
+    ``f_ext=False`` leaves out the two f_ext calls (and their conversions).
+    Returns ({call: Case}, Pinocchio's q per state, cond(s) = cond(M) of state s)."""
+    model, pm = st.model, st.pm
+    pd = pm.createData()
+    frame = model.body_names[-1]
+    fid = pm.getFrameId(frame)
+    fx = {frame: (np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.4]))}
+    PQ = [st.to_pin(q) for q in Q]
+    LWA, nv, nb = P.LOCAL_WORLD_ALIGNED, model.nv, pm.njoints - 1
+
+    def placement(s):
+        P.forwardKinematics(pm, pd, PQ[s])
+        return P.updateFramePlacement(pm, pd, fid)
+
+    def jdot(s):
+        P.computeJointJacobiansTimeVariation(pm, pd, PQ[s], V[s])
+        return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
+
+    out = {
+        "rnea": Case(lambda q, v, a: rnea(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
+        "aba": Case(lambda q, v, a: aba(model, q, v, a), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
+        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix(model, q), lambda s: P.crba(pm, pd, PQ[s]), "crba",
+                                   None, as_pin=_sym),
+        "mass_matrix (lagrange)": Case(lambda q, v, a: mass_matrix(model, q, method="lagrange"),
+                                       lambda s: P.crba(pm, pd, PQ[s]), "crba", None, as_pin=_sym),
+        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix(model, q, v),
+                                lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), "computeCoriolisMatrix", None),
+        "gravity_torques": Case(lambda q, v, a: gravity_torques(model, q),
+                                lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity", None),
+        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects(model, q, v),
+                                  lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), "nonLinearEffects", None),
+        "frame_placement": Case(lambda q, v, a: frame_placement(model, q, frame), placement,
+                                "forwardKinematics + updateFramePlacement", None,
+                                as_ours=lambda x: np.r_[x[0].ravel(), x[1]],
+                                as_pin=lambda X: np.r_[X.rotation.ravel(), X.translation]),
+        "frame_jacobian": Case(lambda q, v, a: frame_jacobian(model, q, frame),
+                               lambda s: P.computeFrameJacobian(pm, pd, PQ[s], fid, LWA), "computeFrameJacobian", None),
+        "frame_jacobian_dot": Case(lambda q, v, a: frame_jacobian_dot(model, q, v, frame), jdot,
+                                   "computeJointJacobiansTimeVariation + getFrameJacobianTimeVariation", None),
+        "kinetic_energy": Case(lambda q, v, a: kinetic_energy(model, q, v),
+                               lambda s: P.computeKineticEnergy(pm, pd, PQ[s], V[s]), "computeKineticEnergy", None,
+                               as_ours=np.atleast_1d, as_pin=np.atleast_1d),
+        "potential_energy": Case(lambda q, v, a: potential_energy(model, q),
+                                 lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), "computePotentialEnergy", None,
+                                 as_ours=np.atleast_1d, as_pin=np.atleast_1d),
+        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics(model, q, v, a, method="cholesky"),
+                                            lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
+        "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives(model, q, v, a),
+                                 lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),
+                                 "computeRNEADerivatives", None),
+        "aba_derivatives": Case(lambda q, v, a: aba_derivatives(model, q, v, a),
+                                lambda s: P.computeABADerivatives(pm, pd, PQ[s], V[s], A[s]),
+                                "computeABADerivatives", None),
+        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor(model, q, v, a),
+                                       lambda s: P.computeJointTorqueRegressor(pm, pd, PQ[s], V[s], A[s]),
+                                       "computeJointTorqueRegressor", None,
+                                       as_pin=lambda Y: np.reshape(Y, (nv, 10 * nb))),   # eigenpy: 1 × n is (n,)
+    }
+    if f_ext:
         PF = [_pin_fext(P, pm, pd, pq, fx) for pq in PQ]
-        LWA = P.LOCAL_WORLD_ALIGNED
+        out["rnea with f_ext"] = Case(lambda q, v, a: rnea(model, q, v, a, f_ext=fx),
+                                      lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), "rnea(fext)", None)
+        out["aba with f_ext"] = Case(lambda q, v, a: aba(model, q, v, a, f_ext=fx),
+                                     lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), "aba(fext)", None,
+                                     by_cond=True)
+    return out, PQ, lambda s: float(np.linalg.cond(_sym(P.crba(pm, pd, PQ[s]))))
 
-        def sym(M):
-            return np.triu(M) + np.triu(M, 1).T
 
-        def placement(pq):
-            P.forwardKinematics(pm, pd, pq)
-            return P.updateFramePlacement(pm, pd, fid)
+def _err(case, ours, theirs, cond):
+    """The error measure (DESIGN.md §3) of one state's result; divided by cond(M) for a solve."""
+    e = error(np.asarray(case.as_ours(ours), float), np.asarray(case.as_pin(theirs), float))
+    return e / cond if case.by_cond else e
 
-        def jdot(pq, v):
-            P.computeJointJacobiansTimeVariation(pm, pd, pq, v)
-            return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
 
-        def cond(s):
-            return np.linalg.cond(P.crba(pm, pd, PQ[s]))
+def _row(x, s):
+    """Row s of a batched result (a tuple of arrays for frame_placement and the derivatives)."""
+    return tuple(y[s] for y in x) if isinstance(x, tuple) else x[s]
 
-        # name: (ours(s), Pinocchio's(s), error scale(s))
-        cases = {
-            "coriolis_matrix": (lambda s: coriolis_matrix(model, Q[s], V[s]),
-                                lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), None),
-            "nonlinear_effects": (lambda s: nonlinear_effects(model, Q[s], V[s]),
-                                  lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), None),
-            "gravity_torques": (lambda s: gravity_torques(model, Q[s]),
-                                lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), None),
-            "mass_matrix (lagrange)": (lambda s: mass_matrix(model, Q[s], method="lagrange"),
-                                       lambda s: P.crba(pm, pd, PQ[s]), None),
-            "frame_placement": (lambda s: frame_placement(model, Q[s], frame), lambda s: placement(PQ[s]), None),
-            "frame_jacobian": (lambda s: frame_jacobian(model, Q[s], frame),
-                               lambda s: P.computeFrameJacobian(pm, pd, PQ[s], fid, LWA), None),
-            "frame_jacobian_dot": (lambda s: frame_jacobian_dot(model, Q[s], V[s], frame),
-                                   lambda s: jdot(PQ[s], V[s]), None),
-            "kinetic_energy": (lambda s: kinetic_energy(model, Q[s], V[s]),
-                               lambda s: P.computeKineticEnergy(pm, pd, PQ[s], V[s]), None),
-            "potential_energy": (lambda s: potential_energy(model, Q[s]),
-                                 lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), None),
-            "forward_dynamics (cholesky) vs aba": (
-                lambda s: forward_dynamics(model, Q[s], V[s], A[s], method="cholesky"),
-                lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), cond),
-            "rnea with f_ext": (lambda s: rnea(model, Q[s], V[s], A[s], f_ext=fx),
-                                lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), None),
-            "aba with f_ext": (lambda s: aba(model, Q[s], V[s], A[s], f_ext=fx),
-                               lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), cond),
-        }
-        # the results as arrays, for the errors only (outside the timing)
-        as_ours = {"frame_placement": lambda x: np.r_[x[0].ravel(), x[1]]}
-        as_pin = {"frame_placement": lambda X: np.r_[X.rotation.ravel(), X.translation], "mass_matrix (lagrange)": sym}
-        for name, (ours, theirs, scale) in cases.items():
-            ours(0), theirs(0)
-            t_ours = per_call(lambda: ours(0), repeat=3 if quick else 7)
-            t_pin = per_call(lambda: theirs(0), repeat=3 if quick else 7)
-            fo, fp = as_ours.get(name, np.asarray), as_pin.get(name, np.asarray)
-            err = max(error(np.atleast_1d(np.asarray(fo(ours(s)), float)), np.atleast_1d(np.asarray(fp(theirs(s)), float)))
-                      / (scale(s) if scale else 1.0) for s in range(len(Q)))
-            rows.append(dict(robot=model.name, call=name + (" (err / cond M)" if scale else ""), ours_us=t_ours * 1e6,
-                             pin_us=t_pin * 1e6, ratio=t_ours / t_pin, err=err))
+
+ERR_NOTE = "err ÷ cond(M)"
+
+
+def latency(sts, quick=False):
+    """a. Single-state latency of every public, input-checked call against Pinocchio's cheapest Python route to
+    the same numbers (conversions outside the timing), with the worst error over the states."""
+    P, rows = pin(), []
+    for st in sts:
+        Q, V, A = random_states(st.model, 20 if quick else 100, np.random.default_rng(0))
+        table, _, cond = cases(P, st, Q, V, A)
+        conds = [cond(s) for s in range(len(Q))]
+        for name, c in table.items():
+            err = max(_err(c, c.ours(Q[s], V[s], A[s]), c.theirs(s), conds[s]) for s in range(len(Q)))
+            q, v, a = Q[0], V[0], A[0]
+            t_ours = per_call(lambda: c.ours(q, v, a), repeat=3 if quick else 7)
+            t_pin = per_call(lambda: c.theirs(0), repeat=3 if quick else 7)
+            rows.append(dict(robot=st.label, call=name, pin_route=c.route, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                             ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
+    return rows
+
+
+def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
+    """b. Every public call on a batch (N, nv), time per state, against Pinocchio's C++ batch
+    (pin.*InParallel, 1 thread) where it exists, else its cheapest Python loop over the same states
+    (conversions outside the timing); at ``sizes``, and at ``big`` for the calls with an InParallel route.
+    The error is the worst over ``sample`` states spread through the batch."""
+    P, rows = pin(), []
+    timed = (lambda f: per_call(f, repeat=2, min_time=0)) if quick else (lambda f: per_call(f, repeat=5))
+    for st in sts:
+        model, pm = st.model, st.pm
+        pool = P.ModelPool(pm, 1)
+        QA, VA, AA = random_states(model, max(*sizes, big), np.random.default_rng(2))
+        for N in sorted({*sizes, big}):
+            Q, V, A = QA[:N], VA[:N], AA[:N]
+            table, PQ, cond = cases(P, st, Q, V, A, f_ext=N in sizes)
+            picks = np.unique(np.linspace(0, N - 1, min(sample, N)).astype(int))
+            conds = {s: cond(s) for s in picks}
+            QT, VT, AT = (np.asfortranarray(np.array(x).T) for x in (PQ, V, A))
+            for name, c in table.items():
+                if N not in sizes and not c.parallel:
+                    continue
+                try:
+                    mine = c.ours(Q, V, A)
+                except ManipdynError as exc:      # a call that refuses a batch is reported, not faked
+                    rows.append(dict(robot=st.label, call=name, N=N, refused=f"{type(exc).__name__}: {exc}"))
+                    continue
+                if c.parallel:
+                    out = np.asfortranarray(np.zeros((model.nv, N)))
+                    par = getattr(P, c.parallel + "InParallel")
+                    theirs, route = (lambda: par(1, pool, QT, VT, AT, out)), "InParallel(1)"
+                    theirs()
+                    pin_s = lambda s: out[:, s]  # noqa: E731
+                else:
+                    theirs, route, pin_s = (lambda: [c.theirs(s) for s in range(N)]), "loop", c.theirs
+                err = max(_err(c, _row(mine, s), pin_s(s), conds[s]) for s in picks)
+                t_ours = timed(lambda: c.ours(Q, V, A)) / N
+                t_pin = timed(theirs) / N
+                rows.append(dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                                 pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
     return rows
 
 

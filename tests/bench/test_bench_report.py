@@ -1,6 +1,7 @@
 """The bench is not a test: this only checks that `manipdyn bench --quick` runs and writes a valid report."""
 import json
 
+from manipdyn.bench import targets
 from manipdyn.cli import main
 
 
@@ -9,13 +10,26 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     monkeypatch.setattr(sections, "per_call", lambda f, repeat=1, min_time=0: (f(), 1e-6)[1])  # no timing loops
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "report.json").read_text())
-    for key in ("machine", "latency", "closed_latency", "throughput", "scaling", "slopes", "reduced",
-                "work_precision", "spm_drift", "hard_cases"):
+    for key in ("machine", "latency", "closed_latency", "batched", "throughput", "scaling", "slopes", "reduced",
+                "work_precision", "spm_drift", "hard_cases", "cold_start", "targets"):
         assert data[key], key
     assert all(r["err"] <= 1e-12 for r in data["latency"])      # errors are measured, not assumed
+    # every public call on a batch, on the three robots, none refused; errors measured 4.9e-13 at worst (aau aba)
+    assert {(r["robot"], r["call"]) for r in data["batched"]} == {
+        (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in targets.SINGLE_CALLS + targets.LAGRANGE}
+    assert all("refused" not in r and r["err"] <= 1e-12 for r in data["batched"])
+    assert {r["robot"] for r in data["latency"]} == {"ur5", "aau_arm", "chain32", "spm (open tree)"}
+    # the targets find their rows and figures in a real report: each counted target reads rows, none is
+    # "not measured"; the hard cases are distributions over 12 states (quick)
+    results = targets.evaluate(data)
+    assert all(r.rows > 0 for r in results if not r.target.optional)
+    assert not [m for m in targets.check(data) if m.measured is None]
+    assert {r["states"] for r in data["hard_cases"]} == {12}
+    assert main(["bench", "--check", "--from", str(tmp_path / "report.json")]) in (0, 1)
     assert data["closed_latency"][0]["err"] <= 1e-10
     text = (tmp_path / "report.md").read_text()
     assert "ratio" in text and "pin" in data["machine"]["versions"]
+    assert "## Targets" in text and "## What to use when" in text and "**One state or many.**" in text
     assert (tmp_path / "scaling.png").stat().st_size > 1000
     assert (tmp_path / "work_precision.png").stat().st_size > 1000
     assert all(r["max_phi"] < 1e-6 for r in data["spm_drift"])

@@ -27,7 +27,7 @@ LAYERS = (("base", ("manipdyn.errors", "manipdyn._jit", "manipdyn.paths")),
           ("validation", ("manipdyn.validation",)),
           ("bench", ("manipdyn.bench",)),
           ("viz", ("manipdyn.viz",)),
-          ("cli", ("manipdyn.cli",)))
+          ("cli", ("manipdyn.cli", "manipdyn.__main__")))    # `python -m manipdyn` runs the CLI
 
 
 def modules(pkg=PKG):
