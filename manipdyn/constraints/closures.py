@@ -106,11 +106,12 @@ def closure_scratch(nb, nv):
 def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
     """Φ (m,), Φ_q (m, nv) and, when v has entries, Φ̇_q q̇ (m,) of one state q (nq,), v (nv,), rows in
     row_labels order (the module docstring gives them); W = closure_scratch(nb, nv)."""
-    parent, iq, iv, nvj, S = I[:, 0], I[:, 2], I[:, 3], I[:, 4], unpack(I, F)[5]
+    mdl = unpack(I, F)
+    parent, iq, iv, nvj, S = mdl[0], mdl[2], mdl[3], mdl[4], mdl[5]
     Rl, pl, Rw, pw, ww, vw, J, dJ, Rs, x, xd, eye, t = W
     a, b, axb, wA, wB, t1, t2, t3 = t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]
     nv, with_v = Jc.shape[1], v.shape[0] > 0
-    fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+    fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw)
     row = 0
     for k in range(CI.shape[0]):
         if CI[k, 2] < 0:                                      # coupling: one linear row, Φ̇_q q̇ = 0

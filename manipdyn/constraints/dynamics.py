@@ -15,7 +15,7 @@ import numpy as np
 
 from ..dynamics.lagrange import mass_matrix
 from ..dynamics.rnea import rnea
-from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output,
+from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, fast3,
                               check_scalar, joint_indices, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
 from ..joints import FREEFLYER
@@ -61,12 +61,16 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     Without f_ext this runs the compiled kernel (constraints/fast.py), held by the tests to
     ``constrained_forward_dynamics_reference``, the readable solve below.
     """
+    from .fast import constrained_fd_fast
+    if f_ext is None and f_ext_frame == "local" and fast3(model, q, v, tau) is not None:   # one float64 state
+        code, qdd, lam, _ = constrained_fd_fast(model, q[None], v[None], tau[None], _baumgarte(baumgarte))
+        if code == -1 and np.isfinite(qdd).all() and np.isfinite(lam).all():
+            return qdd[0], lam[0]                              # else the checked path below says what is wrong
     (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
     baumgarte = _baumgarte(baumgarte)
     if check_f_ext(model, f_ext, f_ext_frame, Q.shape[0]) is not None or not model.nv:
         return constrained_forward_dynamics_reference(model, q, v, tau, baumgarte=baumgarte, f_ext=f_ext,
                                                       f_ext_frame=f_ext_frame)
-    from .fast import constrained_fd_fast
     code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
     if code == -2:
         raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")

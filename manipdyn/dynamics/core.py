@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..joints import joint_placement, joint_velocity, motion_subspace
+from ..joints import joint_placement, motion_subspace
 
 
 def kernel_arrays(model):
@@ -106,33 +106,44 @@ def sandwich3(R, X, tmp, out):
 # -- forward kinematics: the one pass -----------------------------------------------------------------
 
 @njit(cache=True, inline="always")
-def fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
-    """Forward kinematics of one state. Every body i:
+def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
+    """Forward kinematics of one state (mdl = ``unpack(I, F)``, unpacked once per kernel call). Every body i:
       (Rl, pl)[i]  its placement in its parent (joints.joint_placement),
       (Rw, pw)[i]  in the world: Rw_i = Rw_λ Rl_i, pw_i = pw_λ + Rw_λ pl_i,
     and, when v has entries (len(v) = nv; pass an empty v to skip), its world angular velocity ww_i and
     the world velocity of its origin vw_i:  ω_i = ω_λ + Rw_i S_ang q̇_i,
     v_i = v_λ + ω_λ × (pw_i − pw_λ) + Rw_i S_lin q̇_i  (Eqs. 3–4, 9–11 in world axes)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0 = unpack(I, F)[:9]
-    vl, va = np.empty(3), np.empty(3)
-    with_v = v.shape[0] > 0
-    for i in range(I.shape[0]):
+    parent, kind, iq, iv, nvj, S, axis, R0, p0 = mdl[:9]
+    nb = parent.shape[0]
+    for i in range(nb):
         joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
         j = parent[i]
         if j < 0:
-            Rw[i, :, :] = Rl[i]
-            pw[i, :] = pl[i]
+            for a in range(3):
+                for b in range(3):
+                    Rw[i, a, b] = Rl[i, a, b]
+                pw[i, a] = pl[i, a]
         else:
             for a in range(3):
                 for b in range(3):
                     Rw[i, a, b] = Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
                 pw[i, a] = pw[j, a] + Rw[j, a, 0] * pl[i, 0] + Rw[j, a, 1] * pl[i, 1] + Rw[j, a, 2] * pl[i, 2]
-        if not with_v:
-            continue
-        joint_velocity(S, iv[i], nvj[i], v, vl, va)
+    # Velocities in a loop of their own, without scratch arrays: (vl, va) = S q̇ of the joint as scalars (as
+    # joints.joint_velocity). Allocations and the velocity branch inside the placement loop tripled its cost.
+    for i in range(nb if v.shape[0] > 0 else 0):
+        l0 = l1 = l2 = a0 = a1 = a2 = 0.0
+        for r in range(iv[i], iv[i] + nvj[i]):
+            x = v[r]
+            l0 += S[r, 0] * x
+            l1 += S[r, 1] * x
+            l2 += S[r, 2] * x
+            a0 += S[r, 3] * x
+            a1 += S[r, 4] * x
+            a2 += S[r, 5] * x
+        j = parent[i]
         for a in range(3):
-            wa = Rw[i, a, 0] * va[0] + Rw[i, a, 1] * va[1] + Rw[i, a, 2] * va[2]
-            la = Rw[i, a, 0] * vl[0] + Rw[i, a, 1] * vl[1] + Rw[i, a, 2] * vl[2]
+            wa = Rw[i, a, 0] * a0 + Rw[i, a, 1] * a1 + Rw[i, a, 2] * a2
+            la = Rw[i, a, 0] * l0 + Rw[i, a, 1] * l1 + Rw[i, a, 2] * l2
             ww[i, a] = wa if j < 0 else ww[j, a] + wa
             vw[i, a] = la if j < 0 else vw[j, a] + la
         if j >= 0:                                   # ω_λ × (pw_i − pw_λ)
@@ -211,13 +222,13 @@ def finite_state(Q, V, A, s):
 def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).
     Returns -1, or the flat index (state·nq + entry) of the first non-finite entry of Q (V: + N·nq)."""
-    N, nb = Q.shape[0], I.shape[0]
+    N, nb, mdl = Q.shape[0], I.shape[0], unpack(I, F)
     Rl, pl = np.empty((nb, 3, 3)), np.empty((nb, 3))
     for s in range(N):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
             return bad
-        fk_pass(I, F, Q[s], V[s], Rl, pl, Rw[s], pw[s], ww[s], vw[s])
+        fk_pass(mdl, Q[s], V[s], Rl, pl, Rw[s], pw[s], ww[s], vw[s])
     return -1
 
 

@@ -66,7 +66,8 @@ def force_cross(v, f):
 def coriolis_kernel(I, F, Q, V, C):
     """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns −1, the flat index
     of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
     R3, P3, M6, B6 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3)), np.empty((2 * nb, 6, 6)), \
         np.empty((2 * nv, 6))                          # four allocations, cut into the scratch arrays
@@ -79,7 +80,7 @@ def coriolis_kernel(I, F, Q, V, C):
         the world origin and B_i = ½ (v ×* I − I v× + (I v) ×̄) (E&W Eq. 22). I is symmetric and (v×)ᵀ = −v×*,
         so −I v× = (v ×* I)ᵀ: B = ½ (Z + Zᵀ + h ×̄) with Z = v ×* I (column by column), h = I v, and
         (h ×̄) m = m ×* h = [−[h_l]× ω_m; −[h_l]× v_m − [h_a]× ω_m]."""
-        fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+        fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw)
         for i in range(nb):
             R, p, w = Rw[i], pw[i], ww[i]
             vi = (vw[i, 0] + p[1] * w[2] - p[2] * w[1], vw[i, 1] + p[2] * w[0] - p[0] * w[2],

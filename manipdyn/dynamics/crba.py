@@ -75,8 +75,11 @@ def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = arrays[:12]
     for i in range(parent.shape[0]):
         joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], R[i], p[i])
-    cC[:, :] = com
-    IC[:, :, :] = inertia
+    for i in range(parent.shape[0]):           # start from each body's own CoM and inertia (loops: cheaper
+        for a in range(3):                     # than slice copies of these strided views)
+            cC[i, a] = com[i, a]
+            for b in range(3):
+                IC[i, a, b] = inertia[i, a, b]
     for i in range(parent.shape[0] - 1, -1, -1):
         j = parent[i]
         if j < 0:
@@ -146,9 +149,8 @@ def crba_kernel(I, F, Q, M):
     Returns −1, the flat index of the first non-finite q, or −2 − nb − (flat index) of a non-finite M."""
     arrays = unpack(I, F)
     N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
-    R, p = np.empty((nb, 3, 3)), np.empty((nb, 3))
-    mC, W, cC, IC = np.empty(nb), np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    d, tmp = np.empty(3), np.empty((3, 3))
+    R3, B3, mC = np.empty((2 * nb + 1, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty(nb)   # scratch, cut below
+    R, IC, tmp, p, W, cC, d = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
     merge_weights(arrays[0], arrays[9], mC, W)
     for s in range(N):
         for k in range(nq):

@@ -14,14 +14,14 @@ from .state import as_batch, fast1, fast2, fast_shape, raise_kernel_error
 
 
 @njit(cache=True, inline="always")
-def energy_of(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
+def energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
     """T of one state (v (nv,)) or V (v with no entries: potential energy); Rl … vw are core.fk_pass's
     scratch arrays. Non-finite input gives a non-finite energy."""
-    mass, com, inertia, mg = unpack(I, F)[9:]
-    fk_pass(I, F, q, v, Rl, pl, Rw, pw, ww, vw)
+    mass, com, inertia, mg = mdl[9:]
+    fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw)
     kinetic = v.shape[0] > 0
     e = 0.0
-    for b in range(I.shape[0]):
+    for b in range(mass.shape[0]):
         R = Rw[b]
         cx = R[0, 0] * com[b, 0] + R[0, 1] * com[b, 1] + R[0, 2] * com[b, 2]     # R c: CoM from the origin
         cy = R[1, 0] * com[b, 0] + R[1, 1] * com[b, 1] + R[1, 2] * com[b, 2]
@@ -48,14 +48,14 @@ def energy_of(I, F, q, v, Rl, pl, Rw, pw, ww, vw):
 def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
     −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
-    nb = I.shape[0]
+    nb, mdl = I.shape[0], unpack(I, F)
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
+    Rl, pl, Rw, pw, ww, vw = R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:]
     for s in range(Q.shape[0]):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
             return bad
-        out[s] = energy_of(I, F, Q[s], V[s], R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb],
-                           B3[3 * nb:])
+        out[s] = energy_of(mdl, Q[s], V[s], Rl, pl, Rw, pw, ww, vw)
         if not np.isfinite(out[s]):
             return -2 - nb - s
     return -1
@@ -66,7 +66,7 @@ def energy_one(I, F, q, v):
     """The energy of one state (``energy_of``): q (nq,), v (nv,) or (0,); non-finite for a non-finite input."""
     nb = I.shape[0]
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
-    return energy_of(I, F, q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
+    return energy_of(unpack(I, F), q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
 
 
 def _energy(model, call, *arrays):

@@ -124,7 +124,8 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     """For every state of Q (N, nq) [and V (N, nv)]: the world placement Rf (N, 3, 3), pf (N, 3) of the frame
     (Rl, pl) on body b; want ≥ 1: its Jacobian J (N, 6, nv); want = 2: J̇ (N, 6, nv); local: in the frame's
     axes. Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
-    parent, kind, iq, iv, nvj, S = unpack(I, F)[:6]
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S = mdl[:6]
     N, nb = Q.shape[0], I.shape[0]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw, xd, w0 = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3)
@@ -132,7 +133,7 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
             return bad
-        fk_pass(I, F, Q[s], V[s], Rp, pp, Rw, pw, ww, vw)
+        fk_pass(mdl, Q[s], V[s], Rp, pp, Rw, pw, ww, vw)
         body_point(b, Rw, pw, Rl, pl, Rf[s], pf[s])
         if want >= 1:
             point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf[s], J[s])
@@ -145,11 +146,12 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
 
 
 @njit(cache=True)
-def frame_one(I, F, q, v, b, X, want, local, out):
-    """One state q (nq,) [v (nv,)]: the frame X = [R; p] (4, 3) on body b — want = 0: its world placement into
-    out (4, 3) (rows R, then p); want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out (6, nv); local:
-    in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a non-finite out (flat k)."""
-    parent, kind, iq, iv, nvj, S = unpack(I, F)[:6]
+def frame_one(I, F, q, v, b, X, want, local, Rf, out):
+    """One state q (nq,) [v (nv,)]: the frame X = [R; p] (4, 3) on body b — its world orientation into Rf (3, 3)
+    and, want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out (6, nv); local: in the frame's axes.
+    Returns -1, 0 for a non-finite input, or -2 - nb - k for a non-finite out (flat k)."""
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S = mdl[:6]
     nb, nv = I.shape[0], S.shape[0]
     for k in range(q.shape[0]):
         if not np.isfinite(q[k]):
@@ -157,41 +159,51 @@ def frame_one(I, F, q, v, b, X, want, local, out):
     for k in range(v.shape[0]):
         if not np.isfinite(v[k]):
             return 0
-    B3, R3 = np.zeros((4 * nb + 4, 3)), np.empty((2 * nb + 2, 3, 3))       # two allocations, cut below
-    Rp, Rw, Rf, pp, pw, ww, vw = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], \
-        B3[3 * nb:4 * nb]
+    B3, R3 = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb, 3, 3))       # two allocations, cut below
+    Rp, Rw, pp, pw, ww, vw = R3[:nb], R3[nb:], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
     pf, xd, w0 = B3[4 * nb], B3[4 * nb + 1], B3[4 * nb + 2]
-    fk_pass(I, F, q, v, Rp, pp, Rw, pw, ww, vw)
+    fk_pass(mdl, q, v, Rp, pp, Rw, pw, ww, vw)
     body_point(b, Rw, pw, X[:3], X[3], Rf, pf)
-    if want == 0:
-        out[:3, :] = Rf
-        out[3, :] = pf
-    else:
-        J = out if want == 1 else np.empty((6, nv))
-        point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf, J)
-        if want == 2:
-            point_velocity(b, pw, ww, vw, pf, xd)
-            point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf, xd, out)
-        if local:
-            _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
-    for r in range(out.shape[0]):
-        for c in range(out.shape[1]):
-            if not np.isfinite(out[r, c]):
-                return -2 - nb - (r * out.shape[1] + c)
+    J = out if want == 1 else np.empty((6, nv))
+    point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf, J)
+    if want == 2:
+        point_velocity(b, pw, ww, vw, pf, xd)
+        point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf, xd, out)
+    if local:
+        _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
+    flat = out.reshape(-1)
+    for k in range(flat.shape[0]):
+        if not np.isfinite(flat[k]):
+            return -2 - nb - k
     return -1
+
+
+@njit(cache=True)
+def placement_one(I, F, q, b, X, R, p):
+    """One state q (nq,): the world placement R (3, 3), p (3,) of the frame X = [R; p] (4, 3) on body b. Returns
+    -1, or -2 for a non-finite result (a non-finite input gives one)."""
+    nb = I.shape[0]
+    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))
+    fk_pass(unpack(I, F), q, q[:0], R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
+    body_point(b, R3[nb:], B3[nb:], X[:3], X[3], R, p)
+    ok = True
+    for r in range(3):
+        ok &= np.isfinite(p[r]) & np.isfinite(R[r, 0]) & np.isfinite(R[r, 1]) & np.isfinite(R[r, 2])
+    return -1 if ok else -2
 
 
 @njit(cache=True)
 def com_jacobians_kernel(I, F, Q, c, J, Iw):
     """For every state and body b: world CoM c (N, nb, 3), its world-aligned Jacobian J (N, nb, 6, nv) and
     the world inertia about the CoM Iw = R I Rᵀ (N, nb, 3, 3) — what the Lagrange route sums over."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
     N, nb = Q.shape[0], I.shape[0]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw, v0, eye = np.empty((nb, 3)), np.empty((nb, 3)), np.empty(0), np.eye(3)
     tmp, Rc = np.empty((3, 3)), np.empty((3, 3))
     for s in range(N):
-        fk_pass(I, F, Q[s], v0, Rp, pp, Rw, pw, ww, vw)
+        fk_pass(mdl, Q[s], v0, Rp, pp, Rw, pw, ww, vw)
         for b in range(nb):
             body_point(b, Rw, pw, eye, com[b], Rc, c[s, b])
             point_jacobian(parent, iv, nvj, S, b, Rw, pw, c[s, b], J[s, b])
@@ -205,7 +217,8 @@ def lagrange_mass_kernel(I, F, Q, M):
     M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
     columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
     −2 − nb − k for a non-finite M at flat index k."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = unpack(I, F)[:12]
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
     N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     v0, eye, tmp, Rc, Iw = np.empty(0), np.eye(3), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
@@ -214,7 +227,7 @@ def lagrange_mass_kernel(I, F, Q, M):
         for k in range(nq):
             if not np.isfinite(Q[s, k]):
                 return s * nq + k
-        fk_pass(I, F, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
+        fk_pass(mdl, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
         Ms = M[s]
         Ms[:, :] = 0.0
         for b in range(nb):
@@ -251,6 +264,7 @@ def lagrange_mass_kernel(I, F, Q, M):
 # -- Python entry points -----------------------------------------------------------------------------------
 
 _NO_V = np.empty(0)
+_R_SCRATCH = np.empty((3, 3))     # the frame rotation frame_one computes on the way to a Jacobian (not returned)
 _LOCAL = {"local_world_aligned": False, "local": True}
 
 
@@ -270,20 +284,20 @@ def frame_row(model, frame):
 
 
 def _frame_fast(model, k, call, q, v, frame, want, local):
-    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): out (4, 3) or (6, nv)."""
+    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): J or J̇ (6, nv)."""
     try:
         b, X = model._frame_rows[frame]
     except (AttributeError, KeyError, TypeError):
         b, X = frame_row(model, frame)
-    out = np.empty((4, 3) if want == 0 else (6, model.nv))
-    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, b, X, want, local, out)
+    out = np.empty((6, model.nv))
+    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, b, X, want, local, _R_SCRATCH, out)
     if code != -1:
         inputs = dict(q=q) if v is None else dict(q=q, v=v)
         if code >= 0:                                            # a non-finite input
             raise_kernel_error(model, code, tuple(inputs), tuple(inputs.values()), call)
         with np.errstate(invalid="ignore"):                      # a non-finite result
-            check_output(call, "J" if want == 1 else "J̇" if want == 2 else "placement", out[None], model,
-                         {k: x[None] for k, x in inputs.items()}, axis=2 if want else 1)
+            check_output(call, "J" if want == 1 else "J̇", out[None], model,
+                         {k: x[None] for k, x in inputs.items()}, axis=2)
     return out
 
 
@@ -306,10 +320,15 @@ def _frame_terms(model, call, frame, Q, V, want, reference):
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
     k = fast1(model, q)
-    if k is not None:
-        out = _frame_fast(model, k, "frame_placement", q, None, frame, 0, False)
-        return out[:3], out[3]
-    return _frame_placement(model, q, frame)
+    if k is not None:                                   # one float64 state: straight into the kernel
+        try:
+            b, X = model._frame_rows[frame]
+        except (AttributeError, KeyError, TypeError):
+            b, X = frame_row(model, frame)
+        R, p = np.empty((3, 3)), np.empty(3)
+        if placement_one(k[0], k[1], q, b, X, R, p) == -1:
+            return R, p
+    return _frame_placement(model, q, frame)            # checked: names a bad input or result
 
 
 @quiet
