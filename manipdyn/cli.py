@@ -1,4 +1,4 @@
-"""The ``manipdyn`` command: validate, inspect, export, play, example, bench.
+"""The ``manipdyn`` command: validate, inspect, export, play, example, bench, warmup.
 
 Exit codes: 0 success, 1 a validated term failed, 2 bad input (file, URDF, arguments).
 """
@@ -349,6 +349,14 @@ def _play(args) -> int:
 MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 
 
+def _warmup(args) -> int:
+    from .warmup import warmup
+    seconds = warmup(args.jobs)
+    print(f"compiled and cached every kernel in {seconds:.1f} s ({args.jobs} worker process"
+          f"{'es' if args.jobs > 1 else ''}); later processes load them from the cache")
+    return 0
+
+
 def _bench(args) -> int:
     from .bench import targets
     if args.from_report is not None:
@@ -490,6 +498,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="check this existing report.json against the targets, without running the bench "
                         "(implies --check)")
     b.set_defaults(func=_bench)
+    w = sub.add_parser("warmup", help="compile every kernel into the disk cache now (the setup command runs it)")
+    w.add_argument("--jobs", type=_int_in(1, MAX_JOBS), default=2,
+                   help="worker processes compiling at once (default 2)")
+    w.set_defaults(func=_warmup)
     return p
 
 
@@ -578,7 +590,7 @@ def _check_output_dir(path, option):
 
 def _preflight(args):
     """Check input files and output paths before a subcommand starts any long work."""
-    if getattr(args, "jobs", None) is not None and not args.against:
+    if args.command == "validate" and args.jobs is not None and not args.against:
         raise InputError("--jobs needs --against (the engines referee over many files)")
     urdf = getattr(args, "urdf", None)
     sweep = args.command == "validate" and _sweep_mode(args)

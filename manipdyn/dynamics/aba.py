@@ -429,10 +429,11 @@ def aba_one(I, F, q, v, tau, out):
 
 
 @njit(cache=True)
-def aba_fext_one(I, F, q, v, tau, ws, keep, R, xb, xp, world, out):
-    """One state with external wrenches in ``state.fast_wrenches``' form: aba_kernel with N = 1."""
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], wrench_rows_of(ws, keep, R),
-                      xb, xp, world, out[np.newaxis, :])
+def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
+    """One state with one external wrench in ``state.fast_wrenches``' form: aba_kernel with N = 1."""
+    X, xb, xp = wrench_rows_of(f, m, P)
+    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
+                      out[np.newaxis, :])
 
 
 # -- Python entry points ----------------------------------------------------------------------------------

@@ -113,44 +113,73 @@ def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
     and, when v has entries (len(v) = nv; pass an empty v to skip), its world angular velocity ww_i and
     the world velocity of its origin vw_i:  ω_i = ω_λ + Rw_i S_ang q̇_i,
     v_i = v_λ + ω_λ × (pw_i − pw_λ) + Rw_i S_lin q̇_i  (Eqs. 3–4, 9–11 in world axes)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0 = mdl[:9]
-    nb = parent.shape[0]
+    nb = mdl[0].shape[0]
     for i in range(nb):
-        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
-        j = parent[i]
-        if j < 0:
-            for a in range(3):
-                for b in range(3):
-                    Rw[i, a, b] = Rl[i, a, b]
-                pw[i, a] = pl[i, a]
-        else:
-            for a in range(3):
-                for b in range(3):
-                    Rw[i, a, b] = Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
-                pw[i, a] = pw[j, a] + Rw[j, a, 0] * pl[i, 0] + Rw[j, a, 1] * pl[i, 1] + Rw[j, a, 2] * pl[i, 2]
-    # Velocities in a loop of their own, without scratch arrays: (vl, va) = S q̇ of the joint as scalars (as
-    # joints.joint_velocity). Allocations and the velocity branch inside the placement loop tripled its cost.
+        fk_place(mdl, i, q, Rl, pl, Rw, pw)
+    # velocities in a loop of their own: the velocity branch inside the placement loop tripled its cost
     for i in range(nb if v.shape[0] > 0 else 0):
-        l0 = l1 = l2 = a0 = a1 = a2 = 0.0
-        for r in range(iv[i], iv[i] + nvj[i]):
-            x = v[r]
-            l0 += S[r, 0] * x
-            l1 += S[r, 1] * x
-            l2 += S[r, 2] * x
-            a0 += S[r, 3] * x
-            a1 += S[r, 4] * x
-            a2 += S[r, 5] * x
-        j = parent[i]
+        fk_velocity(mdl, i, v, Rw, pw, ww, vw)
+
+
+@njit(cache=True, inline="always")
+def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
+    """``fk_pass`` for the bodies from the root to body ``tip`` only (its support: what a frame on ``tip``
+    depends on; path (nb,) int scratch). Other bodies' entries are left as they were."""
+    parent = mdl[0]
+    n, j = 0, tip
+    while j >= 0:                                    # tip, its parent, …, the root
+        path[n] = j
+        n += 1
+        j = parent[j]
+    for k in range(n - 1, -1, -1):
+        fk_place(mdl, path[k], q, Rl, pl, Rw, pw)
+    for k in range(n - 1 if v.shape[0] > 0 else -1, -1, -1):
+        fk_velocity(mdl, path[k], v, Rw, pw, ww, vw)
+
+
+@njit(cache=True, inline="always")
+def fk_place(mdl, i, q, Rl, pl, Rw, pw):
+    """Body i's placement in its parent (Rl, pl)[i] and in the world (Rw, pw)[i] (its parent's done first)."""
+    parent, kind, iq, iv, nvj, S, axis, R0, p0 = mdl[:9]
+    joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+    j = parent[i]
+    if j < 0:
         for a in range(3):
-            wa = Rw[i, a, 0] * a0 + Rw[i, a, 1] * a1 + Rw[i, a, 2] * a2
-            la = Rw[i, a, 0] * l0 + Rw[i, a, 1] * l1 + Rw[i, a, 2] * l2
-            ww[i, a] = wa if j < 0 else ww[j, a] + wa
-            vw[i, a] = la if j < 0 else vw[j, a] + la
-        if j >= 0:                                   # ω_λ × (pw_i − pw_λ)
-            dx, dy, dz = pw[i, 0] - pw[j, 0], pw[i, 1] - pw[j, 1], pw[i, 2] - pw[j, 2]
-            vw[i, 0] += ww[j, 1] * dz - ww[j, 2] * dy
-            vw[i, 1] += ww[j, 2] * dx - ww[j, 0] * dz
-            vw[i, 2] += ww[j, 0] * dy - ww[j, 1] * dx
+            for b in range(3):
+                Rw[i, a, b] = Rl[i, a, b]
+            pw[i, a] = pl[i, a]
+    else:
+        for a in range(3):
+            for b in range(3):
+                Rw[i, a, b] = Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
+            pw[i, a] = pw[j, a] + Rw[j, a, 0] * pl[i, 0] + Rw[j, a, 1] * pl[i, 1] + Rw[j, a, 2] * pl[i, 2]
+
+
+@njit(cache=True, inline="always")
+def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
+    """Body i's world angular velocity ww[i] and origin velocity vw[i] (its parent's done first), without
+    scratch arrays: (l, a) = S q̇ of the joint as scalars (as joints.joint_velocity)."""
+    parent, kind, iq, iv, nvj, S = mdl[:6]
+    l0 = l1 = l2 = a0 = a1 = a2 = 0.0
+    for r in range(iv[i], iv[i] + nvj[i]):
+        x = v[r]
+        l0 += S[r, 0] * x
+        l1 += S[r, 1] * x
+        l2 += S[r, 2] * x
+        a0 += S[r, 3] * x
+        a1 += S[r, 4] * x
+        a2 += S[r, 5] * x
+    j = parent[i]
+    for a in range(3):
+        wa = Rw[i, a, 0] * a0 + Rw[i, a, 1] * a1 + Rw[i, a, 2] * a2
+        la = Rw[i, a, 0] * l0 + Rw[i, a, 1] * l1 + Rw[i, a, 2] * l2
+        ww[i, a] = wa if j < 0 else ww[j, a] + wa
+        vw[i, a] = la if j < 0 else vw[j, a] + la
+    if j >= 0:                                   # ω_λ × (pw_i − pw_λ)
+        dx, dy, dz = pw[i, 0] - pw[j, 0], pw[i, 1] - pw[j, 1], pw[i, 2] - pw[j, 2]
+        vw[i, 0] += ww[j, 1] * dz - ww[j, 2] * dy
+        vw[i, 1] += ww[j, 2] * dx - ww[j, 0] * dz
+        vw[i, 2] += ww[j, 0] * dy - ww[j, 1] * dx
 
 
 @njit(cache=True, inline="always")
@@ -174,22 +203,26 @@ def nonfinite_input(Q, V, s):
 
 
 @njit(cache=True, inline="always")
-def wrench_rows_of(ws, keep, R):
-    """X (1, K, 6) = [R_k f; R_k m] of the (force, moment) pairs ws[keep[k]]: one state's external wrenches
-    as the kernels read them (state.fast_wrenches; R_k turns the frame's axes into the body's)."""
-    X = np.empty((1, keep.shape[0], 6))
-    for k in range(keep.shape[0]):
-        f, m = ws[keep[k]]
+def wrench_rows_of(f, m, P):
+    """One state's single external wrench as the kernels read it (state.fast_wrenches): X (1, K, 6) =
+    [R f; R m], body (K,) and point (K, 3), from the force f (3,), the moment m (3,) and the frame's row P (13,)
+    = [R row by row (R turns the frame's axes into the body's), its origin in the body, body]. K = 0 for a
+    wrench on the fixed base (it changes no joint torque)."""
+    K = 1 if P[12] >= 0 else 0
+    X, body, point = np.empty((1, K, 6)), np.empty(K, np.int64), np.empty((K, 3))
+    for k in range(K):
+        body[k] = int(P[12])
         for r in range(3):
-            X[0, k, r] = R[k, r, 0] * f[0] + R[k, r, 1] * f[1] + R[k, r, 2] * f[2]
-            X[0, k, 3 + r] = R[k, r, 0] * m[0] + R[k, r, 1] * m[1] + R[k, r, 2] * m[2]
-    return X
+            X[0, k, r] = P[3 * r] * f[0] + P[3 * r + 1] * f[1] + P[3 * r + 2] * f[2]
+            X[0, k, 3 + r] = P[3 * r] * m[0] + P[3 * r + 1] * m[1] + P[3 * r + 2] * m[2]
+            point[k, r] = P[9 + r]
+    return X, body, point
 
 
 @njit(cache=True)
-def wrench_block(ws, keep, R):
+def wrench_block(f, m, P):
     """``wrench_rows_of``, called from Python."""
-    return wrench_rows_of(ws, keep, R)
+    return wrench_rows_of(f, m, P)
 
 
 @njit(cache=True, inline="always")

@@ -340,8 +340,8 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
     code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
     if code != -1:
         return code - N * nv if code <= -2 - nb else code   # non-finite entries: after q̈'s codes
-    W = np.empty((2 * nv + 1, nv))
-    L, M, T = W[:nv], W[nv:2 * nv], W[2 * nv]          # Cholesky factor (lower triangle), M, a column
+    W = np.empty((2 * nv, nv))
+    L, M = W[:nv], W[nv:]                               # Cholesky factor (lower triangle); M, then −M⁻¹ D
     for s in range(N):
         M[:, :] = Minv[s]
         k = spd_inverse(M, L, Minv[s])
@@ -350,14 +350,15 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
             while I[i, 3] + I[i, 4] <= k:                 # the joint of velocity row k
                 i += 1
             return -2 - i
-        for D in (dq[s], dv[s]):                          # D ← −M⁻¹ D, column by column
-            for c in range(nv):
-                for r in range(nv):
-                    x = 0.0
-                    for m in range(nv):
-                        x -= Minv[s, r, m] * D[m, c]
-                    T[r] = x
-                D[:, c] = T
+        for D in (dq[s], dv[s]):                          # D ← −M⁻¹ D, row by row: the inner loop runs along
+            for r in range(nv):                           # contiguous rows (vectorised), not down columns
+                for c in range(nv):
+                    M[r, c] = 0.0
+                for m in range(nv):
+                    x = Minv[s, r, m]
+                    for c in range(nv):
+                        M[r, c] -= x * D[m, c]
+            D[:, :] = M
         k = first_nonfinite3((dq, dv, Minv), s)
         if k >= 0:
             return -2 - nb - N * nv - (s * 3 * nv * nv + k)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import InputError
-from .core import fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
+from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, check_output, fast1, fast2, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
@@ -128,12 +128,12 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     parent, kind, iq, iv, nvj, S = mdl[:6]
     N, nb = Q.shape[0], I.shape[0]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
-    ww, vw, xd, w0 = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3)
+    ww, vw, xd, w0, path = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3), np.empty(nb, np.int64)
     for s in range(N):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
             return bad
-        fk_pass(mdl, Q[s], V[s], Rp, pp, Rw, pw, ww, vw)
+        fk_path(mdl, Q[s], V[s], b, path, Rp, pp, Rw, pw, ww, vw)       # the frame's support only
         body_point(b, Rw, pw, Rl, pl, Rf[s], pf[s])
         if want >= 1:
             point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf[s], J[s])
@@ -159,10 +159,10 @@ def frame_one(I, F, q, v, b, X, want, local, Rf, out):
     for k in range(v.shape[0]):
         if not np.isfinite(v[k]):
             return 0
-    B3, R3 = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb, 3, 3))       # two allocations, cut below
+    B3, R3, path = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb, 3, 3)), np.empty(nb, np.int64)   # cut below
     Rp, Rw, pp, pw, ww, vw = R3[:nb], R3[nb:], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
     pf, xd, w0 = B3[4 * nb], B3[4 * nb + 1], B3[4 * nb + 2]
-    fk_pass(mdl, q, v, Rp, pp, Rw, pw, ww, vw)
+    fk_path(mdl, q, v, b, path, Rp, pp, Rw, pw, ww, vw)                 # the frame's support only
     body_point(b, Rw, pw, X[:3], X[3], Rf, pf)
     J = out if want == 1 else np.empty((6, nv))
     point_jacobian(parent, iv, nvj, S, b, Rw, pw, pf, J)
@@ -183,8 +183,8 @@ def placement_one(I, F, q, b, X, R, p):
     """One state q (nq,): the world placement R (3, 3), p (3,) of the frame X = [R; p] (4, 3) on body b. Returns
     -1, or -2 for a non-finite result (a non-finite input gives one)."""
     nb = I.shape[0]
-    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))
-    fk_pass(unpack(I, F), q, q[:0], R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
+    R3, B3, path = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3)), np.empty(nb, np.int64)
+    fk_path(unpack(I, F), q, q[:0], b, path, R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
     body_point(b, R3[nb:], B3[nb:], X[:3], X[3], R, p)
     ok = True
     for r in range(3):

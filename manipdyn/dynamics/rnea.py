@@ -228,10 +228,11 @@ def rnea_one(I, F, q, v, a, tau):
 
 
 @njit(cache=True)
-def rnea_fext_one(I, F, q, v, a, ws, keep, R, xb, xp, world, tau):
-    """τ (nv,) of one state with external wrenches in ``state.fast_wrenches``' form: ``rnea_kernel`` with N = 1."""
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], wrench_rows_of(ws, keep, R),
-                       xb, xp, world, tau[np.newaxis, :], np.zeros((0, 0, NT)))
+def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
+    """τ (nv,) of one state with one external wrench in ``state.fast_wrenches``' form: ``rnea_kernel``, N = 1."""
+    X, xb, xp = wrench_rows_of(f, m, P)
+    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
+                       tau[np.newaxis, :], np.zeros((0, 0, NT)))
 
 
 @njit(cache=True)

@@ -201,61 +201,53 @@ def wrench_rows(model, f_ext, f_ext_frame, N):
 
 
 def fast_wrenches(model, f_ext, f_ext_frame):
-    """One state's f_ext in the kernels' compact form, when it is a dict {frame name: (force (3,), moment (3,))}
-    of float64 arrays in tuples: (ws, keep, R, body, point) — ws = the (force, moment) pairs as given, keep
-    (K,) the indices of those on moving bodies (a wrench on the fixed base changes no torque), R (K, 3, 3) the
-    rotation frame → body axes for "local" (identity for "world"), body (K,) and point (K, 3) as
-    ``wrench_rows``'. The name lookups are kept on the model per name set; the kernel (core.wrench_block)
-    turns the pairs into rows. None when anything is unusual (then ``wrench_rows`` checks and converts, and
-    raises the error). Finiteness is left to the kernel: a non-finite wrench makes a non-finite result, and
-    the caller then takes the checked path."""
-    if type(f_ext) is not dict or not f_ext or type(f_ext_frame) is not str:
+    """One state's f_ext in the kernels' compact form, when it is a dict of one wrench {frame name: (force (3,),
+    moment (3,))} of float64 arrays: (force, moment, P) with P (13,) the frame's row for
+    ``core.wrench_rows_of`` — [R (9, row by row): frame axes → body axes for "local" (identity for "world"),
+    the frame's origin in body axes (3), the body (-1: the fixed base)], kept on the model per (name, frame).
+    None when anything is unusual (then ``wrench_rows`` checks and converts, and raises the error).
+    Finiteness is left to the kernel: a non-finite wrench makes a non-finite result, and the caller then takes
+    the checked path. (One wrench only: more would be a tuple type of their own, each count compiled anew.)"""
+    if type(f_ext) is not dict or len(f_ext) != 1 or type(f_ext_frame) is not str:
         return None
-    ws = tuple(f_ext.values())
-    for pair in ws:
-        if type(pair) is not tuple or len(pair) != 2:
-            return None
-        for x in pair:
-            if type(x) is not _ND or x.dtype is not _F64 or x.shape != (3,):
-                return None
-    key = (tuple(f_ext), f_ext_frame)
+    (name, pair), = f_ext.items()
+    if type(pair) is not tuple or len(pair) != 2:
+        return None
+    f, m = pair
+    if type(f) is not _ND or f.dtype is not _F64 or f.shape != (3,) or type(m) is not _ND or \
+            m.dtype is not _F64 or m.shape != (3,):
+        return None
     try:
-        rows = model._wrench_rows[key]
+        P = model._wrench_rows[name, f_ext_frame]
     except (AttributeError, KeyError, TypeError):
-        rows = _wrench_lookup(model, key)
-        if rows is None:
+        P = _wrench_lookup(model, name, f_ext_frame)
+        if P is None:
             return None
-    return (ws,) + rows
+    return f, m, P
 
 
-def _wrench_lookup(model, key):
-    """(keep, R, body, point) of a (names, f_ext_frame) key, kept in model._wrench_rows; None for an unknown
-    name or frame word."""
-    names, frame = key
-    if type(model) is not Model or frame not in ("local", "world") or \
-            not all(type(k) is str and k in model.frames for k in names):
+def _wrench_lookup(model, name, frame):
+    """The row P (13,) of ``fast_wrenches`` for a frame name and f_ext_frame, kept in model._wrench_rows; None
+    for an unknown name or frame word."""
+    if type(model) is not Model or frame not in ("local", "world") or type(name) is not str \
+            or name not in model.frames:
         return None
     cache = model.__dict__.get("_wrench_rows")
     if cache is None:
         cache = {}
         object.__setattr__(model, "_wrench_rows", cache)     # a cache, not model data (Model is frozen)
-    frs = [model.frames[k] for k in names]
-    keep = np.array([k for k, fr in enumerate(frs) if fr.body >= 0], np.int64)
-    R = np.array([frs[k].R if frame == "local" else np.eye(3) for k in keep], float).reshape(-1, 3, 3)
-    rows = (keep, R, np.array([frs[k].body for k in keep], np.int64),
-            np.array([frs[k].p for k in keep], float).reshape(-1, 3))
-    cache[key] = rows
-    return rows
+    fr = model.frames[name]
+    R = fr.R if frame == "local" else np.eye(3)
+    P = np.concatenate([np.asarray(R, float).ravel(), np.asarray(fr.p, float), [float(fr.body)]])
+    cache[name, frame] = P
+    return P
 
 
 def fast_wrench_rows(model, f_ext, f_ext_frame):
     """``wrench_rows`` for one state from ``fast_wrenches``: X (1, K, 6), body (K,), point (K, 3); None when
     ``fast_wrenches`` is."""
     fw = fast_wrenches(model, f_ext, f_ext_frame)
-    if fw is None:
-        return None
-    ws, keep, R, body, point = fw
-    return wrench_block(ws, keep, R), body, point
+    return None if fw is None else wrench_block(*fw)
 
 
 def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):

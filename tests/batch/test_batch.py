@@ -88,13 +88,16 @@ def test_one_state_f_ext_fast_path_equals_the_checked_batch():
     rng = np.random.default_rng(14)
     Q, V, A = random_states(model, 6, rng)
     F, M = rng.normal(size=(6, 3)), rng.normal(size=(6, 3))
-    names = [model.body_names[5], next(f for f, fr in model.frames.items() if fr.body >= 0 and np.any(fr.p))]
+    turned = next(f for f, fr in model.frames.items() if fr.body >= 0 and np.any(fr.p)
+                  and not np.allclose(fr.R, np.eye(3)))              # offset and turned in its body
+    names = [model.body_names[5], turned]
     for frame in ("local", "world"):
-        fx = {n: (F, M) for n in names}
-        for call in (lambda q, v, a, f: md.rnea(model, q, v, a, f_ext=f, f_ext_frame=frame),
-                     lambda q, v, a, f: md.aba(model, q, v, a, f_ext=f, f_ext_frame=frame),
-                     lambda q, v, a, f: md.forward_dynamics(model, q, v, a, f_ext=f, f_ext_frame=frame,
-                                                            method="cholesky")):
-            batch = call(Q, V, A, fx)
-            rows = np.stack([call(Q[s], V[s], A[s], {n: (F[s], M[s]) for n in names}) for s in range(6)])
-            assert_close(batch, rows, 1e-15, frame)  # measured 0 (bit-identical)
+        for subset in ([names[0]], [names[1]], names):          # one wrench (the fast path) and two
+            fx = {n: (F, M) for n in subset}
+            for call in (lambda q, v, a, f: md.rnea(model, q, v, a, f_ext=f, f_ext_frame=frame),
+                         lambda q, v, a, f: md.aba(model, q, v, a, f_ext=f, f_ext_frame=frame),
+                         lambda q, v, a, f: md.forward_dynamics(model, q, v, a, f_ext=f, f_ext_frame=frame,
+                                                                method="cholesky")):
+                batch = call(Q, V, A, fx)
+                rows = np.stack([call(Q[s], V[s], A[s], {n: (F[s], M[s]) for n in subset}) for s in range(6)])
+                assert_close(batch, rows, 1e-15, frame)  # measured 0 (bit-identical)

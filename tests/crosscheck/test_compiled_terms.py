@@ -100,16 +100,22 @@ def test_forward_dynamics_cholesky_and_f_ext_one_state(name, frame):
         cond = np.linalg.cond(pin.crba(c.pm, pd, pq))
         ref = pin.aba(c.pm, pd, pq, V[s], T[s]).copy()
         worst["fd"] = max(worst["fd"], err(qdd[s], ref) / cond)
-        one = {k: (np.broadcast_to(f, (5, 3))[s].copy(), np.broadcast_to(n, (5, 3))[s].copy()) for k, (f, n) in fx.items()}
-        pf = pin_fext(c, Q[s], one, frame)
-        got = dict(rnea=md.rnea(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame),
-                   aba=md.aba(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame),
-                   cholesky=md.forward_dynamics(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame, method="cholesky"))
-        want = dict(rnea=pin.rnea(c.pm, pd, pq, V[s], T[s], pf).copy(), aba=pin.aba(c.pm, pd, pq, V[s], T[s], pf).copy())
-        want["cholesky"] = want["aba"]
-        for k in got:
-            assert got[k].shape == (m.nv,)
-            worst[k] = max(worst[k], err(got[k], want[k]) / (1.0 if k == "rnea" else cond))
+        every = {k: (np.broadcast_to(f, (5, 3))[s].copy(), np.broadcast_to(n, (5, 3))[s].copy())
+                 for k, (f, n) in fx.items()}
+        # all wrenches at once (the checked path), and each alone (one wrench: the one-state fast path),
+        # among them one on a frame turned and offset in its body
+        for one in [every] + [{k: w} for k, w in every.items()]:
+            pf = pin_fext(c, Q[s], one, frame)
+            got = dict(rnea=md.rnea(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame),
+                       aba=md.aba(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame),
+                       cholesky=md.forward_dynamics(m, Q[s], V[s], T[s], f_ext=one, f_ext_frame=frame,
+                                                    method="cholesky"))
+            want = dict(rnea=pin.rnea(c.pm, pd, pq, V[s], T[s], pf).copy(),
+                        aba=pin.aba(c.pm, pd, pq, V[s], T[s], pf).copy())
+            want["cholesky"] = want["aba"]
+            for k in got:
+                assert got[k].shape == (m.nv,)
+                worst[k] = max(worst[k], err(got[k], want[k]) / (1.0 if k == "rnea" else cond))
     print(f"\n{name} ({frame}): " + ", ".join(f"{k} {e:.1e}" for k, e in worst.items()))
     assert worst["fd"] <= TOL_FD
     for k in ("rnea", "aba", "cholesky"):

@@ -1,0 +1,152 @@
+"""Compile every kernel ahead of use, and measure the cold start.
+
+The kernels are numba functions cached on disk (``_jit``): the first call of each one in a fresh install
+compiles it (tens of seconds in all), every later process loads the machine code from the cache. ``warmup``
+makes that first call for every public function — one state and a batch, with and without external
+wrenches, an open and a closed chain — so that a user's first call only loads. ``manipdyn warmup`` runs it
+(the README's setup command does), spread over the cores: each worker compiles its own kernels, so no two
+processes write one kernel's cache index.
+
+    first_calls(group=None)  every public call once (or only those of one group), on the bundled models
+    warmup(jobs=2)           first_calls over ``jobs`` worker processes; seconds taken
+    cold_start()             {import_s, first_calls_s, total_s, ...} of a fresh process (bench section)
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+
+import numpy as np
+
+# Each group compiles disjoint kernels (about equal compile time on this machine): a kernel compiled by two
+# workers at once would keep only one worker's entry in its cache index.
+GROUPS = (("rnea", "aba", "crba", "fd", "fext", "closed"),
+          ("bias", "derivatives", "regressor", "coriolis", "lagrange", "frames", "energy", "config"))
+
+
+def _models():
+    from .io.urdf import load_urdf
+    from .paths import bundled_dir
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_urdf(bundled_dir() / "aau_arm.urdf"), load_urdf(bundled_dir() / "fourbar.urdf")
+
+
+def _calls(arm, closed):
+    """{group: [(name, thunk)]}: every public call that reaches a kernel, one state and a batch of 3."""
+    import manipdyn as md
+    from .constraints import assemble
+    rng = np.random.default_rng(0)
+    Q, V, A = rng.uniform(-1, 1, (3, arm.nq)), rng.normal(0, 1, (3, arm.nv)), rng.normal(0, 1, (3, arm.nv))
+    q, v, a = Q[0].copy(), V[0].copy(), A[0].copy()
+    tip = arm.body_names[-1]
+    fx = {tip: (np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.1, 0.0]))}
+    FX = {tip: (np.ones((3, 3)), np.zeros((3, 3)))}
+
+    def both(name, f, **kw):                      # one state and a batch of the call f(arm, q, v, a, **kw)
+        return [(name, lambda: f(arm, q, v, a, **kw)), (name + " batch", lambda: f(arm, Q, V, A, **kw))]
+
+    def closed_calls():
+        qc = assemble(closed, md.neutral(closed)).q
+        tau = np.zeros(closed.nv)
+        return [("constrained_forward_dynamics", lambda: md.constrained_forward_dynamics(closed, qc, 0 * tau, tau)),
+                ("constrained_forward_dynamics batch",
+                 lambda: md.constrained_forward_dynamics(closed, qc[None], tau[None], tau[None]))]
+
+    return dict(
+        rnea=both("rnea", md.rnea) + [("rnea_terms", lambda: md.rnea_terms(arm, q, v, a))],
+        aba=both("aba", md.aba),
+        crba=[("mass_matrix", lambda: md.mass_matrix(arm, q)), ("mass_matrix batch", lambda: md.mass_matrix(arm, Q))],
+        fd=both("forward_dynamics cholesky", md.forward_dynamics, method="cholesky"),
+        fext=[(f"{f.__name__} f_ext {frame}{n}", lambda f=f, w=w, frame=frame, x=x: f(arm, *x, f_ext=w,
+                                                                                        f_ext_frame=frame))
+              for f in (md.rnea, md.aba) for frame in ("local", "world")
+              for n, w, x in (("", fx, (q, v, a)), (" batch", FX, (Q, V, A)))]
+        + [("forward_dynamics cholesky f_ext", lambda: md.forward_dynamics(arm, q, v, a, f_ext=fx, method="cholesky"))],
+        closed=closed_calls(),
+        bias=[("gravity_torques", lambda: md.gravity_torques(arm, q)), ("gravity_torques batch",
+                                                                        lambda: md.gravity_torques(arm, Q)),
+              ("nonlinear_effects", lambda: md.nonlinear_effects(arm, q, v)),
+              ("nonlinear_effects batch", lambda: md.nonlinear_effects(arm, Q, V))],
+        derivatives=both("rnea_derivatives", md.rnea_derivatives) + both("aba_derivatives", md.aba_derivatives),
+        regressor=both("joint_torque_regressor", md.joint_torque_regressor),
+        coriolis=[("coriolis_matrix", lambda: md.coriolis_matrix(arm, q, v)),
+                  ("coriolis_matrix batch", lambda: md.coriolis_matrix(arm, Q, V))],
+        lagrange=[("mass_matrix lagrange", lambda: md.mass_matrix(arm, q, method="lagrange")),
+                  ("mass_matrix lagrange batch", lambda: md.mass_matrix(arm, Q, method="lagrange"))],
+        frames=[(f"{f.__name__} {ref}{n}", lambda f=f, x=x, ref=ref: f(arm, *x, tip, reference=ref))
+                for f, one, many in ((md.frame_jacobian, (q,), (Q,)), (md.frame_jacobian_dot, (q, v), (Q, V)))
+                for ref in ("local_world_aligned", "local") for n, x in (("", one), (" batch", many))]
+        + [("frame_placement", lambda: md.frame_placement(arm, q, tip)),
+           ("frame_placement batch", lambda: md.frame_placement(arm, Q, tip))],
+        energy=[("kinetic_energy", lambda: md.kinetic_energy(arm, q, v)),
+                ("kinetic_energy batch", lambda: md.kinetic_energy(arm, Q, V)),
+                ("potential_energy", lambda: md.potential_energy(arm, q)),
+                ("potential_energy batch", lambda: md.potential_energy(arm, Q))],
+        config=[("integrate", lambda: md.integrate(arm, Q, V)), ("difference", lambda: md.difference(arm, Q, Q))],
+    )
+
+
+def first_calls(group=None):
+    """Make every public call once (group None: all; else the groups of GROUPS[group]); {name: seconds}."""
+    arm, closed = _models()
+    calls = _calls(arm, closed)
+    keys = [k for g in (GROUPS if group is None else (GROUPS[group],)) for k in g]
+    out = {}
+    for k in keys:
+        for name, f in calls[k]:
+            t0 = time.perf_counter()
+            f()
+            out[name] = time.perf_counter() - t0
+    return out
+
+
+def _run_python(code, env=None, timeout=900):
+    """Run ``python -c code`` in a fresh process; its last stdout line as JSON."""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout,
+                       env={**os.environ, **(env or {})})
+    if r.returncode != 0:
+        tail = (r.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"a fresh Python process failed: {tail}")
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+_GROUP_CODE = ("import json, time; t0 = time.perf_counter(); from manipdyn.warmup import first_calls; "
+               "t1 = time.perf_counter(); c = first_calls({group}); "
+               "print(json.dumps(dict(import_s=t1 - t0, first_calls_s=sum(c.values()), calls=c)))")
+
+
+def warmup(jobs=2, env=None):
+    """Compile every kernel into the disk cache: ``first_calls`` of each group in its own process, ``jobs`` at a
+    time. Returns the wall-clock seconds."""
+    from concurrent.futures import ThreadPoolExecutor
+    t0 = time.perf_counter()
+    groups = range(len(GROUPS))
+    with ThreadPoolExecutor(max(1, min(int(jobs), len(GROUPS)))) as pool:
+        list(pool.map(lambda g: _run_python(_GROUP_CODE.format(group=g), env), groups))
+    return time.perf_counter() - t0
+
+
+def cold_start(compile_too=True):
+    """The cold start as a user meets it, each figure from fresh processes:
+      import_s, first_calls_s, total_s  import manipdyn + the first call of every public function, with the
+                                        kernels in the disk cache (after ``manipdyn warmup``) — the target;
+      warmup_s                          ``manipdyn warmup`` (2 processes) into an empty cache;
+      compile_s                         the same first calls into an empty cache in one process, no warmup.
+    compile_too=False measures only the first figure (against the package's own cache)."""
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="manipdyn-cold-") as tmp:
+        env = dict(NUMBA_CACHE_DIR=tmp) if compile_too else None
+        if compile_too:
+            r = _run_python(_GROUP_CODE.format(group=None), dict(NUMBA_CACHE_DIR=os.path.join(tmp, "serial")))
+            out["compile_s"] = r["import_s"] + r["first_calls_s"]
+            out["warmup_s"] = warmup(2, env)
+        r = _run_python(_GROUP_CODE.format(group=None), env)
+    out.update(import_s=r["import_s"], first_calls_s=r["first_calls_s"], total_s=r["import_s"] + r["first_calls_s"],
+               calls=len(r["calls"]), slowest=max(r["calls"].items(), key=lambda kv: kv[1]))
+    return out

@@ -1,0 +1,47 @@
+"""`manipdyn warmup` compiles what a user's first calls need: every kernel a public function reaches."""
+import importlib
+
+import numba
+import pytest
+
+from manipdyn import _jit, warmup
+from manipdyn.cli import main
+
+# kernels no public dynamics call reaches: the validation layer's and playback's helpers (they compile on
+# their own first use, which is not a public function's first call)
+NOT_PUBLIC = {"com_jacobians_kernel", "fk_kernel", "joint_placements_kernel"}
+
+
+def kernels():
+    """{name: dispatcher} of every compiled function defined in the kernel sources (inlined helpers aside:
+    they have no machine code of their own)."""
+    out = {}
+    for rel in _jit.KERNEL_SOURCES:
+        if rel == "_jit.py":
+            continue
+        mod = importlib.import_module("manipdyn." + rel[:-3].replace("/", "."))
+        for name, obj in vars(mod).items():
+            if isinstance(obj, numba.core.registry.CPUDispatcher) and obj.__module__ == mod.__name__ \
+                    and obj.targetoptions.get("inline", "never") == "never":
+                out[name] = obj
+    return out
+
+
+@pytest.mark.skipif(_jit.NOJIT, reason="the kernels run uncompiled")
+def test_first_calls_compile_every_public_kernel():
+    calls = warmup.first_calls()
+    assert len(calls) >= 40 and all(t >= 0 for t in calls.values())
+    missed = sorted(n for n, d in kernels().items() if not d.signatures and n not in NOT_PUBLIC)
+    assert missed == []          # a kernel added without a warmup call fails here
+
+
+def test_groups_cover_every_call_once():
+    arm, closed = warmup._models()
+    keys = [k for g in warmup.GROUPS for k in g]
+    assert sorted(keys) == sorted(warmup._calls(arm, closed)) and len(keys) == len(set(keys))
+
+
+@pytest.mark.parametrize("argv", [["warmup", "--jobs", "0"], ["warmup", "--jobs", "x"], ["warmup", "extra"]])
+def test_cli_refuses_bad_jobs(argv, capsys):
+    assert main(argv) == 2
+    assert "Traceback" not in capsys.readouterr().err
