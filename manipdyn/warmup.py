@@ -111,7 +111,7 @@ def _run_python(code, env=None, timeout=900):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout,
                        env={**os.environ, **(env or {})})
     if r.returncode != 0:
-        tail = (r.stderr.strip().splitlines() or ["no output"])[-1]
+        tail = (r.stderr.strip().splitlines() or [f"exit code {r.returncode}, no message"])[-1]
         raise RuntimeError(f"a fresh Python process failed: {tail}")
     return json.loads(r.stdout.strip().splitlines()[-1])
 

@@ -21,7 +21,7 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
     Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
     N, nq, nv = Q.shape[0], Q.shape[1], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
-    W = closure_scratch(I.shape[0], nv)
+    W = closure_scratch(I.shape[1], nv)
     M = np.empty((1, nv, nv))
     h = np.empty((1, nv))
     zero = np.zeros(nv)

@@ -240,7 +240,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
     (state.raise_kernel_error)."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
-    N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[0]
+    N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
     Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, T, Y, t, vJ, a0 = workspace(nb, nv)
     for i in range(nb):
         rigid_inertia(mass[i], com[i], inertia[i], I0[i])     # I_i, constant
@@ -501,7 +501,7 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, M, out):
     out, then out ← L⁻ᵀ L⁻¹ (τ − h). Wrenches as ``aba_kernel``'s. Returns -1; ≥ 0 a non-finite input; -2 - i
     a pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat
     index k."""
-    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     for s in range(N):
         if first_nonfinite(Tau, s) >= 0:
             return s
@@ -514,7 +514,7 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, M, out):
         code = rnea_kernel(I, F, Q, V, np.zeros((N, nv)), X, body, point, world, out, np.zeros((0, 0, NT)))
     if code != -1:
         return code                                           # a non-finite input, or h (in out)
-    iv, nvj = I[:, 3], I[:, 4]
+    iv, nvj = I[3], I[4]
     for s in range(N):
         for r in range(nv):                                   # τ − h
             out[s, r] = Tau[s, r] - out[s, r]

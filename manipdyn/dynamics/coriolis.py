@@ -68,7 +68,7 @@ def coriolis_kernel(I, F, Q, V, C):
     of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
-    N, nv, nb = Q.shape[0], V.shape[1], I.shape[0]
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     R3, P3, M6, B6 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3)), np.empty((2 * nb, 6, 6)), \
         np.empty((2 * nv, 6))                          # four allocations, cut into the scratch arrays
     Rl, Rw, pl, pw, ww, vw = R3[:nb], R3[nb:], P3[:nb], P3[nb:2 * nb], P3[2 * nb:3 * nb], P3[3 * nb:]

@@ -143,12 +143,12 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
             M[a, r] = M[r, a]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def crba_kernel(I, F, Q, M):
     """M(q) (N, nv, nv) for every state of Q (N, nq) by the composite-rigid-body algorithm (RBDA §6.2).
     Returns −1, the flat index of the first non-finite q, or −2 − nb − (flat index) of a non-finite M."""
     arrays = unpack(I, F)
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
     R3, B3, mC = np.empty((2 * nb + 1, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty(nb)   # scratch, cut below
     R, IC, tmp, p, W, cC, d = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
     merge_weights(arrays[0], arrays[9], mC, W)

@@ -48,7 +48,7 @@ def energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
 def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
     −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
-    nb, mdl = I.shape[0], unpack(I, F)
+    nb, mdl = I.shape[1], unpack(I, F)
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
     Rl, pl, Rw, pw, ww, vw = R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:]
     for s in range(Q.shape[0]):
@@ -64,7 +64,7 @@ def energy_kernel(I, F, Q, V, out):
 @njit(cache=True)
 def energy_one(I, F, q, v):
     """The energy of one state (``energy_of``): q (nq,), v (nv,) or (0,); non-finite for a non-finite input."""
-    nb = I.shape[0]
+    nb = I.shape[1]
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
     return energy_of(unpack(I, F), q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
 

@@ -126,7 +126,7 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     axes. Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl[:6]
-    N, nb = Q.shape[0], I.shape[0]
+    N, nb = Q.shape[0], I.shape[1]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw, xd, w0, path = np.zeros((nb, 3)), np.zeros((nb, 3)), np.empty(3), np.zeros(3), np.empty(nb, np.int64)
     for s in range(N):
@@ -146,21 +146,24 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
 
 
 @njit(cache=True)
-def frame_one(I, F, q, v, b, X, want, local, Rf, out):
-    """One state q (nq,) [v (nv,)]: the frame X = [R; p] (4, 3) on body b — its world orientation into Rf (3, 3)
-    and, want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out (6, nv); local: in the frame's axes.
-    Returns -1, 0 for a non-finite input, or -2 - nb - k for a non-finite out (flat k)."""
+def frame_one(I, F, q, v, X, out):
+    """One state q (nq,) [v (nv,)]: for the frame row X (5, 3) = [R; p; (b, want, local)] (``one_state_row``:
+    the frame's placement [R; p] in body b) — want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out
+    (6, nv); local: in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a
+    non-finite out (flat k). (One packed row: each argument of a compiled call costs ~50 ns.)"""
+    b, want, local = int(X[4, 0]), int(X[4, 1]), X[4, 2] > 0.0
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl[:6]
-    nb, nv = I.shape[0], S.shape[0]
+    nb, nv = I.shape[1], S.shape[0]
     for k in range(q.shape[0]):
         if not np.isfinite(q[k]):
             return 0
     for k in range(v.shape[0]):
         if not np.isfinite(v[k]):
             return 0
-    B3, R3, path = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb, 3, 3)), np.empty(nb, np.int64)   # cut below
-    Rp, Rw, pp, pw, ww, vw = R3[:nb], R3[nb:], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
+    B3, R3, path = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb + 1, 3, 3)), np.empty(nb, np.int64)   # cut below
+    Rp, Rw, Rf = R3[:nb], R3[nb:2 * nb], R3[2 * nb]
+    pp, pw, ww, vw = B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
     pf, xd, w0 = B3[4 * nb], B3[4 * nb + 1], B3[4 * nb + 2]
     fk_path(mdl, q, v, b, path, Rp, pp, Rw, pw, ww, vw)                 # the frame's support only
     body_point(b, Rw, pw, X[:3], X[3], Rf, pf)
@@ -171,18 +174,18 @@ def frame_one(I, F, q, v, b, X, want, local, Rf, out):
         point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf, xd, out)
     if local:
         _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
-    flat = out.reshape(-1)
-    for k in range(flat.shape[0]):
-        if not np.isfinite(flat[k]):
-            return -2 - nb - k
+    for r in range(6):
+        for c in range(nv):
+            if not np.isfinite(out[r, c]):
+                return -2 - nb - (r * nv + c)
     return -1
 
 
 @njit(cache=True)
-def placement_one(I, F, q, b, X, R, p):
-    """One state q (nq,): the world placement R (3, 3), p (3,) of the frame X = [R; p] (4, 3) on body b. Returns
-    -1, or -2 for a non-finite result (a non-finite input gives one)."""
-    nb = I.shape[0]
+def placement_one(I, F, q, X, R, p):
+    """One state q (nq,): the world placement R (3, 3), p (3,) of the frame row X (5, 3) = [R; p; (b, ·, ·)]
+    (``one_state_row``). Returns -1, or -2 for a non-finite result (a non-finite input gives one)."""
+    nb, b = I.shape[1], int(X[4, 0])
     R3, B3, path = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3)), np.empty(nb, np.int64)
     fk_path(unpack(I, F), q, q[:0], b, path, R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
     body_point(b, R3[nb:], B3[nb:], X[:3], X[3], R, p)
@@ -198,7 +201,7 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
     the world inertia about the CoM Iw = R I Rᵀ (N, nb, 3, 3) — what the Lagrange route sums over."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
-    N, nb = Q.shape[0], I.shape[0]
+    N, nb = Q.shape[0], I.shape[1]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     ww, vw, v0, eye = np.empty((nb, 3)), np.empty((nb, 3)), np.empty(0), np.eye(3)
     tmp, Rc = np.empty((3, 3)), np.empty((3, 3))
@@ -219,7 +222,7 @@ def lagrange_mass_kernel(I, F, Q, M):
     −2 − nb − k for a non-finite M at flat index k."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[0], M.shape[2]
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
     Rp, pp, Rw, pw = np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3))
     v0, eye, tmp, Rc, Iw = np.empty(0), np.eye(3), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     c, J, cols, ww = np.empty(3), np.empty((6, nv)), np.empty(nv, np.int64), np.empty((nb, 3))
@@ -264,7 +267,6 @@ def lagrange_mass_kernel(I, F, Q, M):
 # -- Python entry points -----------------------------------------------------------------------------------
 
 _NO_V = np.empty(0)
-_R_SCRATCH = np.empty((3, 3))     # the frame rotation frame_one computes on the way to a Jacobian (not returned)
 _LOCAL = {"local_world_aligned": False, "local": True}
 
 
@@ -283,14 +285,27 @@ def frame_row(model, frame):
     return row
 
 
+def one_state_row(model, frame, want, local):
+    """X (5, 3) = [R; p; (body, want, local)] of a link or frame name for frame_one / placement_one, kept per
+    model and (name, want, local); InputError lists the closest names."""
+    rows = model.__dict__.get("_frame_one_rows")
+    if rows is None:
+        rows = {}
+        object.__setattr__(model, "_frame_one_rows", rows)  # a cache, not model data (Model is frozen)
+    b, X = frame_row(model, frame)
+    row = np.vstack([X, [float(b), float(want), float(local)]])
+    rows[frame, want, local] = row
+    return row
+
+
 def _frame_fast(model, k, call, q, v, frame, want, local):
     """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): J or J̇ (6, nv)."""
     try:
-        b, X = model._frame_rows[frame]
+        X = model._frame_one_rows[frame, want, local]
     except (AttributeError, KeyError, TypeError):
-        b, X = frame_row(model, frame)
+        X = one_state_row(model, frame, want, local)
     out = np.empty((6, model.nv))
-    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, b, X, want, local, _R_SCRATCH, out)
+    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, X, out)
     if code != -1:
         inputs = dict(q=q) if v is None else dict(q=q, v=v)
         if code >= 0:                                            # a non-finite input
@@ -322,11 +337,11 @@ def frame_placement(model, q, frame):
     k = fast1(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            b, X = model._frame_rows[frame]
+            X = model._frame_one_rows[frame, 0, False]
         except (AttributeError, KeyError, TypeError):
-            b, X = frame_row(model, frame)
+            X = one_state_row(model, frame, 0, False)
         R, p = np.empty((3, 3)), np.empty(3)
-        if placement_one(k[0], k[1], q, b, X, R, p) == -1:
+        if placement_one(k[0], k[1], q, X, R, p) == -1:
             return R, p
     return _frame_placement(model, q, frame)            # checked: names a bad input or result
 

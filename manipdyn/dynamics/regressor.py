@@ -162,14 +162,14 @@ def regressor_kernel(I, F, Q, V, A, Y):
     index k of Y.
     """
     mdl = unpack(I, F)
-    N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
+    N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
     RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
     work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
     for s in range(N):
         if not finite_state(Q, V, A, s):
             return s
-        outward(mdl, work, Q[s], V[s], A[s], False)       # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass
+        outward(mdl, work, Q[s], V[s], A[s], False, False)     # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass
         Y[s, :, :] = 0.0
         for i in range(nb):
             body_block(work, i, W)

@@ -235,14 +235,12 @@ def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
                        tau[np.newaxis, :], np.zeros((0, 0, NT)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bias_kernel(I, F, Q, V, tau):
     """τ = rnea(q, v, 0) for every state of Q (N, nq), V (N, nv) — or rnea(q, 0, 0) when V has no columns —
     into tau (N, nv): ``rnea_kernel`` with zero accelerations."""
     Z = np.zeros((Q.shape[0], tau.shape[1]))
-    if V.shape[1] == 0:
-        return rnea_kernel(I, F, Q, Z, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
-    return rnea_kernel(I, F, Q, V, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
+    return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
 
 
 @njit(cache=True)
@@ -263,14 +261,14 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     for a non-finite τ at flat index k of tau.
     """
     mdl = unpack(I, F)
-    N, nb, nv = Q.shape[0], I.shape[0], V.shape[1]
+    N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
     RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
     work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
     keep = T.shape[0] > 0
     for s in range(N):
         if not finite_state(Q, V, A, s):
             return s
-        outward(mdl, work, Q[s], V[s], A[s], world or keep)
+        outward(mdl, work, Q[s], V[s], A[s], world or keep, keep)
         external(work, X, s, xb, xp, world)
         inward(mdl, work, tau[s])
         if keep:
@@ -282,9 +280,10 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
 
 @njit(cache=True, inline="always")
-def outward(mdl, work, q, v, a, orient):
-    """Outward pass i = 1 … nb (Eqs. 3–14): ω'_i, ω̇'_i, v'_i (origin velocity), v̇'_i of every body, its
-    inertial wrench (``inertial``), and if orient its world orientation Rw_i = Rw_λ R."""
+def outward(mdl, work, q, v, a, orient, terms):
+    """Outward pass i = 1 … nb (Eqs. 3–14): ω'_i, ω̇'_i, v̇'_i of every body, its inertial wrench
+    (``inertial``), if terms the origin velocity v'_i (Eqs. 4, 11: no torque needs it), and if orient its
+    world orientation Rw_i = Rw_λ R."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
     Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
     vl, va, al, aa = sv[0], sv[1], sv[2], sv[3]
@@ -298,7 +297,7 @@ def outward(mdl, work, q, v, a, orient):
             p, w0 = vec(pl, i), vec(w, j)
             w_in = rot_t(Rl, i, w0)                        # R^i_{i−1} ω'_{i−1} (Eq. 3 uses ω'_{i−1})
             dw_in = rot_t(Rl, i, vec(dw, j))
-            v_in = rot_t(Rl, i, add(vec(vel, j), cross(w0, p)))                   # Eq. 4
+            v_in = rot_t(Rl, i, add(vec(vel, j), cross(w0, p))) if terms else (0.0, 0.0, 0.0)   # Eq. 4
             dv_in = rot_t(Rl, i, add(vec(dv, j), add(cross(vec(dw, j), p), cross(w0, cross(w0, p)))))
             #                                              Eq. 6 (32c: v̇'_{i−1}, in frame i−1)
         joint_velocity(S, iv[i], nvj[i], v, vl, va)        # S q̇ = [vl; va]

@@ -301,23 +301,36 @@ def fast_shape(model, *arrays):
     return 2
 
 
+def _fast_path(model):
+    """((nq,), (nv,), (I, F)) of a Model, kept on it: what the single-state fast paths read on every call."""
+    fp = model.state_shapes + (kernel_arrays(model),)
+    object.__setattr__(model, "_fast_path", fp)          # a cache, not model data (Model is frozen)
+    return fp
+
+
 def fast1(model, q):
     """The model's kernel arrays (I, F) when q is one float64 configuration (nq,) of a plain Model with nv ≥ 1:
     the single-state kernels then take it as it is and check finiteness themselves. None otherwise (the
     caller takes the checked path, which raises the right error). ~60 ns: it runs before every one-state call."""
     if type(q) is _ND and q.dtype is _F64 and type(model) is Model:
-        sq, sv = model.state_shapes
+        try:
+            sq, sv, k = model._fast_path
+        except AttributeError:
+            sq, sv, k = _fast_path(model)
         if q.shape == sq and sv[0]:
-            return kernel_arrays(model)
+            return k
     return None
 
 
 def fast2(model, q, v):
     """``fast1`` for (q, v): v a float64 (nv,)."""
     if type(v) is _ND and v.dtype is _F64 and type(q) is _ND and q.dtype is _F64 and type(model) is Model:
-        sq, sv = model.state_shapes
+        try:
+            sq, sv, k = model._fast_path
+        except AttributeError:
+            sq, sv, k = _fast_path(model)
         if q.shape == sq and v.shape == sv and sv[0]:
-            return kernel_arrays(model)
+            return k
     return None
 
 
@@ -325,9 +338,12 @@ def fast3(model, q, v, a):
     """``fast1`` for (q, v, a): v and a float64 (nv,)."""
     if (type(a) is _ND and a.dtype is _F64 and type(v) is _ND and v.dtype is _F64 and type(q) is _ND
             and q.dtype is _F64 and type(model) is Model):
-        sq, sv = model.state_shapes
+        try:
+            sq, sv, k = model._fast_path
+        except AttributeError:
+            sq, sv, k = _fast_path(model)
         if q.shape == sq and v.shape == sv and a.shape == sv and sv[0]:
-            return kernel_arrays(model)
+            return k
     return None
 
 
