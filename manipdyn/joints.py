@@ -91,17 +91,19 @@ def joint_placement(kind, axis, R0, p0, q, iq, R, p):
 
 
 @njit(cache=True, inline="always")
-def joint_velocity(S, iv, nvj, x, vl, va):
-    """vl, va (3,) = the linear and angular parts of S x[iv:iv+nvj] (x = q̇ or q̈ of the whole model)."""
-    for k in range(3):
-        vl[k] = 0.0
-        va[k] = 0.0
+def joint_velocity(S, iv, nvj, x):
+    """(l, a): the linear and angular parts (3-tuples) of S x[iv:iv+nvj] (x = q̇ or q̈ of the whole model), as
+    scalars — no scratch arrays, no branch."""
+    l0 = l1 = l2 = a0 = a1 = a2 = 0.0
     for r in range(iv, iv + nvj):
         xr = x[r]
-        if xr != 0.0:
-            for k in range(3):
-                vl[k] += S[r, k] * xr
-                va[k] += S[r, 3 + k] * xr
+        l0 += S[r, 0] * xr
+        l1 += S[r, 1] * xr
+        l2 += S[r, 2] * xr
+        a0 += S[r, 3] * xr
+        a1 += S[r, 4] * xr
+        a2 += S[r, 5] * xr
+    return (l0, l1, l2), (a0, a1, a2)
 
 
 @njit(cache=True, inline="always")

@@ -404,6 +404,10 @@ FAULTS = (
           "return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
           "return bool(lam[0] + lam[1] > lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
           (_ENGINES,), "the referee's triangle-inequality test inverted: the cause is misnamed"),
+    Fault("joint-velocity-angular-row-swapped", "rnea", "manipdyn/joints.py",
+          "        a1 += S[r, 4] * xr\n",
+          "        a1 += S[r, 3] * xr\n",
+          ("tests/crosscheck/test_rnea_kernel.py", _TERMS), "joints.joint_velocity: S q̇'s angular y from S's x column"),
     # ---------------------------------------------------------------- floating base (joints.py, configuration.py)
     Fault("ff-log6-coefficient-cancels", "integrators", "manipdyn/joints.py",
           "return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2",

@@ -267,7 +267,6 @@ def lagrange_mass_kernel(I, F, Q, M):
 # -- Python entry points -----------------------------------------------------------------------------------
 
 _NO_V = np.empty(0)
-_LOCAL = {"local_world_aligned": False, "local": True}
 
 
 def frame_row(model, frame):
@@ -285,35 +284,29 @@ def frame_row(model, frame):
     return row
 
 
-def one_state_row(model, frame, want, local):
+def one_state_row(model, frame, want, reference):
     """X (5, 3) = [R; p; (body, want, local)] of a link or frame name for frame_one / placement_one, kept per
-    model and (name, want, local); InputError lists the closest names."""
+    model and (name, want, reference); InputError lists the closest names, or names a bad reference."""
+    _check_reference(reference)
     rows = model.__dict__.get("_frame_one_rows")
     if rows is None:
         rows = {}
         object.__setattr__(model, "_frame_one_rows", rows)  # a cache, not model data (Model is frozen)
     b, X = frame_row(model, frame)
-    row = np.vstack([X, [float(b), float(want), float(local)]])
-    rows[frame, want, local] = row
+    row = np.vstack([X, [float(b), float(want), float(reference == "local")]])
+    rows[frame, want, reference] = row
     return row
 
 
-def _frame_fast(model, k, call, q, v, frame, want, local):
-    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): J or J̇ (6, nv)."""
+def _frame_fast(model, k, q, v, frame, want, reference):
+    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): J or J̇ (6, nv), or None for
+    a bad input or result (the checked path then names it)."""
     try:
-        X = model._frame_one_rows[frame, want, local]
+        X = model._frame_one_rows[frame, want, reference]
     except (AttributeError, KeyError, TypeError):
-        X = one_state_row(model, frame, want, local)
+        X = one_state_row(model, frame, want, reference)
     out = np.empty((6, model.nv))
-    code = frame_one(k[0], k[1], q, _NO_V if v is None else v, X, out)
-    if code != -1:
-        inputs = dict(q=q) if v is None else dict(q=q, v=v)
-        if code >= 0:                                            # a non-finite input
-            raise_kernel_error(model, code, tuple(inputs), tuple(inputs.values()), call)
-        with np.errstate(invalid="ignore"):                      # a non-finite result
-            check_output(call, "J" if want == 1 else "J̇", out[None], model,
-                         {k: x[None] for k, x in inputs.items()}, axis=2)
-    return out
+    return out if frame_one(k[0], k[1], q, _NO_V if v is None else v, X, out) == -1 else None
 
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
@@ -337,9 +330,9 @@ def frame_placement(model, q, frame):
     k = fast1(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            X = model._frame_one_rows[frame, 0, False]
+            X = model._frame_one_rows[frame, 0, "local_world_aligned"]
         except (AttributeError, KeyError, TypeError):
-            X = one_state_row(model, frame, 0, False)
+            X = one_state_row(model, frame, 0, "local_world_aligned")
         R, p = np.empty((3, 3)), np.empty(3)
         if placement_one(k[0], k[1], q, X, R, p) == -1:
             return R, p
@@ -358,9 +351,11 @@ def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
     k = fast1(model, q)
-    if k is not None and type(reference) is str and reference in _LOCAL:
-        return _frame_fast(model, k, "frame_jacobian", q, None, frame, 1, _LOCAL[reference])
-    return _frame_jacobian(model, q, frame, reference)
+    if k is not None:                                   # one float64 state: straight into the kernel
+        J = _frame_fast(model, k, q, None, frame, 1, reference)
+        if J is not None:
+            return J
+    return _frame_jacobian(model, q, frame, reference)  # checked: names a bad input or result
 
 
 @quiet
@@ -375,9 +370,11 @@ def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
     docstring gives the columns)."""
     k = fast2(model, q, v)
-    if k is not None and type(reference) is str and reference in _LOCAL:
-        return _frame_fast(model, k, "frame_jacobian_dot", q, v, frame, 2, _LOCAL[reference])
-    return _frame_jacobian_dot(model, q, v, frame, reference)
+    if k is not None:                                   # one float64 state: straight into the kernel
+        dJ = _frame_fast(model, k, q, v, frame, 2, reference)
+        if dJ is not None:
+            return dJ
+    return _frame_jacobian_dot(model, q, v, frame, reference)   # checked: names a bad input or result
 
 
 @quiet

@@ -286,7 +286,6 @@ def outward(mdl, work, q, v, a, orient, terms):
     world orientation Rw_i = Rw_λ R."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
     Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
-    vl, va, al, aa = sv[0], sv[1], sv[2], sv[3]
     for i in range(parent.shape[0]):
         joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])   # R^{i−1}_i, p^{i−1}_i
         j = parent[i]
@@ -300,9 +299,8 @@ def outward(mdl, work, q, v, a, orient, terms):
             v_in = rot_t(Rl, i, add(vec(vel, j), cross(w0, p))) if terms else (0.0, 0.0, 0.0)   # Eq. 4
             dv_in = rot_t(Rl, i, add(vec(dv, j), add(cross(vec(dw, j), p), cross(w0, cross(w0, p)))))
             #                                              Eq. 6 (32c: v̇'_{i−1}, in frame i−1)
-        joint_velocity(S, iv[i], nvj[i], v, vl, va)        # S q̇ = [vl; va]
-        joint_velocity(S, iv[i], nvj[i], a, al, aa)        # S q̈ = [al; aa]
-        VL, VA, AL, AA = vec(sv, 0), vec(sv, 1), vec(sv, 2), vec(sv, 3)
+        VL, VA = joint_velocity(S, iv[i], nvj[i], v)      # S q̇ = [vl; va]
+        AL, AA = joint_velocity(S, iv[i], nvj[i], a)      # S q̈ = [al; aa]
         put(w, i, add(w_in, VA))                           # Eq. 3 (as corrected: ω'_{i−1}, θ̇_i); Eq. 9
         put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))   # Eq. 5 (32b: left side is ω̇'); Eq. 10
         put(vel, i, add(v_in, VL))                         # Eq. 4; prismatic Eq. 11
