@@ -178,7 +178,7 @@ def markdown(d) -> str:
                  "epsilon).\n\n"
                  + _table(h, ["case", "n", "states", "cond_median", "cond_max", "route", "median", "p95",
                               "against", "ratio_median", "ratio_p95"],
-                          dict(cond_median=e, cond_max=e, median=e, p95=e, ratio_median=x, ratio_p95=x))
+                          dict(cond_median=e, cond_max=e, median=e, p95=e, ratio_median="{:.2g}×", ratio_p95="{:.2g}×"))
                  + f"\nmpmath reference and the four routes: "
                  f"{sum({r['case']: r['seconds'] for r in h}.values()):.1f} s for the three cases.\n")
     c = d.get("cold_start", {})

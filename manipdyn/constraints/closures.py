@@ -97,9 +97,14 @@ def closure_arrays(model):
 def closure_scratch(nb, nv):
     """Scratch of closure_rows, allocated once per kernel call: forward kinematics (Rl, pl, Rw, pw, ω, ȯ),
     per side (A, B) J, J̇ (2, 6, nv), the body's axes, the point and its velocity; 3-vectors (8, 3)."""
-    return (np.empty((nb, 3, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3)), np.zeros((nb, 3)),
-            np.zeros((nb, 3)), np.empty((2, 6, nv)), np.zeros((2, 6, nv)), np.empty((2, 3, 3)), np.empty((2, 3)),
-            np.zeros((2, 3)), np.eye(3), np.zeros((8, 3)))
+    # slices of four arrays, never many separate small ones (each keeps a reference count the loops touch:
+    # measured 2x slower per state in the frame kernels, dynamics/kinematics.py)
+    R3, B3, J6 = np.empty((2 * nb + 3, 3, 3)), np.zeros((4 * nb + 12, 3)), np.zeros((4, 6, nv))
+    eye = R3[2 * nb + 2]
+    eye[:, :] = 0.0
+    eye[0, 0] = eye[1, 1] = eye[2, 2] = 1.0
+    return (R3[:nb], B3[:nb], R3[nb:2 * nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb], J6[:2], J6[2:],
+            R3[2 * nb:2 * nb + 2], B3[4 * nb:4 * nb + 2], B3[4 * nb + 2:4 * nb + 4], eye, B3[4 * nb + 4:])
 
 
 @njit(cache=True, inline="always")
