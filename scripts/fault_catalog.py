@@ -217,8 +217,8 @@ FAULTS = (
           "",
           (_TERMS,), "Coriolis matrix: B^c_i = B_i alone (the subtree's B_k not summed into the composite)"),
     Fault("bias-nle-with-qdd-equal-qdot", "rnea", "manipdyn/dynamics/rnea.py",
-          "return rnea_kernel(I, F, Q, V, Z, _NO_X",
-          "return rnea_kernel(I, F, Q, V, V, _NO_X",
+          "return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, Z, _NO_X",
+          "return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, V, _NO_X",
           (_TERMS,), "nonlinear_effects = rnea(q, q̇, q̇) instead of rnea(q, q̇, 0)"),
     Fault("energy-kinetic-com-offset-dropped", "kinematics", "manipdyn/dynamics/energy.py",
           "ux = vw[b, 0] + wy * cz - wz * cy",
@@ -579,9 +579,9 @@ FAULTS = (
           (_MJCF,), "the MJCF export places a revolute closure's child-side axis point along the parent's "
                     "axis vector (parent-frame coordinates read in the child's frame)"),
     Fault("deriv-minv-upper-triangle", "derivatives", "manipdyn/dynamics/derivatives.py",
-          "x -= L[m, r] * out[m, c]",
-          "x -= L[r, m] * out[m, c]",
-          (_DERIV,), "M⁻¹ by Cholesky: the back substitution reads L's upper triangle (never written) instead of Lᵀ"),
+          "            x = L[r, m]\n            for c in range(m + 1):\n                M[r, c] -= x * M[m, c]",
+          "            x = L[m, r]\n            for c in range(m + 1):\n                M[r, c] -= x * M[m, c]",
+          (_DERIV,), "M⁻¹ by Cholesky: L⁻¹'s substitution reads L's upper triangle (never written) instead of L"),
     Fault("force-cross-angular-block-sign", "derivatives", "manipdyn/dynamics/core.py",
           "        out[r0 + 2, c0] += y\n", "        out[r0 + 2, c0] -= y\n",
           (_DERIV, _TERMS), "h ×̄ with one entry of each −[h]× block of the wrong sign (the RNEA derivatives' "
