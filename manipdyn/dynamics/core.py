@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..joints import joint_placement, motion_subspace
+from ..joints import joint_placement, joint_velocity, motion_subspace
 
 
 def kernel_arrays(model):
@@ -157,17 +157,9 @@ def fk_place(mdl, i, q, Rl, pl, Rw, pw):
 @njit(cache=True, inline="always")
 def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
     """Body i's world angular velocity ww[i] and origin velocity vw[i] (its parent's done first), without
-    scratch arrays: (l, a) = S q̇ of the joint as scalars (as joints.joint_velocity)."""
+    scratch arrays: (l, a) = S q̇ of the joint as scalars (joints.joint_velocity)."""
     parent, kind, iq, iv, nvj, S = mdl[:6]
-    l0 = l1 = l2 = a0 = a1 = a2 = 0.0
-    for r in range(iv[i], iv[i] + nvj[i]):
-        x = v[r]
-        l0 += S[r, 0] * x
-        l1 += S[r, 1] * x
-        l2 += S[r, 2] * x
-        a0 += S[r, 3] * x
-        a1 += S[r, 4] * x
-        a2 += S[r, 5] * x
+    (l0, l1, l2), (a0, a1, a2) = joint_velocity(S, iv[i], nvj[i], v)
     j = parent[i]
     for a in range(3):
         wa = Rw[i, a, 0] * a0 + Rw[i, a, 1] * a1 + Rw[i, a, 2] * a2
