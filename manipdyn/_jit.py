@@ -94,9 +94,17 @@ def _numba_cache_dir(path):
 _CACHE = None if NOJIT else cache_dir()
 
 
+# Floating point: every kernel may fuse a·b + c into one fused multiply-add (LLVM's "contract", nothing else of
+# fast-math: no reassociation, NaN and ±inf keep their meaning, so the finiteness checks stay exact). A fused
+# multiply-add rounds once instead of twice; batched rnea measured 0.55x -> 0.48x rneaInParallel(1).
+FASTMATH = {"contract"}
+
+
 def njit(*args, cache=False, **options):
-    """numba.njit; with cache=True the disk cache is the keyed folder above. Under MANIPDYN_NOJIT=1 the
-    function is returned as it is."""
+    """numba.njit with fastmath=FASTMATH; with cache=True the disk cache is the keyed folder above. Under
+    MANIPDYN_NOJIT=1 the function is returned as it is."""
+    options.setdefault("fastmath", FASTMATH)
+
     def decorate(func):
         if NOJIT:
             return func

@@ -233,7 +233,7 @@ def first_nonfinite(X, s):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=False)              # as derivatives.py (its note)
 def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
     on body (K,) about point (K, 3), in world axes if ``world`` (``state.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;

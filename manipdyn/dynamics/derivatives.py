@@ -39,6 +39,10 @@ from __future__ import annotations
 
 import numpy as np
 
+# These kernels are compiled without _jit.FASTMATH's fused multiply-adds, and so is aba.aba_kernel, whose q̈
+# they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on solo12),
+# and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
+
 from .._jit import njit
 from ..joints import joint_placement
 from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
@@ -59,12 +63,12 @@ OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "d
 
 # -- 6-vector helpers on rows of (n, 6) arrays, inlined ------------------------------------------------------
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def dot6(x, y):
     return x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] + x[4] * y[4] + x[5] * y[5]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def mat6(Y, x, out, add):
     """out = Y x (or out += Y x with ``add``) for Y (6, 6), x (6,)."""
     for a in range(6):
@@ -72,7 +76,7 @@ def mat6(Y, x, out, add):
         out[a] = out[a] + s if add else s
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def world_motion(R, p, s, out):
     """out = ⁰X_i s = [R s_lin + p × R s_ang; R s_ang] for body i at (R, p) in the world (RBDA Table 2.2)."""
     for a in range(3):
@@ -83,7 +87,7 @@ def world_motion(R, p, s, out):
     out[2] += p[0] * out[4] - p[1] * out[3]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def world_inertia(m, c, Ic, R, p, T, out):
     """out (6, 6) = Y_i in the world, about its origin: ``rigid_inertia`` of the CoM R c + p and of R I_C Rᵀ
     (T (6, 6) scratch)."""
@@ -97,7 +101,7 @@ def world_inertia(m, c, Ic, R, p, T, out):
     rigid_inertia(m, T[3, :3], T[:3, 3:], out)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def inertia_variation(Y, v, h, P, out):
     """out = Ẏ = v ×* Y − Y v× + h ×̄ (Pinocchio's ``variation`` plus ``addForceCrossMatrix``): with the
     motion-cross matrix X = v× = [[ω×, v_l×], [0, ω×]] and v ×* = −Xᵀ, Y symmetric: −XᵀY − (XᵀY)ᵀ, plus
@@ -117,7 +121,7 @@ def inertia_variation(Y, v, h, P, out):
     add_force_cross(out, h, 1.0)             # + h ×̄
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def spd_inverse(M, L, out):
     """out = M⁻¹ = L⁻ᵀ L⁻¹ for a symmetric positive definite M (n, n), by Cholesky M = L Lᵀ (L (n, n) scratch,
     lower triangle), then L⁻¹ (into M's lower triangle: M is overwritten) and the symmetric product, as
@@ -163,7 +167,7 @@ def spd_inverse(M, L, out):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=False)
 def first_nonfinite3(D, s):
     """The flat index (which, row, column) within D[:, s] of the first non-finite entry of the three
     (N, nv, nv) matrices D = (dq, dv, da), or -1."""
@@ -178,7 +182,7 @@ def first_nonfinite3(D, s):
 
 # -- the kernel: Carpentier & Mansard's two passes, nested so that they share the scratch arrays -------------
 
-@njit(cache=True)
+@njit(cache=True, fastmath=False)
 def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ (N, nv, nv) into dq, dv, da for every state of Q (N, nq), V, A (N, nv), with the
     external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``state.wrench_rows``; body axes,
@@ -341,7 +345,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=False)
 def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv):
     """∂q̈/∂q, ∂q̈/∂q̇ (N, nv, nv) into dq, dv and M⁻¹ into Minv: q̈ = aba (into qdd), the RNEA derivatives at
     q̈ (M into Minv), then M⁻¹ by Cholesky and ∂q̈/∂x = −M⁻¹ ∂τ/∂x. Returns -1; aba_kernel's codes (a bad
@@ -374,14 +378,14 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=False)
 def rnea_derivatives_one(I, F, q, v, a, dq, dv, da):
     """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
     return rnea_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B,
                                    _NO_P, False, dq[np.newaxis], dv[np.newaxis], da[np.newaxis])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=False)
 def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
     """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
     return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_B,
