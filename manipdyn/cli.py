@@ -351,9 +351,10 @@ MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 
 def _warmup(args) -> int:
     from .warmup import warmup
-    seconds = warmup(args.jobs)
-    print(f"compiled and cached every kernel in {seconds:.1f} s ({args.jobs} worker process"
-          f"{'es' if args.jobs > 1 else ''}); later processes load them from the cache")
+    from .warmup import GROUPS
+    seconds, workers = warmup(args.jobs), min(args.jobs, len(GROUPS))
+    print(f"compiled and cached every kernel in {seconds:.1f} s ({workers} worker process"
+          f"{'es' if workers > 1 else ''}); later processes load them from the cache")
     return 0
 
 

@@ -1,7 +1,7 @@
 """Compile every kernel ahead of use, and measure the cold start.
 
 The kernels are numba functions cached on disk (``_jit``): the first call of each one in a fresh install
-compiles it (tens of seconds in all), every later process loads the machine code from the cache. ``warmup``
+compiles it (minutes in all: 156 s on 2 cores, measured), every later process loads the machine code from the cache. ``warmup``
 makes that first call for every public function — one state and a batch, with and without external
 wrenches, an open and a closed chain — so that a user's first call only loads. ``manipdyn warmup`` runs it
 (the README's setup command does), spread over the cores: each worker compiles its own kernels, so no two
@@ -23,8 +23,10 @@ import warnings
 
 import numpy as np
 
-# Each group compiles disjoint kernels (about equal compile time on this machine): a kernel compiled by two
-# workers at once would keep only one worker's entry in its cache index.
+# Each group compiles its own kernels (about equal compile time on this machine): a kernel compiled by two
+# workers with different signatures would keep only one worker's entry in its cache index. The one shared
+# kernel, aba_kernel (called by aba_derivatives), gets the same signatures from both, so nothing is lost — the
+# bench's cold start (a fresh process after warmup: 0.34 s for all first calls) shows no recompile.
 GROUPS = (("rnea", "aba", "crba", "fd", "fext", "closed"),
           ("bias", "derivatives", "regressor", "coriolis", "lagrange", "frames", "energy", "config"))
 

@@ -128,7 +128,7 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     parent, kind, iq, iv, nvj, S = mdl[:6]
     N, nb = Q.shape[0], I.shape[1]
     # scratch as slices of two arrays, never as separate small arrays: measured 2.3x faster per state (0.28
-    # against 0.65 µs on ur5: separate arrays each keep a reference count, touched at every view in the loop)
+    # against 0.65 µs on ur5; the same kernel text, only the allocations differ)
     R3, B3, path = np.empty((2 * nb, 3, 3)), np.zeros((4 * nb + 2, 3)), np.empty(nb, np.int64)
     Rp, Rw, pp, pw, ww, vw = R3[:nb], R3[nb:], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
     xd, w0 = B3[4 * nb], B3[4 * nb + 1]
@@ -228,7 +228,7 @@ def lagrange_mass_kernel(I, F, Q, M):
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
     N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
-    # scratch as slices of a few arrays (separate small arrays measured 2x slower per state: kinematics above)
+    # scratch as slices of a few arrays (separate small arrays measured 2.3x slower per state: frame_kernel)
     R3, B3, J, cols, v0 = np.empty((2 * nb + 4, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty((6, nv)), \
         np.empty(nv, np.int64), np.empty(0)
     Rp, Rw, tmp, Rc, Iw, eye = R3[:nb], R3[nb:2 * nb], R3[2 * nb], R3[2 * nb + 1], R3[2 * nb + 2], R3[2 * nb + 3]
