@@ -502,7 +502,7 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     ``aba_kernel``'s. Returns -1; ≥ 0 a non-finite input; -2 - i a pivot of M not > 0 in joint i's rows (M is
     not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
-    C = min(N, 16)                                            # states per chunk (measured 5 % faster than
+    C = max(1, min(N, 16))                                    # states per chunk (measured 5 % faster than
     M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), np.zeros((0, 0, NT))   # one M of all N states)
     iv, nvj = I[3], I[4]
     for s in range(N):
