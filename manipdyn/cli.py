@@ -350,8 +350,7 @@ MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 
 
 def _warmup(args) -> int:
-    from .warmup import warmup
-    from .warmup import GROUPS
+    from .warmup import GROUPS, warmup
     seconds, workers = warmup(args.jobs), min(args.jobs, len(GROUPS))
     print(f"compiled and cached every kernel in {seconds:.1f} s ({workers} worker process"
           f"{'es' if workers > 1 else ''}); later processes load them from the cache")

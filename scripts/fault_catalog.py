@@ -568,6 +568,13 @@ FAULTS = (
           "Rw[b, y, 0] * x[k, z] + Rw[b, y, 1] * x[k, z + 1] + Rw[b, y, 2] * x[k, z + 2]",
           "Rw[b, 0, y] * x[k, z] + Rw[b, 1, y] * x[k, z + 1] + Rw[b, 2, y] * x[k, z + 2]",
           (_DERIV,), "a body-axes f_ext turned into world axes by Rwᵀ instead of Rw"),
+    Fault("deriv-ancestor-run-spans-siblings", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "while lo > 0 and parent[lo] == lo - 1:", "while lo > 0 and parent[lo] >= 0:",
+          (_DERIV,), "a run of ancestors taken as every body from the root up, siblings' subtrees included "
+                     "(branches that do not couple get entries)"),
+    Fault("cholesky-chunk-wrench-rows", "aba", "manipdyn/dynamics/aba.py",
+          "X[s0:s1] if X.shape[0] > 1 else X", "X[:s1 - s0] if X.shape[0] > 1 else X",
+          (_TERMS,), "Cholesky route: every chunk of states reads the first chunk's per-state wrenches"),
     Fault("mjcf-fullinertia-products-swapped", "validation", "manipdyn/io/mjcf.py",
           'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))',
           'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]))',
