@@ -572,6 +572,9 @@ FAULTS = (
           "while lo > 0 and parent[lo] == lo - 1:", "while lo > 0 and parent[lo] >= 0:",
           (_DERIV,), "a run of ancestors taken as every body from the root up, siblings' subtrees included "
                      "(branches that do not couple get entries)"),
+    Fault("deriv-rigid6-skew-entry-sign", "derivatives", "manipdyn/dynamics/derivatives.py",
+          "y4 = Y[4, 0] * x[0] + Y[4, 2] * x[2]", "y4 = Y[4, 0] * x[0] - Y[4, 2] * x[2]",
+          (_DERIV,), "Y x for a spatial inertia (rigid6) with one entry of the [h]× block of the wrong sign"),
     Fault("cholesky-chunk-wrench-rows", "aba", "manipdyn/dynamics/aba.py",
           "X[s0:s1] if X.shape[0] > 1 else X", "X[:s1 - s0] if X.shape[0] > 1 else X",
           (_TERMS,), "Cholesky route: every chunk of states reads the first chunk's per-state wrenches"),
