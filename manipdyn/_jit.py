@@ -94,10 +94,42 @@ def _numba_cache_dir(path):
 _CACHE = None if NOJIT else cache_dir()
 
 
-# Floating point: every kernel may fuse a·b + c into one fused multiply-add (LLVM's "contract", nothing else of
-# fast-math: no reassociation, NaN and ±inf keep their meaning, so the finiteness checks stay exact). A fused
-# multiply-add rounds once instead of twice; batched rnea measured 0.55x -> 0.48x rneaInParallel(1).
-FASTMATH = {"contract"}
+# Floating point: kernels round as written (no fast-math), so that for the same formula they give Pinocchio's
+# numbers to the last bits. CONTRACT lets LLVM fuse a·b + c into one fused multiply-add (nothing else of
+# fast-math: no reassociation, NaN and ±inf keep their meaning, so the finiteness checks stay exact); it is
+# given only to the two batch entries whose speed target needs it — rnea.rnea_batch (batched rnea 0.55x ->
+# 0.48x rneaInParallel(1), target 0.5x) and aba.cholesky_batch (1.02x -> 0.99x Pinocchio's loop on chain32) —
+# and costs their results a rounding change of the order of 1e-16 (measured: batched rnea's worst error against
+# Pinocchio 3.8e-16 -> 4.2e-16 on ur5). One state, in whatever form it comes, rounds as written.
+FASTMATH = False
+CONTRACT = {"contract"}
+
+
+class entry:
+    """A kernel's machine code for one fixed list of argument types, called without numba's dispatch.
+
+    numba's dispatcher resolves the type of every argument on every call (~25–35 ns per array, measured);
+    a one-state call whose inputs are already checked (``state.fast1``: float64 ndarrays of the model's
+    shapes) calls ``entry.call`` instead: the compiled function for ``types``, loaded from the disk cache
+    (or compiled) on first use. It checks nothing — an argument of another dtype or number of dimensions
+    would be read as the declared type — so its callers pass exactly these types. ``STATE`` inputs are
+    declared with any strides and read only: a strided or read-only q is read correctly. Under
+    MANIPDYN_NOJIT ``call`` is the Python function."""
+    __slots__ = ("kernel", "types", "call")
+
+    def __init__(self, kernel, *types):
+        self.kernel, self.types = kernel, types
+        self.call = kernel if NOJIT else self._first
+
+    def _first(self, *args):
+        self.call = self.kernel.compile(self.types)
+        return self.call(*args)
+
+
+MODEL = (numba.types.Array(numba.int64, 2, "C"), numba.types.Array(numba.float64, 3, "C"))   # core's (I, F)
+STATE = numba.types.Array(numba.float64, 1, "A", readonly=True)   # one state's q, v or a, as the caller gave it
+
+C1, C2 = (numba.types.Array(numba.float64, n, "C") for n in (1, 2))   # float64 in C order: rows, results
 
 
 def njit(*args, cache=False, **options):

@@ -58,15 +58,18 @@ def quat_to_matrix(x, y, z, w, R):
 
 
 @njit(cache=True, inline="always")
-def joint_placement(kind, axis, R0, p0, q, iq, R, p):
-    """R = R0 R_J(q), p = p0 + R0 p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
-    evaluated at the current d). q is the whole configuration, iq the joint's first entry."""
-    # Every array is read before the branches, which then hold scalars only: an array whose last use lies
-    # inside a branch makes numba keep an atomic reference-count pair per call (~3x slower kernels).
+def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
+    """R[i] = R0_i R_J(q), p[i] = p0_i + R0_i p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
+    evaluated at the current d), from the model's per-joint arrays (kind, iq: q's first entry of the joint,
+    axis, R0, p0; core.unpack) and the whole configuration q."""
+    # Indexed, not handed rows: a row view per body costs a reference-count pair (17 ns per body of forward
+    # kinematics, measured). Every array is read before the branches, which then hold scalars only: an array
+    # whose last use lies inside a branch makes numba keep an atomic reference-count pair per call.
+    kind, iq = kind[i], iq[i]
     last = q.shape[0] - 1
     q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's
     q3, q4, q5, q6 = q[min(iq + 3, last)], q[min(iq + 4, last)], q[min(iq + 5, last)], q[min(iq + 6, last)]
-    x, y, z = axis[0], axis[1], axis[2]
+    x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
     if kind == REVOLUTE:                       # Rodrigues, written out: R_J = Rot(z, θ), p_J = 0
         s, c = np.sin(q0), np.cos(q0)
         t = 1.0 - c
@@ -83,11 +86,11 @@ def joint_placement(kind, axis, R0, p0, q, iq, R, p):
         r20, r21, r22 = 2 * (q3 * q5 - q4 * q6), 2 * (q4 * q5 + q3 * q6), 1 - 2 * (q3 * q3 + q4 * q4)
         px, py, pz = q0, q1, q2
     for a in range(3):
-        b0, b1, b2 = R0[a, 0], R0[a, 1], R0[a, 2]
-        R[a, 0] = b0 * r00 + b1 * r10 + b2 * r20
-        R[a, 1] = b0 * r01 + b1 * r11 + b2 * r21
-        R[a, 2] = b0 * r02 + b1 * r12 + b2 * r22
-        p[a] = p0[a] + b0 * px + b1 * py + b2 * pz
+        b0, b1, b2 = R0[i, a, 0], R0[i, a, 1], R0[i, a, 2]
+        R[i, a, 0] = b0 * r00 + b1 * r10 + b2 * r20
+        R[i, a, 1] = b0 * r01 + b1 * r11 + b2 * r21
+        R[i, a, 2] = b0 * r02 + b1 * r12 + b2 * r22
+        p[i, a] = p0[i, a] + b0 * px + b1 * py + b2 * pz
 
 
 @njit(cache=True, inline="always")

@@ -158,10 +158,11 @@ def _rebuild(model, keep, values):
 def _fixed_placement(model, i, value):
     """(R, p) of body i in its parent with joint i held at ``value`` (its q block, (nq_i,)): the one joint
     model's X = X0 X_J(q), whatever the joint type."""
-    R, p = np.empty((3, 3)), np.empty(3)
-    joint_placement(int(model.kind[i]), np.ascontiguousarray(model.axis[i], float), np.ascontiguousarray(model.R0[i], float),
-                    np.ascontiguousarray(model.p0[i], float), np.ascontiguousarray(np.atleast_1d(value), float), 0, R, p)
-    return R, p
+    R, p = np.empty((1, 3, 3)), np.empty((1, 3))                  # joint i as the only joint of a model
+    joint_placement(0, np.array([model.kind[i]], np.int64), np.zeros(1, np.int64),
+                    np.ascontiguousarray(model.axis[i:i + 1], float), np.ascontiguousarray(model.R0[i:i + 1], float),
+                    np.ascontiguousarray(model.p0[i:i + 1], float), np.ascontiguousarray(np.atleast_1d(value), float), R, p)
+    return R[0], p[0]
 
 
 def _move_frame(f, new_of, base):

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import CONTRACT, njit
 from ..errors import InputError
 from ..joints import joint_placement
 from ..model import MimicModel
@@ -253,7 +253,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
         the body frame),  I^A_i = I_i,  p^A_i = v_i ×* I_i v_i; with ``world`` also the bodies' world
         orientations Rw_i = Rw_λ Rl_i (for world-axes external wrenches)."""
         for i in range(nb):
-            joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+            joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
             for k in range(6):                # v_J = S_i q̇_i (as joints.joint_velocity; here 40 ns/body less)
                 x = 0.0
                 for r in range(iv[i], iv[i] + nvj[i]):
@@ -494,7 +494,14 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     return qdd
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
+def cholesky_batch(I, F, Q, V, Tau, X, body, point, world, out):
+    """``cholesky_kernel`` for a batch of states, compiled with fused multiply-adds (_jit.CONTRACT: its speed
+    target needs them); one state, whatever its form, goes through the kernel as written."""
+    return cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out)
+
+
+@njit(cache=True, inline="always")
 def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ = M⁻¹ (τ − h) for every state (the M⁻¹ route): M by the CRBA (crba.crba_kernel), factored in place,
     M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_kernel) into out, then out ← L⁻ᵀ L⁻¹
@@ -579,7 +586,8 @@ def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
             return unbatch(np.zeros(V.shape), single)
         Q, V, T = (np.ascontiguousarray(x) for x in (Q, V, T))
     qdd = np.empty(V.shape)
-    code = cholesky_kernel(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world", qdd)
+    code = (cholesky_kernel if single else cholesky_batch)(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world",
+                                                           qdd)
     if code != -1:
         if f_ext is not None:                                  # a non-finite wrench is the cause to report
             check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])

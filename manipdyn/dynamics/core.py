@@ -140,7 +140,7 @@ def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
 def fk_place(mdl, i, q, Rl, pl, Rw, pw):
     """Body i's placement in its parent (Rl, pl)[i] and in the world (Rw, pw)[i] (its parent's done first)."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0 = mdl[:9]
-    joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+    joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
     j = parent[i]
     if j < 0:
         for a in range(3):
@@ -261,8 +261,9 @@ def joint_placements_kernel(I, F, Q, R, p):
     """Placement of every body in its parent for every state: R (N, nb, 3, 3), p (N, nb, 3)."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0 = unpack(I, F)[:9]
     for s in range(Q.shape[0]):
+        q, Rs, ps = Q[s], R[s], p[s]
         for i in range(I.shape[1]):
-            joint_placement(kind[i], axis[i], R0[i], p0[i], Q[s], iq[i], R[s, i], p[s, i])
+            joint_placement(i, kind, iq, axis, R0, p0, q, Rs, ps)
 
 
 # -- Python entry points --------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import C2, MODEL, STATE, entry, njit
 from ..joints import joint_placement
 from .core import kernel_arrays, rot3, sandwich3, unpack
 from .state import as_batch, fast1, fast_shape, raise_kernel_error, unbatch
@@ -74,7 +74,7 @@ def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     carried as centre of mass and inertia about it). arrays = core.unpack(I, F); W from merge_weights."""
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = arrays[:12]
     for i in range(parent.shape[0]):
-        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], R[i], p[i])
+        joint_placement(i, kind, iq, axis, R0, p0, q, R, p)
     for i in range(parent.shape[0]):           # start from each body's own CoM and inertia (loops: cheaper
         for a in range(3):                     # than slice copies of these strided views)
             cC[i, a] = com[i, a]
@@ -171,6 +171,9 @@ def crba_one(I, F, q, M):
     return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
 
 
+CRBA_ONE = entry(crba_one, *MODEL, STATE, C2)   # the one-state calls' compiled code (``_jit.entry``)
+
+
 def crba(model, q):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above).
     Float64 arrays go straight to the kernel; anything else is checked and converted first."""
@@ -178,7 +181,7 @@ def crba(model, q):
     if k is not None:                                 # one float64 state
         nv = model.nv
         M = np.empty((nv, nv))
-        code = crba_one(k[0], k[1], q, M)
+        code = CRBA_ONE.call(k[0], k[1], q, M)
         if code == -1:
             return M
         raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
@@ -190,7 +193,7 @@ def crba(model, q):
         q, nd = unbatch(Q, single), 1 if single else 2
     nv = model.nv
     M = np.empty(q.shape[:-1] + (nv, nv))
-    code = (crba_one if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
+    code = (CRBA_ONE.call if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
     if code != -1:
         raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
     return M

@@ -39,9 +39,9 @@ from __future__ import annotations
 
 import numpy as np
 
-# These kernels are compiled without _jit.FASTMATH's fused multiply-adds, and so is aba.aba_kernel, whose q̈
-# they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on solo12),
-# and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
+# These kernels round as written, without fused multiply-adds (_jit.CONTRACT), and so does aba.aba_kernel, whose
+# q̈ they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on
+# solo12), and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
 
 from .._jit import njit
 from ..joints import joint_placement
@@ -230,7 +230,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     def motion(q, v, a):
         """Forward pass (i = 1 … nb): placements, J_i, v_i, a_i, V_i, A_i, B_i, Y_i, f_i, Ẏ_i."""
         for i in range(nb):
-            joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])
+            joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
             j = parent[i]
             for x in range(3):
                 for y in range(3):

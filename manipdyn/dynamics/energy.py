@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import MODEL, STATE, entry, njit
 from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
 from .state import as_batch, fast1, fast2, fast_shape, raise_kernel_error
 
@@ -61,12 +61,22 @@ def energy_kernel(I, F, Q, V, out):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def energy_one(I, F, q, v):
     """The energy of one state (``energy_of``): q (nq,), v (nv,) or (0,); non-finite for a non-finite input."""
     nb = I.shape[1]
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
     return energy_of(unpack(I, F), q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
+
+
+@njit(cache=True)
+def potential_one(I, F, q):
+    """V of one state q (nq,): energy_one with no velocities (the kinetic branch drops out of the machine code)."""
+    return energy_one(I, F, q, q[:0])
+
+
+KINETIC_ONE = entry(energy_one, *MODEL, STATE, STATE)   # the one-state calls' compiled code (``_jit.entry``)
+POTENTIAL_ONE = entry(potential_one, *MODEL, STATE)
 
 
 def _energy(model, call, *arrays):
@@ -97,7 +107,7 @@ def kinetic_energy(model, q, v):
     """T = Σ_links ½ m |v_C|² + ½ ωᵀ (R I Rᵀ) ω, v_C = v_o + ω × R c (world), float or (N,)."""
     k = fast2(model, q, v)
     if k is not None:                             # one float64 state: a finite result is the answer
-        e = energy_one(k[0], k[1], q, v)
+        e = KINETIC_ONE.call(k[0], k[1], q, v)
         if e - e == 0.0:
             return e
     return _energy(model, "kinetic_energy", q, v)
@@ -107,10 +117,9 @@ def potential_energy(model, q):
     """V = −Σ_links m gᵀ c (gravity g in the base frame, CoM c in world coordinates), float or (N,)."""
     k = fast1(model, q)
     if k is not None:
-        e = energy_one(k[0], k[1], q, _NO_V)
+        e = POTENTIAL_ONE.call(k[0], k[1], q)
         if e - e == 0.0:
             return e
     return _energy(model, "potential_energy", q)
 
 
-_NO_V = np.empty(0)

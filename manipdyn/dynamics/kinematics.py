@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import MODEL, C1, C2, STATE, entry, njit
 from ..errors import InputError
 from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, check_output, fast1, fast2, frame_of, quiet, raise_kernel_error, unbatch
@@ -148,13 +148,14 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     return -1
 
 
-@njit(cache=True)
-def frame_one(I, F, q, v, X, out):
+@njit(cache=True, inline="always")
+def frame_one(I, F, q, v, X, want, out):
     """One state q (nq,) [v (nv,)]: for the frame row X (5, 3) = [R; p; (b, want, local)] (``one_state_row``:
     the frame's placement [R; p] in body b) — want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out
     (6, nv); local: in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a
-    non-finite out (flat k). (One packed row: each argument of a compiled call costs ~50 ns.)"""
-    b, want, local = int(X[4, 0]), int(X[4, 1]), X[4, 2] > 0.0
+    non-finite out (flat k). Compiled through jacobian_one and jacobian_dot_one, where want is a constant
+    (the other case's branches and the empty v of J drop out of the machine code)."""
+    b, local = int(X[4, 0]), X[4, 2] > 0.0
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl[:6]
     nb, nv = I.shape[1], S.shape[0]
@@ -185,6 +186,18 @@ def frame_one(I, F, q, v, X, out):
 
 
 @njit(cache=True)
+def jacobian_one(I, F, q, X, out):
+    """frame_one's J (6, nv) of one state q (nq,)."""
+    return frame_one(I, F, q, q[:0], X, 1, out)
+
+
+@njit(cache=True)
+def jacobian_dot_one(I, F, q, v, X, out):
+    """frame_one's J̇ (6, nv) of one state q (nq,), v (nv,)."""
+    return frame_one(I, F, q, v, X, 2, out)
+
+
+@njit(cache=True)
 def placement_one(I, F, q, X, R, p):
     """One state q (nq,): the world placement R (3, 3), p (3,) of the frame row X (5, 3) = [R; p; (b, ·, ·)]
     (``one_state_row``). Returns -1, or -2 for a non-finite result (a non-finite input gives one)."""
@@ -196,6 +209,12 @@ def placement_one(I, F, q, X, R, p):
     for r in range(3):
         ok &= np.isfinite(p[r]) & np.isfinite(R[r, 0]) & np.isfinite(R[r, 1]) & np.isfinite(R[r, 2])
     return -1 if ok else -2
+
+
+# One-state calls go straight to the compiled code (``_jit.entry``): q, v as the caller gave them, the frame row
+JACOBIAN_ONE = entry(jacobian_one, *MODEL, STATE, C2, C2)
+JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, STATE, STATE, C2, C2)
+PLACEMENT_ONE = entry(placement_one, *MODEL, STATE, C2, C2, C1)
 
 
 @njit(cache=True)
@@ -275,7 +294,6 @@ def lagrange_mass_kernel(I, F, Q, M):
 
 # -- Python entry points -----------------------------------------------------------------------------------
 
-_NO_V = np.empty(0)
 
 
 def frame_row(model, frame):
@@ -294,28 +312,18 @@ def frame_row(model, frame):
 
 
 def one_state_row(model, frame, want, reference):
-    """X (5, 3) = [R; p; (body, want, local)] of a link or frame name for frame_one / placement_one, kept per
-    model and (name, want, reference); InputError lists the closest names, or names a bad reference."""
+    """(X, shape): X (5, 3) = [R; p; (body, want, local)] of a link or frame name for frame_one /
+    placement_one and the shape (6, nv) of a Jacobian, kept per model and (name, want, reference);
+    InputError lists the closest names, or names a bad reference."""
     _check_reference(reference)
     rows = model.__dict__.get("_frame_one_rows")
     if rows is None:
         rows = {}
         object.__setattr__(model, "_frame_one_rows", rows)  # a cache, not model data (Model is frozen)
     b, X = frame_row(model, frame)
-    row = np.vstack([X, [float(b), float(want), float(reference == "local")]])
+    row = np.vstack([X, [float(b), float(want), float(reference == "local")]]), (6, model.nv)
     rows[frame, want, reference] = row
     return row
-
-
-def _frame_fast(model, k, q, v, frame, want, reference):
-    """frame_one on one float64 state (k = ``fast1``/``fast2``'s kernel arrays): J or J̇ (6, nv), or None for
-    a bad input or result (the checked path then names it)."""
-    try:
-        X = model._frame_one_rows[frame, want, reference]
-    except (AttributeError, KeyError, TypeError):
-        X = one_state_row(model, frame, want, reference)
-    out = np.empty((6, model.nv))
-    return out if frame_one(k[0], k[1], q, _NO_V if v is None else v, X, out) == -1 else None
 
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
@@ -339,11 +347,11 @@ def frame_placement(model, q, frame):
     k = fast1(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            X = model._frame_one_rows[frame, 0, "local_world_aligned"]
+            X = model._frame_one_rows[frame, 0, "local_world_aligned"][0]
         except (AttributeError, KeyError, TypeError):
-            X = one_state_row(model, frame, 0, "local_world_aligned")
+            X = one_state_row(model, frame, 0, "local_world_aligned")[0]
         R, p = np.empty((3, 3)), np.empty(3)
-        if placement_one(k[0], k[1], q, X, R, p) == -1:
+        if PLACEMENT_ONE.call(k[0], k[1], q, X, R, p) == -1:
             return R, p
     return _frame_placement(model, q, frame)            # checked: names a bad input or result
 
@@ -361,8 +369,12 @@ def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
     k = fast1(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
-        J = _frame_fast(model, k, q, None, frame, 1, reference)
-        if J is not None:
+        try:
+            X, shape = model._frame_one_rows[frame, 1, reference]
+        except (AttributeError, KeyError, TypeError):
+            X, shape = one_state_row(model, frame, 1, reference)
+        J = np.empty(shape)
+        if JACOBIAN_ONE.call(k[0], k[1], q, X, J) == -1:
             return J
     return _frame_jacobian(model, q, frame, reference)  # checked: names a bad input or result
 
@@ -380,8 +392,12 @@ def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     docstring gives the columns)."""
     k = fast2(model, q, v)
     if k is not None:                                   # one float64 state: straight into the kernel
-        dJ = _frame_fast(model, k, q, v, frame, 2, reference)
-        if dJ is not None:
+        try:
+            X, shape = model._frame_one_rows[frame, 2, reference]
+        except (AttributeError, KeyError, TypeError):
+            X, shape = one_state_row(model, frame, 2, reference)
+        dJ = np.empty(shape)
+        if JACOBIAN_DOT_ONE.call(k[0], k[1], q, v, X, dJ) == -1:
             return dJ
     return _frame_jacobian_dot(model, q, v, frame, reference)   # checked: names a bad input or result
 

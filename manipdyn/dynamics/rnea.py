@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import C1, CONTRACT, MODEL, STATE, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from ..model import MimicModel
 from .core import finite_state, kernel_arrays, unpack, wrench_rows_of
@@ -59,7 +59,7 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     k = fast3(model, q, v, a) if f_ext is None and f_ext_frame == "local" else None
     if k is not None:                                           # one float64 state: straight into the kernel
         tau = np.empty(v.shape)
-        code = rnea_one(k[0], k[1], q, v, a, tau)
+        code = RNEA_ONE.call(k[0], k[1], q, v, a, tau)
         if code == -1:
             return tau
         raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
@@ -75,15 +75,15 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
         nd = fast_shape(model, q, v, a) if f_ext_frame == "local" else 0
     if nd == 1:                                                 # one state, no Python-side reshapes
         tau = np.empty(v.shape)
-        code = rnea_one(*kernel_arrays(model), q, v, a, tau)
+        code = RNEA_ONE.call(*kernel_arrays(model), q, v, a, tau)
     elif nd == 2 and f_ext is None:
         tau = np.empty(v.shape)
-        code = rnea_kernel(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
+        code = rnea_batch(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
     elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
         return mimic_call("rnea", model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
     else:                                                       # checked and converted first
         (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-        return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea")[0], single)
+        return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea", single=single)[0], single)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
     return tau
@@ -106,7 +106,7 @@ def _bias(model, q, v, call):
     k = fast1(model, q) if v is None else fast2(model, q, v)
     if k is not None:                                         # one float64 state: straight into the kernel
         tau = np.empty(model.state_shapes[1])
-        code = bias_one(k[0], k[1], q, _NO_V if v is None else v, tau)
+        code = BIAS_ONE.call(k[0], k[1], q, _NO_V if v is None else v, tau)
         if code == -1:
             return tau
     arrays = (q,) if v is None else (q, v)
@@ -121,7 +121,7 @@ def _bias(model, q, v, call):
     q = arrays[0]
     v = arrays[1] if len(arrays) > 1 else np.empty(q.shape[:-1] + (0,))
     tau = np.empty(q.shape[:-1] + (model.nv,))
-    code = (bias_one if nd == 1 else bias_kernel)(*kernel_arrays(model), q, v, tau)
+    code = (BIAS_ONE.call if nd == 1 else bias_kernel)(*kernel_arrays(model), q, v, tau)
     if code != -1:
         raise_kernel_error(model, code, _QVA[:len(arrays)], arrays, call, "g" if len(arrays) == 1 else "h", tau)
     return tau
@@ -143,7 +143,7 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
       tau      (N, nv) joint torques/forces (Eqs. 17, 18); a free-flyer root's six entries are its f, n
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True)
+    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True, single=single)
     out = {k: T[:, :, 3 * m:3 * m + 3] for m, k in enumerate(TERMS)}
     out["R"] = T[:, :, 3 * len(TERMS):].reshape(T.shape[:2] + (3, 3))
     inputs = dict(q=Q, v=V, a=A)
@@ -154,16 +154,18 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
 
 
 @quiet
-def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
+def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False, single=False):
     """The kernel on checked batches Q (N, nq), V, A (N, nv): τ (N, nv) and the per-link terms (N, nb, NT)
-    (or an empty array); f_ext checked and converted first."""
+    (or an empty array); f_ext checked and converted first. A batch goes through rnea_batch (fused
+    multiply-adds), one state (``single``) through the kernel as written, as the one-state fast paths do."""
     N, nb = Q.shape[0], model.njoints
     X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
     tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT) if terms else (0, nb, NT))
     if nb == 0:
         return tau, T
     Q, V, A = (np.ascontiguousarray(x) for x in (Q, V, A))
-    code = rnea_kernel(*kernel_arrays(model), Q, V, A, X, body, point, f_ext_frame == "world", tau, T)
+    code = (rnea_kernel if single else rnea_batch)(*kernel_arrays(model), Q, V, A, X, body, point,
+                                                   f_ext_frame == "world", tau, T)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (Q, V, A), call, "tau", tau)
     return tau, T
@@ -249,6 +251,18 @@ def bias_one(I, F, q, v, tau):
     return bias_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :])
 
 
+# The one-state calls' compiled code (``_jit.entry``): q, v, a as the caller gave them
+RNEA_ONE = entry(rnea_one, *MODEL, STATE, STATE, STATE, C1)
+BIAS_ONE = entry(bias_one, *MODEL, STATE, STATE, C1)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rnea_batch(I, F, Q, V, A, X, xb, xp, world, tau, T):
+    """``rnea_kernel`` for a batch of states, compiled with fused multiply-adds (_jit.CONTRACT: batched rnea's
+    speed target needs them); one state, whatever its form, goes through the kernel as written."""
+    return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
+
+
 @njit(cache=True, inline="always")
 def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
@@ -287,7 +301,7 @@ def outward(mdl, work, q, v, a, orient, terms):
     parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
     Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
     for i in range(parent.shape[0]):
-        joint_placement(kind[i], axis[i], R0[i], p0[i], q, iq[i], Rl[i], pl[i])   # R^{i−1}_i, p^{i−1}_i
+        joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
         j = parent[i]
         if j < 0:                                          # the fixed base: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g
             w_in, dw_in, v_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)

@@ -1,6 +1,6 @@
 """A batch (N, nv) equals the stack of single-state calls to 1e-14 (DESIGN.md §3 measure)."""
 import numpy as np
-from conftest import AAU, assert_close, zoo_paths
+from conftest import AAU, assert_close, err, zoo_paths
 
 from manipdyn import load_urdf, rnea, rnea_terms
 from manipdyn.validation import random_states
@@ -91,6 +91,7 @@ def test_one_state_f_ext_fast_path_equals_the_checked_batch():
     turned = next(f for f, fr in model.frames.items() if fr.body >= 0 and np.any(fr.p)
                   and not np.allclose(fr.R, np.eye(3)))              # offset and turned in its body
     names = [model.body_names[5], turned]
+    worst = 0.0                                                      # measured 3.2e-15
     for frame in ("local", "world"):
         for subset in ([names[0]], [names[1]], names):          # one wrench (the fast path) and two
             fx = {n: (F, M) for n in subset}
@@ -100,4 +101,6 @@ def test_one_state_f_ext_fast_path_equals_the_checked_batch():
                                                                 method="cholesky")):
                 batch = call(Q, V, A, fx)
                 rows = np.stack([call(Q[s], V[s], A[s], {n: (F[s], M[s]) for n in subset}) for s in range(6)])
-                assert_close(batch, rows, 1e-15, frame)  # measured 0 (bit-identical)
+                worst = max(worst, err(batch, rows))
+                assert_close(batch, rows, 1e-14, frame)  # DESIGN §5; batches fuse multiply-adds (_jit.CONTRACT)
+    print(f"\nworst {worst:.1e}")

@@ -80,6 +80,32 @@ def test_terms_match_pinocchio_one_state_and_batch(name):
         assert e <= TOL[k][0], f"{k}: err {e:.2e} > {TOL[k][0]:.0e} (measured worst {TOL[k][1]})"
 
 
+def _layouts(x):
+    """x as a strided view (every other entry of a buffer whose gaps hold 7.0: read as if contiguous, they would
+    give finite, wrong numbers), a reversed view of a reversed copy (negative strides) and a read-only array."""
+    buf = np.full(2 * x.size, 7.0)
+    buf[::2] = x
+    ro = x.copy()
+    ro.flags.writeable = False
+    return buf[::2], x[::-1].copy()[::-1], ro
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "tree4"])
+def test_one_state_calls_read_any_layout(name):
+    """The one-state calls hand q and v to the compiled code as they are (_jit.entry: declared with any strides,
+    read only): a strided, a reversed and a read-only state give Pinocchio's numbers as a plain array does."""
+    c = case(name)
+    m = c.model
+    Q, V, _ = c.states(1, 57)
+    frame = m.body_names[-1]
+    ref = _pin_terms(c, Q[0], V[0], frame)
+    for q, v in zip(_layouts(Q[0]), _layouts(V[0])):
+        ours = _ours(m, q, v, frame)
+        for k in ref:
+            key = k[0] if isinstance(k, tuple) else k
+            assert err(ours[k], ref[k]) <= TOL[key][0], (k, q.strides, q.flags.writeable)
+
+
 # × cond(M) of each state: q̈ of the Cholesky route vs pin.aba; one-state f_ext calls vs Pinocchio's fext.
 TOL_FD = 4e-16           # measured 1.3e-17 × cond (tree4)
 TOL_FEXT = dict(rnea=5e-14, aba=5e-16, cholesky=3e-16)      # measured 1.5e-15 (τ), 1.7e-17, 1.0e-17 × cond (tree4)
