@@ -587,6 +587,10 @@ FAULTS = (
           "(rnea_kernel if single else rnea_batch)", "(rnea_batch if single else rnea_batch)",
           ("tests/robustness/test_api_inputs.py",), "one state in a converted form (ints) rounds as a batch does "
           "(fused multiply-adds), not as the same state in float64 does"),
+    Fault("crba-nonfinite-first-entry-missed", "lagrange", "manipdyn/dynamics/crba.py",
+          "        if k >= 0:\n            return -2 - nb - (s * nv * nv + k)",
+          "        if k > 0:\n            return -2 - nb - (s * nv * nv + k)",
+          ("tests/robustness/test_api_outputs.py",), "CRBA's result check lets a non-finite M[0, 0] through"),
     Fault("cholesky-chunk-wrench-rows", "aba", "manipdyn/dynamics/aba.py",
           "X[s0:s1] if X.shape[0] > 1 else X", "X[:s1 - s0] if X.shape[0] > 1 else X",
           (_TERMS,), "Cholesky route: every chunk of states reads the first chunk's per-state wrenches"),

@@ -174,6 +174,25 @@ def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
 
 
 @njit(cache=True, inline="always")
+def first_nonfinite_entry(A):
+    """The flat index of the first non-finite entry of the 2-D A, or -1. The common case (all finite) is one
+    branch-free pass (x − x is 0 for a finite x, NaN for ±inf and NaN; measured 0.2 µs per 32 × 32 M less
+    than an early exit per entry); only a bad A is searched for its entry."""
+    n, m = A.shape
+    bad = 0
+    for a in range(n):
+        for b in range(m):
+            bad += not (A[a, b] - A[a, b] == 0.0)
+    if bad == 0:
+        return -1
+    for a in range(n):
+        for b in range(m):
+            if not np.isfinite(A[a, b]):
+                return a * m + b
+    return -1
+
+
+@njit(cache=True, inline="always")
 def nonfinite_input(Q, V, s):
     """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V.
     The common case (all finite) is one branch-free pass; only a bad state is searched for its entry."""

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import C2, MODEL, STATE, entry, njit
 from ..joints import joint_placement
-from .core import kernel_arrays, rot3, sandwich3, unpack
+from .core import first_nonfinite_entry, kernel_arrays, rot3, sandwich3, unpack
 from .state import as_batch, fast1, fast_shape, raise_kernel_error, unbatch
 
 
@@ -158,10 +158,9 @@ def crba_kernel(I, F, Q, M):
                 return s * nq + k
         composite_pass(arrays, Q[s], W, R, p, cC, IC, d, tmp)
         column_pass(arrays, R, p, mC, cC, IC, M[s])
-        for a in range(nv):                    # the result is finite (else an intermediate overflowed)
-            for b in range(nv):
-                if not np.isfinite(M[s, a, b]):
-                    return -2 - nb - ((s * nv + a) * nv + b)
+        k = first_nonfinite_entry(M[s])        # the result is finite (else an intermediate overflowed)
+        if k >= 0:
+            return -2 - nb - (s * nv * nv + k)
     return -1
 
 

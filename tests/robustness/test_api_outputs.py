@@ -15,6 +15,7 @@ N5 = ARM.nv
 Z = np.zeros(N5)
 BIG = np.full(N5, 1e200)                 # ω² overflows: 1e400
 TOOL_BIG = {"tool": (np.full(3, 1e308), np.full(3, 1e308))}
+HUGE_I = dataclasses.replace(ARM, inertia=np.repeat(np.eye(3)[None] * 1e308, ARM.njoints, 0))  # composites overflow
 
 OVERFLOW = {
     "rnea": lambda: md.rnea(ARM, Z, BIG, Z),
@@ -23,13 +24,15 @@ OVERFLOW = {
     "aba": lambda: md.aba(ARM, Z, BIG, Z),
     "aba_f_ext": lambda: md.aba(ARM, Z, Z, np.full(N5, 1e308), f_ext=TOOL_BIG),
     "forward_dynamics": lambda: md.forward_dynamics(ARM, Z, BIG, Z, method="cholesky"),
+    "mass_matrix": lambda: md.mass_matrix(HUGE_I, Z),
+    "mass_matrix_batch": lambda: md.mass_matrix(HUGE_I, np.zeros((3, N5))),
     "coriolis_matrix": lambda: md.coriolis_matrix(ARM, Z, np.full(N5, 1.7e308)),
     "kinetic_energy": lambda: md.kinetic_energy(ARM, Z, BIG),
     "frame_jacobian_dot": lambda: md.frame_jacobian_dot(ARM, Z, np.full(N5, 1e308), "tool"),
     "constrained_forward_dynamics": lambda: md.constrained_forward_dynamics(FOURBAR, np.zeros(3), np.full(3, 1e200),
                                                                             np.zeros(3)),
 }
-CALL_NAME = {"rnea_f_ext": "rnea", "aba_f_ext": "aba"}
+CALL_NAME = {"rnea_f_ext": "rnea", "aba_f_ext": "aba", "mass_matrix_batch": "mass_matrix"}
 
 
 @pytest.mark.parametrize("fn", list(OVERFLOW))
