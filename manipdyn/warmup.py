@@ -1,7 +1,7 @@
 """Compile every kernel ahead of use, and measure the cold start.
 
 The kernels are numba functions cached on disk (``_jit``): the first call of each one in a fresh install
-compiles it (minutes in all: 156–169 s on 2 cores, measured), every later process loads the machine code from the cache. ``warmup``
+compiles it (minutes in all: 225–245 s on 2 cores, measured), every later process loads the machine code from the cache. ``warmup``
 makes that first call for every public function — one state and a batch, with and without external
 wrenches, an open and a closed chain — so that a user's first call only loads. ``manipdyn warmup`` runs it
 (the README's setup command does), spread over the cores: each worker compiles its own kernels, so no two
