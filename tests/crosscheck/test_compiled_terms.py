@@ -82,18 +82,23 @@ def test_terms_match_pinocchio_one_state_and_batch(name):
 
 def _layouts(x):
     """x as a strided view (every other entry of a buffer whose gaps hold 7.0: read as if contiguous, they would
-    give finite, wrong numbers), a reversed view of a reversed copy (negative strides) and a read-only array."""
+    give finite, wrong numbers), a reversed view of a reversed copy (negative strides), a read-only array and
+    one whose data is not 8-byte aligned."""
     buf = np.full(2 * x.size, 7.0)
     buf[::2] = x
     ro = x.copy()
     ro.flags.writeable = False
-    return buf[::2], x[::-1].copy()[::-1], ro
+    odd = np.frombuffer(bytearray(8 * x.size + 1), np.float64, x.size, offset=1)
+    odd[...] = x
+    assert not odd.flags.aligned
+    return buf[::2], x[::-1].copy()[::-1], ro, odd
 
 
 @pytest.mark.parametrize("name", ["aau_arm", "tree4"])
 def test_one_state_calls_read_any_layout(name):
     """The one-state calls hand q and v to the compiled code as they are (_jit.entry: declared with any strides,
-    read only): a strided, a reversed and a read-only state give Pinocchio's numbers as a plain array does."""
+    read only): a strided, a reversed, a read-only and an unaligned state give Pinocchio's numbers as a plain
+    array does."""
     c = case(name)
     m = c.model
     Q, V, _ = c.states(1, 57)
