@@ -294,8 +294,6 @@ def lagrange_mass_kernel(I, F, Q, M):
 
 # -- Python entry points -----------------------------------------------------------------------------------
 
-
-
 def frame_row(model, frame):
     """(body, X (4, 3) = [R; p]) of a link or frame name: the frame's placement in its body, kept per model
     (the lookup and the array are built once per name); InputError lists the closest names."""
