@@ -591,6 +591,10 @@ FAULTS = (
           "        if k >= 0:\n            return -2 - nb - (s * nv * nv + k)",
           "        if k > 0:\n            return -2 - nb - (s * nv * nv + k)",
           ("tests/robustness/test_api_outputs.py",), "CRBA's result check lets a non-finite M[0, 0] through"),
+    Fault("first-nonfinite-entry-blind", "lagrange", "manipdyn/dynamics/core.py",
+          "bad += not (A[a, b] - A[a, b] == 0.0)", "bad += 0",
+          ("tests/robustness/test_api_outputs.py",), "the result check shared by CRBA, C, the Lagrange M, the "
+          "regressor and the derivatives passes every matrix: an overflowed result is returned as if finite"),
     Fault("cholesky-chunk-wrench-rows", "aba", "manipdyn/dynamics/aba.py",
           "X[s0:s1] if X.shape[0] > 1 else X", "X[:s1 - s0] if X.shape[0] > 1 else X",
           (_TERMS,), "Cholesky route: every chunk of states reads the first chunk's per-state wrenches"),

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from .core import add_force_cross, fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
+from .core import add_force_cross, first_nonfinite_entry, fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, fast2, fast_shape, raise_kernel_error, unbatch
 
 
@@ -160,10 +160,9 @@ def coriolis_kernel(I, F, Q, V, C):
         bodies(Q[s], V[s])
         composites()
         blocks(C[s])
-        for a in range(nv):
-            for b in range(nv):
-                if not np.isfinite(C[s, a, b]):
-                    return -2 - nb - ((s * nv + a) * nv + b)
+        k = first_nonfinite_entry(C[s])
+        if k >= 0:
+            return -2 - nb - (s * nv * nv + k)
     return -1
 
 

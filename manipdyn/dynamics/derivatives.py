@@ -46,7 +46,7 @@ import numpy as np
 from .._jit import njit
 from ..joints import joint_placement
 from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
-from .core import add_force_cross, finite_state, kernel_arrays, unpack
+from .core import add_force_cross, finite_state, first_nonfinite_entry, kernel_arrays, unpack
 from .state import (
     as_batch,
     fast_shape,
@@ -185,21 +185,12 @@ def spd_inverse(M, L, out):
 @njit(cache=True, inline="always", fastmath=False)
 def first_nonfinite3(D, s):
     """The flat index (which, row, column) within D[:, s] of the first non-finite entry of the three
-    (N, nv, nv) matrices D = (dq, dv, da), or -1. The common case (all finite) is one branch-free pass
-    (x − x is 0 for a finite x, NaN for ±inf and NaN); only a bad state is searched for its entry."""
+    (N, nv, nv) matrices D = (dq, dv, da), or -1 (core.first_nonfinite_entry on each)."""
     nv = D[0].shape[1]
-    bad = 0
     for w in range(3):
-        x = D[w][s].ravel()
-        for k in range(x.shape[0]):
-            bad += not (x[k] - x[k] == 0.0)
-    if bad == 0:
-        return -1
-    for w in range(3):
-        for r in range(nv):
-            for c in range(nv):
-                if not np.isfinite(D[w][s, r, c]):
-                    return (w * nv + r) * nv + c
+        k = first_nonfinite_entry(D[w][s])
+        if k >= 0:
+            return w * nv * nv + k
     return -1
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import MODEL, C1, C2, STATE, entry, njit
 from ..errors import InputError
-from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, sandwich3, unpack
+from .core import first_nonfinite_entry, fk_pass, fk_path, kernel_arrays, nonfinite_input, sandwich3, unpack
 from .state import as_batch, check_output, fast1, fast2, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
@@ -285,10 +285,9 @@ def lagrange_mass_kernel(I, F, Q, M):
             for t in range(r):
                 x = Ms[r, t] + Ms[t, r]
                 Ms[r, t] = Ms[t, r] = x
-        for a in range(nv):
-            for b in range(nv):
-                if not np.isfinite(Ms[a, b]):
-                    return -2 - nb - ((s * nv + a) * nv + b)
+        k = first_nonfinite_entry(Ms)
+        if k >= 0:
+            return -2 - nb - (s * nv * nv + k)
     return -1
 
 

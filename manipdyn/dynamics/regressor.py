@@ -44,7 +44,7 @@ import numpy as np
 from .._jit import njit
 from ..errors import InputError
 from .aba import motion_to_child
-from .core import finite_state, kernel_arrays, unpack
+from .core import finite_state, first_nonfinite_entry, kernel_arrays, unpack
 from .rnea import outward
 from .state import (
     as_batch,
@@ -174,10 +174,9 @@ def regressor_kernel(I, F, Q, V, A, Y):
         for i in range(nb):
             body_block(work, i, W)
             to_ancestors(mdl, work, i, W, Sx, Y[s])
-        for r in range(nv):                               # finite result (else an intermediate overflowed)
-            for c in range(NP * nb):
-                if not np.isfinite(Y[s, r, c]):
-                    return -2 - nb - ((s * nv + r) * NP * nb + c)
+        k = first_nonfinite_entry(Y[s])                   # finite result (else an intermediate overflowed)
+        if k >= 0:
+            return -2 - nb - (s * nv * NP * nb + k)
     return -1
 
 
