@@ -3,8 +3,8 @@
 Public API (names follow Pinocchio's where the meaning is the same). Every dynamics function takes one
 state — q (nq,), q̇, q̈, τ (nv,) — or a batch (N, nq), (N, nv), and returns the matching shape; nq = nv but
 for a free-flyer root (``load_urdf(path, root_joint="free_flyer")``), whose q moves by ``integrate``.
-A tree with <mimic> joints honoured (``load_urdf(path, mimic=True)`` -> MimicModel) goes to rnea, mass_matrix,
-gravity_torques, aba and forward_dynamics in its independent coordinates (``manipdyn.dynamics.mimic``).
+A tree with <mimic> joints honoured (``load_urdf(path, mimic=True)`` -> MimicModel) goes to the calls listed in
+``manipdyn.dynamics.mimic.TAKES_MIMIC``, in its independent coordinates; every other call refuses it.
 Pinocchio is never imported here.
 """
 from __future__ import annotations
@@ -14,9 +14,9 @@ from .dynamics.aba import aba, forward_dynamics
 from .dynamics.derivatives import aba_derivatives, rnea_derivatives
 from .dynamics.energy import kinetic_energy, potential_energy
 from .dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
-from .dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
-from .dynamics import mimic as _mimic  # noqa: F401  (registers the MimicModel versions of rnea, aba, ...)
-from .dynamics.rnea import nonlinear_effects, rnea, rnea_terms
+from .dynamics.coriolis import coriolis_matrix
+from .dynamics.crba import mass_matrix
+from .dynamics.rnea import gravity_torques, nonlinear_effects, rnea, rnea_terms
 from .dynamics.regressor import dynamic_parameters, joint_torque_regressor, model_with_parameters
 from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, InertiaWarning, InputError,
                      ManipdynError, ModelError, NumericalError, QuirkWarning, SingularError, URDFError)

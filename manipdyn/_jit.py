@@ -7,8 +7,10 @@ kernel's stale machine code. Here every kernel's cache lives in a folder named b
 sources (``KERNEL_SOURCES``): editing any of them selects a fresh folder, and everything recompiles.
 
 Cache folder: ``<base>/numba-<sha256[:16]>``, base = numba's ``NUMBA_CACHE_DIR`` if the user set it, else
-``manipdyn/__pycache__`` if writable (older ``numba-*`` folders there are removed), else the user cache
-directory (``~/.cache/manipdyn``). If none is writable the kernels compile without a disk cache.
+``manipdyn/__pycache__`` if writable, else the user cache directory (``~/.cache/manipdyn``). If none is
+writable the kernels compile without a disk cache. Importing reads the kernel sources (to hash them) and
+changes nothing but the cache folder it picks (numba creates it); ``prune_stale()`` — run by ``manipdyn
+warmup`` — removes the in-tree folders of earlier sources.
 
 Switches (environment, read at import):
   MANIPDYN_NOJIT=1     the kernels run uncompiled, as the Python functions they are written as (slow: for
@@ -27,9 +29,9 @@ from pathlib import Path
 import numba
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_SOURCES = ("_jit.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
+KERNEL_SOURCES = ("_jit.py", "spatial.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
                   "dynamics/derivatives.py", "dynamics/regressor.py", "dynamics/coriolis.py", "dynamics/energy.py",
-                  "dynamics/kinematics.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
+                  "dynamics/kinematics.py", "dynamics/lagrange.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
 _FOLDER = re.compile(r"numba-[0-9a-f]{16}")
 
@@ -67,17 +69,20 @@ def cache_dir(root=PACKAGE, user_base=None):
         return Path(user_base) / name if _writable(Path(user_base) / name) else None
     in_tree = Path(root) / "__pycache__"
     if _writable(in_tree / name):
-        _prune(in_tree, name)
         return in_tree / name
     home = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "manipdyn"
     return home / name if _writable(home / name) else None
 
 
-def _prune(base, keep):
-    """Remove the cache folders of earlier sources from base (never a user-given folder)."""
-    for p in base.iterdir():
-        if p.name != keep and _FOLDER.fullmatch(p.name) and p.is_dir():
+def prune_stale(root=PACKAGE):
+    """Remove the in-tree cache folders (``manipdyn/__pycache__/numba-*``) of earlier kernel sources, keeping the
+    current one (never a user-given NUMBA_CACHE_DIR). Returns the folders removed."""
+    keep, base, gone = cache_dir(root), Path(root) / "__pycache__", []
+    for p in base.iterdir() if base.is_dir() else ():
+        if (keep is None or p != keep) and _FOLDER.fullmatch(p.name) and p.is_dir():
             shutil.rmtree(p, ignore_errors=True)
+            gone.append(p)
+    return gone
 
 
 @contextmanager
@@ -109,7 +114,7 @@ class entry:
     """A kernel's machine code for one fixed list of argument types, called without numba's dispatch.
 
     numba's dispatcher resolves the type of every argument on every call (~25–35 ns per array, measured);
-    a one-state call whose inputs are already checked (``state.fast1``: float64 ndarrays of the model's
+    a one-state call whose inputs are already checked (``state.fast``: float64 ndarrays of the model's
     shapes) calls ``entry.call`` instead: the compiled function for ``types``, loaded from the disk cache
     (or compiled) on first use. It checks nothing — an argument of another dtype or number of dimensions
     would be read as the declared type — so its callers pass exactly these types. ``STATE`` inputs are
@@ -126,10 +131,12 @@ class entry:
         return self.call(*args)
 
 
-MODEL = (numba.types.Array(numba.int64, 2, "C"), numba.types.Array(numba.float64, 3, "C"))   # core's (I, F)
+MODEL = (numba.types.Array(numba.int64, 2, "C", readonly=True),
+         numba.types.Array(numba.float64, 3, "C", readonly=True))   # Model.kernel's (I, F), read-only
 STATE = numba.types.Array(numba.float64, 1, "A", readonly=True)   # one state's q, v or a, as the caller gave it
 
-C1, C2 = (numba.types.Array(numba.float64, n, "C") for n in (1, 2))   # float64 in C order: rows, results
+C1, C2 = (numba.types.Array(numba.float64, n, "C") for n in (1, 2))   # float64 in C order: results
+ROW = numba.types.Array(numba.float64, 2, "C", readonly=True)       # a frame's row of Model.kernel
 
 
 def njit(*args, cache=False, **options):

@@ -13,7 +13,8 @@ import traceback
 import warnings
 from pathlib import Path
 
-from .errors import InputError, ManipdynError
+from .errors import InputError, ManipdynError, MissingExtraError
+from .extras import require
 from .io.trajectory import MAX_TRAJECTORY_BYTES
 from .paths import bundled_dir
 
@@ -29,7 +30,8 @@ exit codes:
   0  success
   1  a validated term failed (validate), or a target was missed (bench --check)
   2  bad input or usage: a bad argument, a missing or unreadable file, a URDF or trajectory manipdyn
-     refuses, an interrupted run (Ctrl-C), or an internal error; one line on stderr
+     refuses, a missing optional package (the line gives the pip command of its extra, e.g.
+     pip install "manipdyn[validate]"), an interrupted run (Ctrl-C), or an internal error; one line on stderr
      ("manipdyn <command>: error: ..."), no traceback unless --debug
 
 limits (checked before any work starts): validate --states 1..{MAX_STATES}, --tol finite and > 0,
@@ -51,10 +53,12 @@ def _validate(args) -> int:
         return _referee(args)
     if args.markdown:
         raise InputError("--markdown needs --against (the engines referee)")
-    from tqdm import tqdm
-
     from .validation import format_report, validate
     from .validation.mimic import validate_mimic
+    from .validation.reference import pin
+
+    pin()                                 # MissingExtraError (exit 2) before any model loads
+    tqdm = _progress_bar()
 
     if args.states is None:
         args.states = 1000
@@ -77,6 +81,34 @@ def _validate(args) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps([r.as_dict() for r in reports], indent=1))
     return 1 if failed else 0
+
+
+class _NoBar:
+    """Stands in for tqdm's bar when tqdm (the validate extra) is not installed: no bar, messages printed."""
+
+    def __init__(self, *args, **kw):
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n=1):
+        pass
+
+    @staticmethod
+    def write(s, file=None, end="\n"):
+        print(s, file=file or sys.stdout, end=end)
+
+
+def _progress_bar():
+    """tqdm's bar class, or _NoBar without tqdm (the bar is cosmetic: validate runs the same)."""
+    try:
+        return require("tqdm", "validate", "manipdyn validate's progress bar").tqdm
+    except MissingExtraError:
+        return _NoBar
 
 
 def _referee(args) -> int:
@@ -315,7 +347,8 @@ def _export(args) -> int:
 def _play(args) -> int:
     from . import viz
     from .io.urdf import load_urdf
-    from .viz.geometry import parse_package_dirs
+    from .viz.geometry import meshcat_module, parse_package_dirs
+    meshcat_module()                      # MissingExtraError (exit 2) before any work starts
     package_dirs = parse_package_dirs(args.package_dir)
     if args.html:
         out = Path(args.html)
@@ -391,6 +424,7 @@ def _example(args) -> int:
     if args.name == "aau":
         from .examples import aau_arm as ex
         from .io.urdf import load_urdf
+        require("matplotlib", "plots", ex.PLOTS)          # before the example runs
         model = load_urdf(BUNDLED / "aau_arm.urdf")
         traj, tau = ex.chapter_example(model, samples=args.samples)
         ex.write_csv(out / "aau_arm.csv", model, traj, tau)

@@ -1,7 +1,7 @@
 """The configuration space: neutral, integrate, difference, random and normalized configurations.
 
 Names and meaning are Pinocchio's (``pin.neutral``, ``pin.integrate``, ``pin.difference``,
-``pin.randomConfiguration``, ``pin.normalize``), on manipdyn's q (DESIGN.md §3: a continuous joint is one
+``pin.randomConfiguration``, ``pin.normalize``), on manipdyn's q (docs/design.md §3: a continuous joint is one
 angle, where Pinocchio stores cos/sin; a free-flyer root is [x y z qx qy qz qw] as in Pinocchio):
 
     q ⊕ v         integrate: 1-dof joints q + v; free flyer M(q) exp6(v), v = [linear; angular] body frame
@@ -31,13 +31,8 @@ FREE_RANGE = 1.0         # ... a free flyer's position in [−1, 1]³ m
 
 
 def _arrays(model):
-    """(kind, continuous, idx_q, idx_v) as writable contiguous arrays, built once per model."""
-    arr = model.__dict__.get("_config_arrays")
-    if arr is None:
-        arr = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
-               np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
-        object.__setattr__(model, "_config_arrays", arr)   # a cache, not model data (Model is frozen)
-    return arr
+    """(kind, continuous, idx_q, idx_v) as contiguous arrays (``model.kernel.config``)."""
+    return model.kernel.config
 
 
 def _quat_slices(model):

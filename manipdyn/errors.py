@@ -35,6 +35,11 @@ class DivergenceError(ManipdynError, ArithmeticError):
     """A simulation produced a non-finite state: names the time at which it happened."""
 
 
+class MissingExtraError(ManipdynError, ImportError):
+    """An optional package is not installed: names the feature that needs it and the pip command of the
+    manipdyn extra that brings it (manipdyn.extras.require). ``import manipdyn`` and the algorithms need none."""
+
+
 class QuirkWarning(UserWarning):
     """Something the URDF loader noticed (Model.quirks): one warning per kind, naming every link or joint."""
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit import njit
+from .spatial import cross3
 
 REVOLUTE, PRISMATIC, FREEFLYER = 0, 1, 2
 TYPE_NAMES = ("revolute", "prismatic", "free_flyer")
@@ -155,14 +156,6 @@ def _Vinv_coeff(th2):
     return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2
 
 
-@njit(cache=True, inline="always")
-def _wcross(a, w, out):
-    """out = ω × a = [ω]× a (the callers build V(ω) v and V(ω)⁻¹ d from it)."""
-    out[0] = w[1] * a[2] - w[2] * a[1]
-    out[1] = w[2] * a[0] - w[0] * a[2]
-    out[2] = w[0] * a[1] - w[1] * a[0]
-
-
 @njit(cache=True)
 def integrate_kernel(kind, iq, iv, Q, V, out):
     """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a free flyer
@@ -178,8 +171,8 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
             w[0], w[1], w[2] = V[s, b + 3], V[s, b + 4], V[s, b + 5]
             th2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
             ca, cb = _V_coeffs(th2)            # exp6 translation: V(ω) v
-            _wcross(V[s, b:b + 3], w, t1)
-            _wcross(t1, w, t2)
+            cross3(w, V[s, b:b + 3], t1)
+            cross3(w, t1, t2)
             x0, y0, z0, w0 = Q[s, a + 3], Q[s, a + 4], Q[s, a + 5], Q[s, a + 6]
             quat_to_matrix(x0, y0, z0, w0, R)
             for k in range(3):
@@ -230,8 +223,8 @@ def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
                 d[c] = (R[0, c] * (Q1[s, a] - Q0[s, a]) + R[1, c] * (Q1[s, a + 1] - Q0[s, a + 1])
                         + R[2, c] * (Q1[s, a + 2] - Q0[s, a + 2]))
             cc = _Vinv_coeff(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-            _wcross(d, w, t1)
-            _wcross(t1, w, t2)
+            cross3(w, d, t1)
+            cross3(w, t1, t2)
             for c in range(3):                 # log6: linear part V(ω)⁻¹ d
                 out[s, b + c] = d[c] - 0.5 * t1[c] + cc * t2[c]
                 out[s, b + 3 + c] = w[c]

@@ -14,16 +14,15 @@ Conventions owned here:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
 from types import MappingProxyType
 
 from .errors import InputError
-from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES
+from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES, motion_subspace
 
-__all__ = ["Model", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
+__all__ = ["Model", "KernelForm", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
            "FREEFLYER", "QUAT_TOL"]
 
 QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's q (integrate's output: ~1e-16)
@@ -153,62 +152,36 @@ class Model:
         free = [self.joint_names[i] for i in range(self.njoints) if self.kind[i] == FREEFLYER and self.parent[i] >= 0]
         if free:
             raise InputError(f"model {self.name!r}: a free flyer must be the root joint; {free[0]!r} is not")
+        nqs, nvs = _frozen([NQ[int(k)] for k in self.kind]), _frozen([NV[int(k)] for k in self.kind])
+        derived = dict(nqs=nqs, nvs=nvs, idx_q=_frozen(np.concatenate([[0], np.cumsum(nqs)[:-1]]) if len(nqs) else []),
+                       idx_v=_frozen(np.concatenate([[0], np.cumsum(nvs)[:-1]]) if len(nvs) else []),
+                       nq=int(np.sum(nqs)), nv=int(np.sum(nvs)), v_joint=_frozen(np.repeat(np.arange(len(nvs)), nvs)),
+                       q_names=_dof_names(self, FREE_COORDS), v_names=_dof_names(self, FREE_RATES))
+        for key, value in derived.items():
+            object.__setattr__(self, key, value)
+        object.__setattr__(self, "kernel", KernelForm.of(self))
+
+    # -- derived once, in __post_init__ (the model is immutable: nothing is added later) --
+    nqs: np.ndarray = field(init=False, repr=False)     # (nb,) configuration size of each joint (joints.NQ)
+    nvs: np.ndarray = field(init=False, repr=False)     # (nb,) velocity size of each joint (joints.NV)
+    idx_q: np.ndarray = field(init=False, repr=False)   # (nb,) index of joint i's first entry in q
+    idx_v: np.ndarray = field(init=False, repr=False)   # (nb,) index of joint i's first entry in v (and a, τ)
+    nq: int = field(init=False, repr=False)             # size of q
+    nv: int = field(init=False, repr=False)             # size of v, a and τ
+    q_names: tuple = field(init=False, repr=False)      # (nq,) the joint's name, or "root_joint.qx" for a free flyer's
+    v_names: tuple = field(init=False, repr=False)      # (nv,) the joint's name, or "root_joint.wx" for a free flyer's
+    v_joint: np.ndarray = field(init=False, repr=False)  # (nv,) the joint each entry of v belongs to
+    kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
 
     @property
     def njoints(self) -> int:
         """nb, the number of joints (= moving bodies)."""
         return len(self.joint_names)
 
-    @cached_property
-    def nqs(self) -> np.ndarray:
-        """(nb,) configuration size of each joint (``joints.NQ``)."""
-        return _frozen([NQ[int(k)] for k in self.kind])
-
-    @cached_property
-    def nvs(self) -> np.ndarray:
-        """(nb,) velocity size of each joint (``joints.NV``)."""
-        return _frozen([NV[int(k)] for k in self.kind])
-
-    @cached_property
-    def idx_q(self) -> np.ndarray:
-        """(nb,) index of joint i's first entry in q."""
-        return _frozen(np.concatenate([[0], np.cumsum(self.nqs)[:-1]]) if self.njoints else [])
-
-    @cached_property
-    def idx_v(self) -> np.ndarray:
-        """(nb,) index of joint i's first entry in v (and in a, τ)."""
-        return _frozen(np.concatenate([[0], np.cumsum(self.nvs)[:-1]]) if self.njoints else [])
-
-    @cached_property
-    def nq(self) -> int:
-        """Size of q (cached: the fast paths read it on every call)."""
-        return int(np.sum(self.nqs))
-
-    @cached_property
-    def nv(self) -> int:
-        """Size of v, a and τ."""
-        return int(np.sum(self.nvs))
-
-    @cached_property
+    @property
     def state_shapes(self) -> tuple:
-        """((nq,), (nv,)): the shapes of one state, read by the single-state fast paths on every call."""
-        return (self.nq,), (self.nv,)
-
-    @cached_property
-    def q_names(self) -> tuple:
-        """(nq,) a name for every entry of q: the joint's name, or "root_joint.qx" for a free flyer's."""
-        return _dof_names(self, FREE_COORDS)
-
-    @cached_property
-    def v_names(self) -> tuple:
-        """(nv,) a name for every entry of v, a and τ: the joint's name, or "root_joint.wx" for a free
-        flyer's."""
-        return _dof_names(self, FREE_RATES)
-
-    @cached_property
-    def v_joint(self) -> np.ndarray:
-        """(nv,) the joint each entry of v belongs to."""
-        return _frozen(np.repeat(np.arange(self.njoints), self.nvs))
+        """((nq,), (nv,)): the shapes of one state."""
+        return self.kernel.q_shape, self.kernel.v_shape
 
     @property
     def floating(self) -> bool:
@@ -224,15 +197,10 @@ class Model:
             raise InputError(f"model {self.name!r} has no link or frame named {name!r}; "
                              f"known: {', '.join(known[:50])}{' ...' if len(known) > 50 else ''}") from None
 
-    @cached_property
-    def _joint_position(self) -> dict:
-        """joint name -> index in q (built once: lookups stay O(1) on large models)."""
-        return {name: i for i, name in enumerate(self.joint_names)}
-
     def joint_index(self, name: str) -> int:
         """Index of a moving joint in q; InputError names the unknown joint."""
         try:
-            return self._joint_position[name]
+            return self.kernel.joint_index[name]
         except (KeyError, TypeError):
             raise InputError(f"model {self.name!r} has no moving joint named {name!r}; "
                              f"q order: {', '.join(self.joint_names[:50])}"
@@ -287,9 +255,9 @@ class MimicModel:
 
     The one linear map (``manipdyn.dynamics.mimic`` applies it): q_full = Gq q + q_off, v_full = G v,
     a_full = G a, τ = Gᵀ τ_full, M = Gᵀ M_full G. Independent coordinates keep the full model's q order with
-    the mimic joints' entries removed (Pinocchio's order). The public ``rnea``, ``mass_matrix``,
-    ``gravity_torques``, ``aba`` and ``forward_dynamics`` take it in place of a Model; for every other function
-    (kinematics, playback) use ``full`` at ``full_state(q, v, a)``.
+    the mimic joints' entries removed (Pinocchio's order). The calls listed in
+    ``manipdyn.dynamics.mimic.TAKES_MIMIC`` take it in place of a Model; every other function refuses it (use
+    ``full`` at ``full_state(q, v, a)``).
     """
     full: Model            # the tree with every joint moving (mimic joints as independent joints)
     G: np.ndarray          # (full.nv, nv) v_full = G v
@@ -369,3 +337,109 @@ def _dof_names(model, free_names) -> tuple:
     for i, j in enumerate(model.joint_names):
         out += [f"{j}.{c}" for c in free_names] if model.kind[i] == FREEFLYER else [j]
     return tuple(out)
+
+
+# -- the kernel form: everything derived from a Model for the compiled kernels, built once --------------------
+
+@dataclass(frozen=True, eq=False, slots=True)
+class KernelForm:
+    """What the compiled kernels (and the one-state fast paths) read of a Model, derived once when the model is
+    built (``Model.kernel``): the Model holds the description, this holds the same numbers laid out for the
+    kernels, as MuJoCo's mjModel holds its arrays or Pinocchio's Model its derived tree data. Read-only.
+
+    The kernels take the whole model as two arrays, ``I`` and ``F`` (each array argument of a compiled call
+    costs ~30 ns of dispatch, so 13 named arrays would cost a one-state call ~0.4 µs more); ``dynamics.core.unpack``
+    turns them back into the named views of ``core.ModelArrays`` inside every kernel, and is the only reader of
+    the layout below.
+    """
+    q_shape: tuple             # (nq,): one configuration
+    v_shape: tuple             # (nv,): one velocity, acceleration or torque
+    arrays: tuple              # (I, F), the two below, as the kernels take them
+    I: np.ndarray              # (5, nb) int64, rows: parent, kind, idx_q, idx_v, nv_j (joints in q order)
+    F: np.ndarray              # (4 nb + 1 + m, 3, 3) float64, blocks of 3×3: [0, nb) R0; [nb, 2nb) inertia about the
+    #                            CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0]; 4nb: −g in
+    #                            row 0; then S (nv, 6) row by row ([linear; angular], joints.motion_subspace)
+    config: tuple              # (kind (nb,), continuous (nb,) bool, idx_q (nb,), idx_v (nb,)): configuration kernels
+    joint_index: MappingProxyType  # joint name -> index in q order (O(1) lookups on large models)
+    frame_rows: MappingProxyType   # frame name -> (body, X (4, 3) = [R; p]: the frame in its body)
+    one_state_rows: MappingProxyType  # (frame name, reference) -> X (5, 3) = [R; p; (body, 0, local)]
+    wrench_rows: MappingProxyType  # (frame name, "local" | "world") -> P (13,) = [R (9, row by row: the frame's
+    #                                axes into the body's, identity for "world"); origin in the body (3); body]
+    closure_ints: np.ndarray   # (nc, 3) int64 [parent body, child body, number of orientation pairs (−1: coupling)]
+    closure_floats: np.ndarray  # (nc, 24) [pp (3), pc (3), a_1..a_3 (9), b_1..b_3 (9)]; a coupling: [ratio, 0, ...]
+    closure_labels: tuple      # (m,) the name of every closure row ("<closure>.x|y|z|r1|r2|r3|c")
+
+    @classmethod
+    def of(cls, model) -> "KernelForm":
+        """The kernel form of a Model (called once, by Model.__post_init__)."""
+        nb = model.njoints
+        I = np.zeros((5, nb), np.int64)
+        if nb:
+            I[:] = np.vstack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
+        S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
+            else np.zeros((0, 6))
+        m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
+        F = np.zeros((4 * nb + 1 + m, 3, 3))
+        F[:nb], F[nb:2 * nb] = model.R0, model.inertia
+        F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = model.axis, model.p0, model.com
+        F[3 * nb:4 * nb, 0, 0] = model.mass
+        F[4 * nb, 0] = -np.asarray(model.gravity, float)
+        F[4 * nb + 1:].reshape(-1, 6)[:model.nv] = S
+        config = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
+                  np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
+        frame_rows, one_state, wrench = {}, {}, {}
+        for name, fr in model.frames.items():
+            R, p = np.asarray(fr.R, float), np.asarray(fr.p, float)
+            X = np.ascontiguousarray(np.vstack([R, p]))
+            frame_rows[name] = (int(fr.body), X)
+            for reference in ("local_world_aligned", "local"):
+                one_state[name, reference] = np.vstack([X, [float(fr.body), 0.0, float(reference == "local")]])
+            for axes in ("local", "world"):
+                wrench[name, axes] = np.concatenate([(R if axes == "local" else np.eye(3)).ravel(), p, [float(fr.body)]])
+        ints, floats, labels = _closure_form(model.constraints)
+        arrays = [I, F, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
+                  *wrench.values()]
+        for a in arrays:
+            a.setflags(write=False)
+        return cls((model.nq,), (model.nv,), (I, F), I, F, config,
+                   MappingProxyType({name: i for i, name in enumerate(model.joint_names)}),
+                   MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
+                   ints, floats, labels)
+
+
+def perpendicular_pair(e):
+    """Two unit vectors completing e (3,) to a right-handed orthonormal basis."""
+    t = np.eye(3)[np.argmin(np.abs(e))]
+    n1 = np.cross(e, t)
+    n1 /= np.linalg.norm(n1)
+    return n1, np.cross(e, n1)
+
+
+def orientation_pairs(c):
+    """(a, b) direction pairs of a closure's orientation rows, a in the parent body frame, b in the child's
+    (constraints/closures.py: Φ = a·b)."""
+    if c.type == "revolute":
+        n1, n2 = perpendicular_pair(c.axis_p)
+        return [(n1, c.axis_c), (n2, c.axis_c)]
+    if c.type == "fixed":
+        A, B = c.Rp, c.Rc
+        return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 1])]
+    return []
+
+
+def _closure_form(constraints):
+    """(ints (nc, 3), floats (nc, 24), row labels) of KernelForm for a tuple of Constraint."""
+    nc = len(constraints)
+    ints, floats, labels = np.zeros((nc, 3), np.int64), np.zeros((nc, 24)), []
+    for k, c in enumerate(constraints):
+        if c.type == "coupling":
+            ints[k], floats[k, 0] = (c.parent, c.child, -1), c.ratio
+            labels.append(f"{c.name}.c")
+            continue
+        pairs = orientation_pairs(c)
+        ints[k] = c.parent, c.child, len(pairs)
+        floats[k, :3], floats[k, 3:6] = c.pp, c.pc
+        for m, (a, b) in enumerate(pairs):
+            floats[k, 6 + 3 * m:9 + 3 * m], floats[k, 15 + 3 * m:18 + 3 * m] = a, b
+        labels += [f"{c.name}.{x}" for x in ("x", "y", "z")] + [f"{c.name}.r{m + 1}" for m in range(len(pairs))]
+    return ints, floats, tuple(labels)

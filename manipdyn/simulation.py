@@ -2,7 +2,7 @@
 
 State x = (q, q̇); q̈ = f(t, q, q̇) from forward dynamics (ABA or the Cholesky route for trees; Lagrange's
 equations of the 1st kind for closed chains, optionally Baumgarte-stabilised or projected back onto the
-closures after every step). Fixed-step methods integrate a batch (N, nv) at once.
+closures after every step). The fixed-step integrators take a batch (N, nv) at once.
 
 Configurations move by the joint model's ``integrate`` (q ⊕ ξ), never by q + ξ: for revolute and
 prismatic joints the two are the same, for a free-flyer root ξ is a body-frame twist and q ⊕ ξ =
@@ -32,7 +32,7 @@ class SimResult:
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
-    method: str
+    integrator: str       # "euler", "rk4" or "adaptive"
     dt: float
     n_steps: int
     wall_time: float
@@ -78,18 +78,19 @@ def _torque(tau, shape, single, names):
     return checked
 
 
-def accelerations(model, forward="aba", stabilization="none", baumgarte=(10.0, 10.0)):
-    """q̈ = f(t, q, q̇, τ) for this model: tree forward dynamics, or the closed-chain KKT solve."""
+def accelerations(model, method="aba", stabilization="none", baumgarte=(10.0, 10.0)):
+    """q̈ = f(t, q, q̇, τ) for this model: tree forward dynamics by ``method`` ("aba" or "cholesky"), or the
+    closed-chain KKT solve."""
     if model.constraints:
         bg = baumgarte if stabilization == "baumgarte" else None
         return lambda q, v, tau: constrained_forward_dynamics(model, q, v, tau, baumgarte=bg)[0]
-    return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=forward)
+    return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=method)
 
 
-def _step(method, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
+def _step(integrator, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
     """One step of size h: semi-implicit Euler or classical RK4 (RKMK on a free flyer: q ⊕ ξ = plus(q, ξ),
     ξ̇ = dexpinv(ξ, v); for 1-dof joints plus is + and dexpinv returns v)."""
-    if method == "euler":                       # v_{k+1} = v_k + h q̈(q_k, v_k); q_{k+1} = q_k ⊕ h v_{k+1}
+    if integrator == "euler":                   # v_{k+1} = v_k + h q̈(q_k, v_k); q_{k+1} = q_k ⊕ h v_{k+1}
         v1 = v + h * accel(q, v, torque(t, q, v))
         return plus(q, h * v1), v1
     rate = (lambda xi, w: w) if dexpinv is None else dexpinv
@@ -133,18 +134,21 @@ def _group_ops(model):
     return plus, dexpinv
 
 
+INTEGRATORS = ("euler", "rk4", "adaptive")
 MAX_POSITION = 1e6  # |q| (rad, m) and |q̇| (rad/s, m/s) beyond any manipulator's range: a runaway (at
 MAX_RATE = 1e4      # |q| = 1e6 a double resolves 1e-10, the default rtol; 1e4 rad/s ≈ 95 000 rpm)
 
 
-def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-10, atol=1e-12,
-             forward="aba", stabilization="none", baumgarte=(10.0, 10.0), max_steps=None, max_position=MAX_POSITION,
+def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, integrator="rk4", method="aba", rtol=1e-10,
+             atol=1e-12, stabilization="none", baumgarte=(10.0, 10.0), max_steps=None, max_position=MAX_POSITION,
              max_rate=MAX_RATE):
     """Integrate the equations of motion from (q0, v0) over t_span = (t0, t1).
 
     tau: None, a constant (nv,) (or (N, nv)) array or a callable tau(t, q, v) (batches: (N, nv) in and out).
-    method: "euler" (semi-implicit), "rk4" (fixed dt; the last step is shortened to end at t1), or
+    integrator: "euler" (semi-implicit), "rk4" (fixed dt; the last step is shortened to end at t1), or
     "adaptive" (scipy DOP853 at rtol/atol, one state at a time, every internal step returned).
+    method: the forward-dynamics route of a tree, as in ``forward_dynamics``: "aba" (default) or "cholesky";
+    closed chains always solve the KKT system of ``constrained_forward_dynamics``.
     Closed chains: stabilization "none", "baumgarte" (alpha, beta) or "projection" (after every step).
 
     The work is bounded: fixed-step runs refuse a dt whose step count (t1 − t0)/dt exceeds ``max_steps``
@@ -152,38 +156,41 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
     10⁵) with DivergenceError. A non-finite state, |q| beyond ``max_position`` (default 10⁶ rad or m) or
     |q̇| beyond ``max_rate`` (default 10⁴ rad/s or m/s) raise DivergenceError naming the time, the joint
     (and the initial state of a batch): huge torques end there within a few steps instead of driving
-    the adaptive method into ever smaller steps.
+    the adaptive integrator into ever smaller steps.
     tau(t, q, v) must return real values of the state's shape: InputError otherwise (a non-finite
     torque at t0 is an InputError; later, DivergenceError: the controller followed a diverging state).
     """
     (Q, V), single = as_batch(model, q0=q0, v0=v0)
     check_quaternions(model, Q, "q0")
     t0, t1 = _span(t_span)
-    if not isinstance(method, str) or method not in ("euler", "rk4", "adaptive"):
-        raise InputError(f"method must be 'euler', 'rk4' or 'adaptive', not {method!r}")
+    if not isinstance(integrator, str) or integrator not in INTEGRATORS:
+        raise InputError(f"integrator must be 'euler', 'rk4' or 'adaptive', not {integrator!r}")
+    if isinstance(method, str) and method in INTEGRATORS:
+        raise InputError(f"method={method!r} names an integrator: use integrator={method!r} (method is the "
+                         f"forward-dynamics route, 'aba' or 'cholesky', as in forward_dynamics)")
+    if not isinstance(method, str) or method not in ("aba", "cholesky"):
+        raise InputError(f"method must be 'aba' or 'cholesky' (the forward-dynamics route), not {method!r}")
     if not isinstance(stabilization, str) or stabilization not in ("none", "baumgarte", "projection"):
         raise InputError(f"stabilization must be 'none', 'baumgarte' or 'projection', not {stabilization!r}")
     if stabilization == "baumgarte":
         baumgarte = _pair("baumgarte", baumgarte)
     bounds = tuple(check_scalar(n, x, positive=True) for n, x in (("max_position", max_position),
                                                                    ("max_rate", max_rate)))
-    max_steps = check_scalar("max_steps", (10**5 if method == "adaptive" else 10**7) if max_steps is None
+    max_steps = check_scalar("max_steps", (10**5 if integrator == "adaptive" else 10**7) if max_steps is None
                              else max_steps, positive=True, integer=True)
-    accel, torque = accelerations(model, forward, stabilization, baumgarte), _torque(tau, V.shape, single, model.v_names)
-    if not isinstance(forward, str) or forward not in ("aba", "cholesky"):
-        raise InputError(f"forward must be 'aba' or 'cholesky', not {forward!r}")
+    accel, torque = accelerations(model, method, stabilization, baumgarte), _torque(tau, V.shape, single, model.v_names)
     watch = _Watch(model, single, bounds, t0)
     try:
         watch(t0, Q, V)
     except DivergenceError as exc:
         raise InputError(f"initial state: {str(exc).split(': ', 1)[1]}") from None
     start = time.perf_counter()
-    if method == "adaptive":
+    if integrator == "adaptive":
         if not single:
-            raise InputError("method='adaptive' runs one initial state at a time; pass q0, v0 of shape (nv,)")
+            raise InputError("integrator='adaptive' runs one initial state at a time; pass q0, v0 of shape (nv,)")
         rtol, atol = (check_scalar(n, x, positive=True) for n, x in (("rtol", rtol), ("atol", atol)))
         T, Qs, Vs = _adaptive(model, accel, torque, Q[0], V[0], t0, t1, rtol, atol, max_steps, watch)
-        return SimResult(T, Qs, Vs, method, float("nan"), len(T) - 1, time.perf_counter() - start)
+        return SimResult(T, Qs, Vs, integrator, float("nan"), len(T) - 1, time.perf_counter() - start)
     T = _grid(t0, t1, check_scalar("dt", dt, positive=True), max_steps)
     n = len(T) - 1
     Qs, Vs = np.empty((n + 1,) + Q.shape), np.empty((n + 1,) + V.shape)
@@ -192,7 +199,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
     plus, dexpinv = _group_ops(model)
     for k in range(n):
         try:
-            Q, V = _step(method, accel, torque, T[k], Q, V, T[k + 1] - T[k], plus, dexpinv)
+            Q, V = _step(integrator, accel, torque, T[k], Q, V, T[k + 1] - T[k], plus, dexpinv)
             if project is not None:
                 Q, V = project(Q, V)
         except _TorqueError as exc:
@@ -202,7 +209,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, method="rk4", rtol=1e-
         watch(T[k + 1], Q, V)
         Qs[k + 1], Vs[k + 1] = Q, V
     Qs, Vs = np.moveaxis(Qs, 0, 1), np.moveaxis(Vs, 0, 1)       # (N, T, nq), (N, T, nv)
-    return SimResult(T, Qs[0] if single else Qs, Vs[0] if single else Vs, method, float(dt), n,
+    return SimResult(T, Qs[0] if single else Qs, Vs[0] if single else Vs, integrator, float(dt), n,
                      time.perf_counter() - start)
 
 

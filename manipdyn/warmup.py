@@ -1,7 +1,7 @@
 """Compile every kernel ahead of use, and measure the cold start.
 
 The kernels are numba functions cached on disk (``_jit``): the first call of each one in a fresh install
-compiles it (minutes in all: 225–245 s on 2 cores, measured), every later process loads the machine code from the cache. ``warmup``
+compiles it (minutes in all: the README gives the measured figure), every later process loads the machine code from the cache. ``warmup``
 makes that first call for every public function — one state and a batch, with and without external
 wrenches, an open and a closed chain — so that a user's first call only loads. ``manipdyn warmup`` runs it
 (the README's setup command does), spread over the cores: each worker compiles its own kernels, so no two
@@ -127,7 +127,11 @@ def warmup(jobs=2, env=None):
     """Compile every kernel into the disk cache: ``first_calls`` of each group in its own process, ``jobs`` at a
     time. Returns the wall-clock seconds."""
     from concurrent.futures import ThreadPoolExecutor
+
+    from ._jit import prune_stale
     t0 = time.perf_counter()
+    if env is None:
+        prune_stale()                               # the package's own cache: drop earlier sources' folders
     groups = range(len(GROUPS))
     with ThreadPoolExecutor(max(1, min(int(jobs), len(GROUPS)))) as pool:
         list(pool.map(lambda g: _run_python(_GROUP_CODE.format(group=g), env), groups))

@@ -1,4 +1,4 @@
-"""Shared test helpers: the one error measure (DESIGN.md §3), URDF builders, the robot zoo."""
+"""Shared test helpers: the one error measure (docs/design.md §3), URDF builders, the robot zoo."""
 from __future__ import annotations
 
 import sys

@@ -28,7 +28,7 @@ def with_free_flyer(model, mass, com, inertia):
 
 def random_floating_states(model, n, rng):
     """n states (q (n, nq), v (n, nv)): the root anywhere within 1 m with a uniformly random orientation,
-    the joints as DESIGN.md §3 (revolute uniform in [−π, π], prismatic in [−0.5, 0.5]), v ~ N(0, 2²)."""
+    the joints as docs/design.md §3 (revolute uniform in [−π, π], prismatic in [−0.5, 0.5]), v ~ N(0, 2²)."""
     Q = np.empty((n, model.nq))
     Q[:, :3] = rng.uniform(-1.0, 1.0, (n, 3))
     quat = rng.normal(size=(n, 4))

@@ -10,9 +10,9 @@ and q̈ = M⁻¹(τ − h) is solved in mpmath.
 """
 from __future__ import annotations
 
-import mpmath as mp
 import numpy as np
 
+from ..extras import require
 from ..io.urdf import load_urdf_string
 
 
@@ -31,6 +31,7 @@ def planar_chain_urdf(masses, lengths):
 
 def mp_forward(masses, lengths, q, v, tau, g=9.81, dps=50):
     """q̈ of the planar chain at ``dps`` digits (mpmath), and cond(M) in double."""
+    mp = require("mpmath", "validate", "manipdyn bench (its 50-digit reference)")
     mp.mp.dps = dps
     n = len(masses)
     m, L = [mp.mpf(x) for x in masses], [mp.mpf(x) for x in lengths]
@@ -65,7 +66,7 @@ def _pin_cholesky(pin, pm, pd, pq, v, tau):
 
 def ill_conditioned(n=6, spread=(1e-6, 1e3), seed=0, states=5, light_root=False, lengths=(0.05, 0.5)):
     """Errors of q̈ from ABA and the Cholesky (M⁻¹) route, ours and Pinocchio's, against the 50-digit reference."""
-    import pinocchio as pin
+    pin = require("pinocchio", "validate", "manipdyn bench")
 
     from ..dynamics.aba import aba, forward_dynamics
     from ..validation.measure import error

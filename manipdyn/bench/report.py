@@ -7,12 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..extras import require
 from ..paths import bundled_dir
 from ..validation.zoo import robots_dir
 from . import sections, targets
 from .timing import machine
 
 ROOT = bundled_dir().parent
+NEEDS = (("pinocchio", "validate"), ("mpmath", "validate"), ("matplotlib", "plots"))   # (module, its extra)
 
 
 def write(data, out_dir):
@@ -25,6 +27,8 @@ def write(data, out_dir):
 
 def run(out_dir, quick=False, progress=print) -> dict:
     """Run every section and write report.md, report.json and the plots into out_dir."""
+    for module, extra in NEEDS:           # before any section runs: a missing extra is named at once
+        require(module, extra, "manipdyn bench")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ur5 = robots_dir() / "ur_description/urdf/ur5_robot.urdf"
@@ -262,7 +266,7 @@ def advice(d) -> str:
 
 def plots(d, out):
     """scaling.png: time per call against n on log axes, ours solid, Pinocchio dashed."""
-    import matplotlib
+    matplotlib = require("matplotlib", "plots", "manipdyn bench (its plots)")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5))

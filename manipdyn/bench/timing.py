@@ -8,6 +8,7 @@ from importlib import metadata
 
 import numpy as np
 
+from ..extras import require
 from ..io.urdf import load_urdf_string
 
 
@@ -67,6 +68,6 @@ def random_chain_urdf(n, seed=0) -> str:
 
 def random_chain(n, seed=0):
     """(our Model, Pinocchio model) of random_chain_urdf(n)."""
-    import pinocchio as pin
+    pin = require("pinocchio", "validate", "manipdyn bench")
     text = random_chain_urdf(n, seed)
     return load_urdf_string(text, source=f"chain{n}"), pin.buildModelFromXML(text)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..configuration import check_quaternions, integrate
-from ..dynamics.lagrange import mass_matrix
+from ..dynamics.crba import mass_matrix
 from ..dynamics.state import as_batch, as_real, check_finite, check_output, check_scalar, quiet
 from ..errors import ConstraintError, InputError, SingularError
 from ..model import FREEFLYER, PRISMATIC
@@ -26,14 +26,24 @@ from .dynamics import actuation, dofs, moving_dofs
 
 @dataclass(frozen=True)
 class Assembly:
-    """Result of ``assemble``: the assembled q and how it was reached."""
-    q: np.ndarray          # (nq,)
-    iterations: int
-    residual: float        # max |Φ(q)|
-    cond: float            # condition number of the solved block of Φ_q at q
-    branch: int            # ±1: sign of det(Uᵀ Φ_q,free), U the row space of Φ_q,free at the guess
-    same_branch: bool      # the guess had the same sign: no singularity crossed
-    damped: bool           # damped least-squares steps were needed
+    """Result of ``assemble``: the assembled q and how it was reached. One guess (nq,) gives q (nq,) and a
+    number per other field; a batch of N guesses (N, nq) gives q (N, nq) and (N,) arrays, row k the result
+    of guess k."""
+    q: np.ndarray          # (nq,) or (N, nq)
+    iterations: int        # int or (N,) int
+    residual: float        # max |Φ(q)|; float or (N,)
+    cond: float            # condition number of the solved block of Φ_q at q; float or (N,)
+    branch: int            # ±1: sign of det(Uᵀ Φ_q,free), U the row space of Φ_q,free at the guess; int or (N,)
+    same_branch: bool      # the guess had the same sign: no singularity crossed; bool or (N,) bool
+    damped: bool           # damped least-squares steps were needed; bool or (N,) bool
+
+
+def _stack(model, rows):
+    """One Assembly of (N, nq) and (N,) arrays from N one-guess results (row k from rows[k])."""
+    return Assembly(np.array([a.q for a in rows], dtype=float).reshape(len(rows), model.nq),
+                    *(np.array([getattr(a, f) for a in rows], dtype=t) for f, t in
+                      (("iterations", int), ("residual", float), ("cond", float), ("branch", int),
+                       ("same_branch", bool), ("damped", bool))))
 
 
 def _solve_block(model, q, free, rtol=RANK_RTOL):
@@ -65,9 +75,10 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
     of a four-bar, or a basin without a root), it restarts from ``restarts`` seeded perturbations of the
     guess's free coordinates, of growing spread (0.3, 1 and π rad; a tenth of that in metres for prismatic
     joints), and returns the first that converges (``same_branch`` then says whether it kept the guess's
-    branch). A batch of guesses (N, nq) is assembled row by row and gives a list of N results. Steps are
-    taken in v-space and applied by q ⊕ δ; a free-flyer root moves only if a closure ties the robot to the
-    world (``moving_dofs``), else it stays at the guess whatever ``fixed`` says.
+    branch). A batch of guesses (N, nq) is assembled row by row and gives one Assembly whose fields have a
+    leading axis N: q (N, nq), the others (N,) (row k: guess k). Steps are taken in v-space and applied by
+    q ⊕ δ; a free-flyer root moves only if a closure ties the robot to the world (``moving_dofs``), else it
+    stays at the guess whatever ``fixed`` says.
 
     Raises ConstraintError naming the closures still violated and the smallest residual reached when no
     start converges; SingularError when the Jacobian block is singular (cond > max_cond) from the guess
@@ -85,7 +96,7 @@ def assemble(model, q_guess, *, fixed=None, tol=1e-12, max_iter=50, max_step=0.5
     hold = actuation(model, fixed) if fixed is None or len(fixed) else []
     free = moving_dofs(model, hold)                            # entries of v the Newton steps move
     out = [_assemble_one(model, q.copy(), free, opts, restarts, seed) for q in Q]
-    return out[0] if single else out
+    return out[0] if single else _stack(model, out)
 
 
 def _assemble_one(model, q, free, opts, restarts, seed):
@@ -214,8 +225,9 @@ def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw
 
     q_guess (nq,) with v_act, a_act (n_act,) gives q (nq,), q̇, q̈ (nv,) and one Assembly; a batch q_guess
     (N, nq) with v_act, a_act (N, n_act) (or (n_act,) for every row) is completed row by row and gives
-    (N, nq), (N, nv) arrays and a list of N Assembly results. n_act counts entries of v: one per actuated
-    1-dof joint, six for a free flyer listed in ``actuated`` (its body-frame [linear; angular] rates).
+    (N, nq), (N, nv) arrays and one Assembly of (N, nq) and (N,) arrays, as ``assemble`` on the batch.
+    n_act counts entries of v: one per actuated 1-dof joint, six for a free flyer listed in ``actuated``
+    (its body-frame [linear; angular] rates).
     A free-flyer root not listed stays at the guess and at rest (q̇ = q̈ = 0 on its entries): under
     closures internal to the robot the passive rates do not depend on the base's."""
     (Q,), single = as_batch(model, q=q_guess)
@@ -230,14 +242,14 @@ def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw
                              f"{[model.v_names[i] for i in idx]}")
         check_finite(name, x)
         rates.append(np.broadcast_to(x, (Q.shape[0], len(idx))))
-    asm = assemble(model, Q, fixed=[model.joint_names[i] for i in joints], **assemble_kw)
-    out = [_complete_one(model, a.q, joints, idx, va, aa) for a, va, aa in zip(asm, *rates)]
+    asm = assemble(model, Q[0] if single else Q, fixed=[model.joint_names[i] for i in joints], **assemble_kw)
+    out = [_complete_one(model, q, joints, idx, va, aa) for q, va, aa in zip(asm.q.reshape(Q.shape), *rates)]
     N = Q.shape[0]
     q, v, a = ((np.array(x).reshape(N, n) for x, n in zip(zip(*out), (model.nq, model.nv, model.nv))) if out
                else (np.zeros((0, model.nq)), np.zeros((0, model.nv)), np.zeros((0, model.nv))))
     for name, x in (("q", q), ("v", v), ("a", a)):
         check_output("complete_state", name, x, model, dict(q=Q))
-    return (q[0], v[0], a[0], asm[0]) if single else (q, v, a, asm)
+    return (q[0], v[0], a[0], asm) if single else (q, v, a, asm)
 
 
 @quiet

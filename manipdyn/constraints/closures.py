@@ -22,46 +22,18 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..dynamics.core import cross3, fk_pass, kernel_arrays, nonfinite_input, rot3, unpack
+from ..dynamics.core import fk_pass, kernel_arrays, nonfinite_input, unpack
+from ..spatial import cross3, rot3
 from ..dynamics.kinematics import body_point, point_jacobian, point_jacobian_dot, point_velocity
 from ..dynamics.state import (as_batch, as_real, check_finite, check_model, check_output, quiet,
                               raise_kernel_error, unbatch)
 from ..errors import InputError
 
 
-def _perp_pair(e):
-    """Two unit vectors completing e (3,) to a right-handed orthonormal basis."""
-    t = np.eye(3)[np.argmin(np.abs(e))]
-    n1 = np.cross(e, t)
-    n1 /= np.linalg.norm(n1)
-    return n1, np.cross(e, n1)
-
-
-def _pairs(c):
-    """(a, b) direction pairs of the orientation rows, a in the parent body frame, b in the child's."""
-    if c.type == "revolute":
-        n1, n2 = _perp_pair(c.axis_p)
-        return [(n1, c.axis_c), (n2, c.axis_c)]
-    if c.type == "fixed":
-        A, B = c.Rp, c.Rc
-        return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 1])]
-    return []
-
-
 def row_labels(model):
-    """Name of every constraint row, in order (a new list each call; built once per model)."""
+    """Name of every constraint row, in order (a new list each call; ``model.kernel.closure_labels``)."""
     check_model(model)
-    labels = model.__dict__.get("_row_labels")
-    if labels is None:
-        labels = []
-        for c in model.constraints:
-            if c.type == "coupling":
-                labels.append(f"{c.name}.c")
-                continue
-            labels += [f"{c.name}.{k}" for k in ("x", "y", "z")]
-            labels += [f"{c.name}.r{k + 1}" for k in range(len(_pairs(c)))]
-        object.__setattr__(model, "_row_labels", tuple(labels))   # a cache, not model data (Model is frozen)
-    return list(labels)
+    return list(model.kernel.closure_labels)
 
 
 def n_rows(model) -> int:
@@ -70,25 +42,10 @@ def n_rows(model) -> int:
 
 
 def closure_arrays(model):
-    """Closures in kernel form, built once per model: ints CI (nc, 3) = [parent, child, n_pairs], floats
-    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, a in the parent's frame, b in the child's);
-    a coupling has n_pairs = −1 and CF[k, 0] = its ratio."""
-    arr = model.__dict__.get("_closure_arrays")
-    if arr is None:
-        nc = len(model.constraints)
-        ints, flts = np.zeros((nc, 3), np.int64), np.zeros((nc, 24))
-        for k, c in enumerate(model.constraints):
-            if c.type == "coupling":
-                ints[k], flts[k, 0] = (c.parent, c.child, -1), c.ratio
-                continue
-            pairs = _pairs(c)
-            ints[k] = c.parent, c.child, len(pairs)
-            flts[k, :3], flts[k, 3:6] = c.pp, c.pc
-            for m, (a, b) in enumerate(pairs):
-                flts[k, 6 + 3 * m:9 + 3 * m], flts[k, 15 + 3 * m:18 + 3 * m] = a, b
-        arr = (ints, flts)
-        object.__setattr__(model, "_closure_arrays", arr)     # a cache, not model data (Model is frozen)
-    return arr
+    """Closures in kernel form (``model.kernel``): ints CI (nc, 3) = [parent, child, n_pairs], floats
+    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, model.orientation_pairs); a coupling has
+    n_pairs = −1 and CF[k, 0] = its ratio."""
+    return model.kernel.closure_ints, model.kernel.closure_floats
 
 
 # -- the rows, compiled --------------------------------------------------------------------------------------
@@ -112,7 +69,7 @@ def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
     """Φ (m,), Φ_q (m, nv) and, when v has entries, Φ̇_q q̇ (m,) of one state q (nq,), v (nv,), rows in
     row_labels order (the module docstring gives them); W = closure_scratch(nb, nv)."""
     mdl = unpack(I, F)
-    parent, iq, iv, nvj, S = mdl[0], mdl[2], mdl[3], mdl[4], mdl[5]
+    parent, iq, iv, nvj, S = mdl.parent, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     Rl, pl, Rw, pw, ww, vw, J, dJ, Rs, x, xd, eye, t = W
     a, b, axb, wA, wB, t1, t2, t3 = t[0], t[1], t[2], t[3], t[4], t[5], t[6], t[7]
     nv, with_v = Jc.shape[1], v.shape[0] > 0

@@ -13,10 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.lagrange import mass_matrix
+from ..dynamics.crba import mass_matrix
 from ..dynamics.rnea import rnea
-from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, fast3,
-                              check_scalar, joint_indices, unbatch)
+from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, fast, check_scalar, joint_indices, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
 from ..joints import FREEFLYER
 from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
@@ -62,7 +61,7 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
     ``constrained_forward_dynamics_reference``, the readable solve below.
     """
     from .fast import constrained_fd_fast
-    if f_ext is None and f_ext_frame == "local" and fast3(model, q, v, tau) is not None:   # one float64 state
+    if f_ext is None and f_ext_frame == "local" and fast(model, q, v, tau) is not None:   # one float64 state
         code, qdd, lam, _ = constrained_fd_fast(model, q[None], v[None], tau[None], _baumgarte(baumgarte))
         if code == -1 and np.isfinite(qdd).all() and np.isfinite(lam).all():
             return qdd[0], lam[0]                              # else the checked path below says what is wrong
@@ -168,7 +167,7 @@ def moving_dofs(model, held=()):
 def constrained_inverse_dynamics(model, q, v, a, actuated=None, *, tol=1e-9, f_ext=None, f_ext_frame="local"):
     """(τ_a, λ): actuator forces for a prescribed motion of a closed chain, τ_tree = Sᵀ τ_a − Φ_qᵀ λ.
 
-    Solves [Sᵀ, −Φ_qᵀ] [τ_a; λ] = rnea(q, q̇, q̈) in the least-squares, minimum-norm sense (rank-revealing)
+    Solves ``[Sᵀ, −Φ_qᵀ] [τ_a; λ] = rnea(q, q̇, q̈)`` in the least-squares, minimum-norm sense (rank-revealing)
     and raises ConstraintError when (q, q̇, q̈) violates a closure (|Φ|, |Φ_q q̇| or |Φ_q q̈ + Φ̇_q q̇| above
     tol) or when the actuators cannot produce the motion (under-actuated: residual above tol).
     Whether the chain is "fully", "under" or "over" actuated at q: ``actuation_status(model, q, actuated)``.

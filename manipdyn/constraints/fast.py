@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..dynamics.core import kernel_arrays
+from ..dynamics.core import kernel_arrays, nonfinite_input
+from ..spatial import first_nonfinite
 from ..dynamics.crba import crba_kernel
 from ..dynamics.rnea import rnea_one
 from ..errors import NumericalError, SingularError
@@ -26,12 +27,11 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
     h = np.empty((1, nv))
     zero = np.zeros(nv)
     for s in range(N):
-        for i in range(nq):
-            if not np.isfinite(Q[s, i]):
-                return s * nq + i
-        for i in range(nv):
-            if not (np.isfinite(V[s, i]) and np.isfinite(T[s, i])):
-                return N * nq + s * nv + i
+        k = nonfinite_input(Q, V, s)
+        if k < 0 and first_nonfinite(T, s) >= 0:
+            k = N * nq + s * nv + first_nonfinite(T, s)
+        if k >= 0:
+            return k
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi, Jc, bias)
         crba_kernel(I, F, Q[s:s + 1], M)
         rnea_one(I, F, Q[s], V[s], zero, h[0])                                 # h = C q̇ + g
@@ -93,7 +93,7 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
 
 def _overflowed(model, Q, V):
     """NumericalError if M or h = C q̇ + g of a state is not finite (what made the kernel's solve fail)."""
-    from ..dynamics.lagrange import mass_matrix
+    from ..dynamics.crba import mass_matrix
     from ..dynamics.rnea import rnea
     try:
         rnea(model, Q, V, np.zeros_like(V))

@@ -18,7 +18,7 @@ Pinocchio — in each body's own frame, about its origin:
 With (R, p) body i's placement in its parent λ (x_λ = R x_i + p, ``core``):
   ⁱX_λ m  = [Rᵀ (v + ω × p); Rᵀ ω]          motion, parent → body
   ^λX*_i f = [R f; R n + p × R f]            force, body → parent
-Gravity enters as the base acceleration a_0 = −a_g = [−g; 0] (RBDA §5.3, DESIGN §6).
+Gravity enters as the base acceleration a_0 = −a_g = [−g; 0] (RBDA §5.3, docs/design.md §6).
 
 External wrenches enter inside the kernel (Table 7.1: p^A_i = v_i ×* I_i v_i − f^x_i, f^x_i in body
 coordinates), as ``state.wrench_rows`` lays them out: one row per named frame (body, the frame's origin in
@@ -35,161 +35,13 @@ from .._jit import CONTRACT, njit
 from ..errors import InputError
 from ..joints import joint_placement
 from ..model import MimicModel
+from . import mimic
+from ..spatial import (cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_to_parent,
+                       inertia_to_parent, motion_to_child, rigid_inertia)
 from .core import kernel_arrays, unpack, wrench_rows_of
-from .crba import crba_kernel
-from .rnea import NT, rnea_kernel
-from .state import (as_batch, check_f_ext, fast3, fast_shape, fast_wrench_rows, fast_wrenches, mimic_call, raise_kernel_error, unbatch,
-                    wrench_rows)
-
-
-# -- spatial algebra on 6-vectors [linear; angular], inlined into the kernel ------------------------------
-
-@njit(cache=True, inline="always")
-def motion_to_child(R, p, m, out):
-    """out = ⁱX_λ m = [Rᵀ (m_lin + m_ang × p); Rᵀ m_ang] (RBDA Table 2.2; out must not alias m)."""
-    wx, wy, wz = m[3], m[4], m[5]
-    lx = m[0] + wy * p[2] - wz * p[1]
-    ly = m[1] + wz * p[0] - wx * p[2]
-    lz = m[2] + wx * p[1] - wy * p[0]
-    for a in range(3):
-        out[a] = R[0, a] * lx + R[1, a] * ly + R[2, a] * lz
-        out[3 + a] = R[0, a] * wx + R[1, a] * wy + R[2, a] * wz
-
-
-@njit(cache=True, inline="always")
-def force_to_parent(R, p, f, out):
-    """out += ^λX*_i f = [R f_lin; R f_ang + p × R f_lin] (RBDA Table 2.2)."""
-    fx = R[0, 0] * f[0] + R[0, 1] * f[1] + R[0, 2] * f[2]
-    fy = R[1, 0] * f[0] + R[1, 1] * f[1] + R[1, 2] * f[2]
-    fz = R[2, 0] * f[0] + R[2, 1] * f[1] + R[2, 2] * f[2]
-    out[0] += fx
-    out[1] += fy
-    out[2] += fz
-    out[3] += R[0, 0] * f[3] + R[0, 1] * f[4] + R[0, 2] * f[5] + p[1] * fz - p[2] * fy
-    out[4] += R[1, 0] * f[3] + R[1, 1] * f[4] + R[1, 2] * f[5] + p[2] * fx - p[0] * fz
-    out[5] += R[2, 0] * f[3] + R[2, 1] * f[4] + R[2, 2] * f[5] + p[0] * fy - p[1] * fx
-
-
-@njit(cache=True, inline="always")
-def cross_motion(v, m, out):
-    """out = v × m = [ω × m_lin + v_lin × m_ang; ω × m_ang] (RBDA §2.9)."""
-    out[0] = v[4] * m[2] - v[5] * m[1] + v[1] * m[5] - v[2] * m[4]
-    out[1] = v[5] * m[0] - v[3] * m[2] + v[2] * m[3] - v[0] * m[5]
-    out[2] = v[3] * m[1] - v[4] * m[0] + v[0] * m[4] - v[1] * m[3]
-    out[3] = v[4] * m[5] - v[5] * m[4]
-    out[4] = v[5] * m[3] - v[3] * m[5]
-    out[5] = v[3] * m[4] - v[4] * m[3]
-
-
-@njit(cache=True, inline="always")
-def cross_force(v, f, out):
-    """out = v ×* f = [ω × f_lin; ω × f_ang + v_lin × f_lin] (RBDA §2.9)."""
-    out[0] = v[4] * f[2] - v[5] * f[1]
-    out[1] = v[5] * f[0] - v[3] * f[2]
-    out[2] = v[3] * f[1] - v[4] * f[0]
-    out[3] = v[4] * f[5] - v[5] * f[4] + v[1] * f[2] - v[2] * f[1]
-    out[4] = v[5] * f[3] - v[3] * f[5] + v[2] * f[0] - v[0] * f[2]
-    out[5] = v[3] * f[4] - v[4] * f[3] + v[0] * f[1] - v[1] * f[0]
-
-
-@njit(cache=True, inline="always")
-def rigid_inertia(m, c, Ic, out):
-    """out (6, 6) = [[m 1, −m [c]×], [m [c]×, I_C − m [c]×²]]: a body of mass m, CoM c and inertia I_C about
-    the CoM, about its frame origin (RBDA Eq. 2.63)."""
-    cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
-    for a in range(3):
-        for b in range(3):
-            out[a, b] = m if a == b else 0.0
-            out[3 + a, 3 + b] = Ic[a, b] + m * ((cc if a == b else 0.0) - c[a] * c[b])
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, -m * c[2], m * c[1]          # m [c]×
-    out[4, 0], out[4, 1], out[4, 2] = m * c[2], 0.0, -m * c[0]
-    out[5, 0], out[5, 1], out[5, 2] = -m * c[1], m * c[0], 0.0
-    for a in range(3):
-        for b in range(3):
-            out[a, 3 + b] = out[3 + b, a]                                    # −m [c]× = (m [c]×)ᵀ
-
-
-@njit(cache=True, inline="always")
-def rotate_block(R, X, r0, c0, T):
-    """T[r0:r0+3, c0:c0+3] = R X[r0:r0+3, c0:c0+3] Rᵀ; T[0:3, 3:6] is scratch (X Rᵀ)."""
-    for a in range(3):
-        for b in range(3):
-            T[a, 3 + b] = X[r0 + a, c0] * R[b, 0] + X[r0 + a, c0 + 1] * R[b, 1] + X[r0 + a, c0 + 2] * R[b, 2]
-    for a in range(3):
-        for b in range(3):
-            T[r0 + a, c0 + b] = R[a, 0] * T[0, 3 + b] + R[a, 1] * T[1, 3 + b] + R[a, 2] * T[2, 3 + b]
-
-
-@njit(cache=True, inline="always")
-def inertia_to_parent(R, p, Ia, T, out):
-    """out += ^λX*_i Iᵃ ⁱX_λ (RBDA Table 7.1, pass 2). For symmetric Iᵃ = [[C, Bᵀ], [B, A]] (C linear, A
-    angular): rotated blocks C' = R C Rᵀ, B', A' (into T), then shifted by P = [p]× (G = P C'):
-      C += C',   B += B' + G,   A += A' + P B'ᵀ − B' P − G P   (P B'ᵀ − B' P = H + Hᵀ, H = P B'ᵀ)."""
-    rotate_block(R, Ia, 0, 0, T)                          # C'
-    rotate_block(R, Ia, 3, 0, T)                          # B'
-    rotate_block(R, Ia, 3, 3, T)                          # A'
-    px, py, pz = p[0], p[1], p[2]
-    for b in range(3):
-        x, y, z = T[0, b], T[1, b], T[2, b]               # G[:, b] = p × C'[:, b], into T[0:3, 3:6]
-        T[0, 3 + b], T[1, 3 + b], T[2, 3 + b] = py * z - pz * y, pz * x - px * z, px * y - py * x
-        x, y, z = T[3 + b, 0], T[3 + b, 1], T[3 + b, 2]   # H[:, b] = p × B'[b, :];  A' += H + Hᵀ
-        hx, hy, hz = py * z - pz * y, pz * x - px * z, px * y - py * x
-        T[3, 3 + b] += hx
-        T[4, 3 + b] += hy
-        T[5, 3 + b] += hz
-        T[3 + b, 3] += hx
-        T[3 + b, 4] += hy
-        T[3 + b, 5] += hz
-    for a in range(3):                                    # − (G P)[a, :] = p × G[a, :]
-        x, y, z = T[a, 3], T[a, 4], T[a, 5]
-        T[3 + a, 3] += py * z - pz * y
-        T[3 + a, 4] += pz * x - px * z
-        T[3 + a, 5] += px * y - py * x
-    for a in range(3):
-        for b in range(3):
-            out[a, b] += T[a, b]
-            x = T[3 + a, b] + T[a, 3 + b]
-            out[3 + a, b] += x
-            out[b, 3 + a] += x
-            out[3 + a, 3 + b] += T[3 + a, 3 + b]
-
-
-# -- D_i = L Lᵀ for a joint's n ≤ 6 velocities ---------------------------------------------------------------
-
-@njit(cache=True, inline="always")
-def cholesky(D, n, dmin):
-    """D = L Lᵀ in place (n × n, lower triangle read and written). Returns -1, or the first k whose pivot
-    D_kk − Σ_m L_km² is not > dmin (left in D[k, k]): D is singular to working precision there."""
-    for k in range(n):
-        d = D[k, k]
-        for m in range(k):
-            d -= D[k, m] * D[k, m]
-        if not d > dmin:
-            D[k, k] = d
-            return k
-        d = np.sqrt(d)
-        D[k, k] = d
-        for r in range(k + 1, n):
-            x = D[r, k]
-            for m in range(k):
-                x -= D[r, m] * D[k, m]
-            D[r, k] = x / d
-    return -1
-
-
-@njit(cache=True, inline="always")
-def cholesky_solve(L, n, x):
-    """x ← D⁻¹ x = L⁻ᵀ L⁻¹ x (x (n,); forward, then back substitution)."""
-    for r in range(n):
-        y = x[r]
-        for m in range(r):
-            y -= L[r, m] * x[m]
-        x[r] = y / L[r, r]
-    for r in range(n - 1, -1, -1):
-        y = x[r]
-        for m in range(r + 1, n):
-            y -= L[m, r] * x[m]
-        x[r] = y / L[r, r]
+from .crba import crba, crba_kernel
+from .rnea import NT, rnea, rnea_kernel
+from .state import (as_batch, check_f_ext, fast, fast_shape, fast_wrench_rows, fast_wrenches, raise_kernel_error, unbatch, wrench_rows)
 
 
 # -- the articulated-body algorithm -----------------------------------------------------------------------
@@ -224,22 +76,16 @@ def singular_threshold(inertia, mass):
     return 1e-14 * x
 
 
-@njit(cache=True, inline="always")
-def first_nonfinite(X, s):
-    """Index of the first non-finite entry of X[s], or -1."""
-    for k in range(X.shape[1]):
-        if not np.isfinite(X[s, k]):
-            return k
-    return -1
-
-
 @njit(cache=True, fastmath=False)              # as derivatives.py (its note)
 def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
     on body (K,) about point (K, 3), in world axes if ``world`` (``state.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
     -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
     (state.raise_kernel_error)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
+    axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
+    mg = mdl.mg
     N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
     Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, T, Y, t, vJ, a0 = workspace(nb, nv)
     for i in range(nb):
@@ -454,7 +300,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     Raises SingularError naming the joint whose articulated inertia D_i = S_iᵀ I^A_i S_i is singular (a
     moving subtree without mass or inertia: M is singular there).
     """
-    k = fast3(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
+    k = fast(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
     if k is not None:                                           # one float64 state: straight into the kernel
         qdd = np.empty(v.shape)
         code = aba_one(k[0], k[1], q, v, tau, qdd)
@@ -463,7 +309,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau), "aba", "q̈", qdd)
     nd = fast_shape(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else 0
     if f_ext is not None:                                       # one state with wrenches: rows kept per model
-        k = fast3(model, q, v, tau)
+        k = fast(model, q, v, tau)
         ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
         if ext is not None:
             qdd = np.empty(v.shape)
@@ -478,7 +324,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
             (Q, V, T), single = (q, v, tau), False
             ext = wrench_rows(model, None, "local", Q.shape[0])
         elif type(model) is MimicModel:                         # q̈ = M⁻¹ (τ − Gᵀ h_full) (dynamics/mimic.py)
-            return mimic_call("aba", model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+            return mimic.forward_dynamics(model, rnea, crba, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
         else:                                                   # checked and converted first
             (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
             ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
@@ -557,7 +403,9 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
     if type(model) is MimicModel:
-        return mimic_call("forward_dynamics", model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, method=method)
+        if not (isinstance(method, str) and method in ("aba", "cholesky")):
+            raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
+        return mimic.forward_dynamics(model, rnea, crba, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if method != "cholesky":
@@ -568,7 +416,7 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
 def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
     """q̈ by the M⁻¹ route (cholesky_kernel): Cholesky of the CRBA mass matrix, right-hand side
     τ − rnea(q, q̇, 0, f_ext)."""
-    k = fast3(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
+    k = fast(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
     if k is not None:                                          # one float64 state: straight into the kernel
         qdd = np.empty(v.shape)
         if cholesky_one(k[0], k[1], q, v, tau, qdd) == -1:

@@ -17,89 +17,41 @@ Placement convention (owned here): R maps body coordinates into the parent's (or
 """
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from .._jit import njit
-from ..joints import joint_placement, joint_velocity, motion_subspace
+from ..joints import joint_placement, joint_velocity
+from ..spatial import first_nonfinite
 
 
 def kernel_arrays(model):
-    """(I, F) of the model (see the module docstring), built once and kept on the model."""
-    try:
-        return model._core_arrays
-    except AttributeError:
-        pass
-    if True:
-        nb = model.njoints
-        I = np.zeros((5, nb), np.int64)
-        if nb:
-            I[:] = np.vstack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
-        S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
-            else np.zeros((0, 6))
-        nv = S.shape[0]
-        m = max(2, 2 * ((nv + 2) // 3))              # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
-        F = np.zeros((4 * nb + 1 + m, 3, 3))
-        F[:nb], F[nb:2 * nb] = model.R0, model.inertia
-        F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = model.axis, model.p0, model.com
-        F[3 * nb:4 * nb, 0, 0] = model.mass
-        F[4 * nb, 0] = -np.asarray(model.gravity, float)
-        F[4 * nb + 1:].reshape(-1, 6)[:nv] = S
-        arr = (I, F)
-        object.__setattr__(model, "_core_arrays", arr)   # a cache, not model data (Model is frozen)
-        return arr
+    """(I, F): the model in the kernels' two-array form (``model.Model.kernel``, built with the model)."""
+    return model.kernel.arrays
+
+
+ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg")
+ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
+    parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
+    kind (nb,) int     joints.REVOLUTE, PRISMATIC or FREEFLYER
+    iq, iv (nb,) int   joint i's first entry in q and in v
+    nvj (nb,) int      joint i's number of velocities
+    S (nv, 6)          motion subspace rows [linear; angular] in the body frame (joints.motion_subspace)
+    axis (nb, 3)       joint axis in the body frame
+    R0 (nb, 3, 3)      joint frame in the parent body at q = 0;   p0 (nb, 3) its origin
+    mass (nb,)         body mass;   com (nb, 3) centre of mass (body frame);   inertia (nb, 3, 3) about the CoM
+    mg (3,)            −g, the base acceleration that stands for gravity"""
 
 
 @njit(cache=True, inline="always")
 def unpack(I, F):
-    """Views of the model arrays: parent, kind, iq, iv, nvj (nb,), S (nv, 6), axis (nb, 3),
-    R0 (nb, 3, 3), p0 (nb, 3), mass (nb,), com (nb, 3), inertia (nb, 3, 3), mg = −g (3,)."""
+    """The named views (``ModelArrays``) of the two kernel arrays (the layout is Model.kernel's: KernelForm)."""
     nb = I.shape[1]
     nv = I[3, nb - 1] + I[4, nb - 1] if nb else 0        # velocities in body order: the last body's end
     B = F[2 * nb:3 * nb]
-    return (I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:].reshape(-1, 6)[:nv],
-            B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0])
-
-
-# -- 3-vector helpers (inlined into every kernel) -------------------------------------------------------
-
-@njit(cache=True, inline="always")
-def rot3(R, x, out):
-    """out = R x (3,)."""
-    a, b, c = x[0], x[1], x[2]
-    for k in range(3):
-        out[k] = R[k, 0] * a + R[k, 1] * b + R[k, 2] * c
-
-
-@njit(cache=True, inline="always")
-def rot3t(R, x, out):
-    """out = Rᵀ x (3,)."""
-    a, b, c = x[0], x[1], x[2]
-    for k in range(3):
-        out[k] = R[0, k] * a + R[1, k] * b + R[2, k] * c
-
-
-@njit(cache=True, inline="always")
-def cross3(a, b, out):
-    """out = a × b (3,); out may alias neither a nor b's later reads (values are read first)."""
-    x = a[1] * b[2] - a[2] * b[1]
-    y = a[2] * b[0] - a[0] * b[2]
-    z = a[0] * b[1] - a[1] * b[0]
-    out[0], out[1], out[2] = x, y, z
-
-
-@njit(cache=True, inline="always")
-def sandwich3(R, X, tmp, out):
-    """out += R X Rᵀ for a symmetric 3×3 X (an inertia): the upper triangle, mirrored, so that the result is
-    exactly symmetric (tmp is scratch)."""
-    for a in range(3):
-        for b in range(3):
-            tmp[a, b] = R[a, 0] * X[0, b] + R[a, 1] * X[1, b] + R[a, 2] * X[2, b]
-    for a in range(3):
-        for b in range(a, 3):
-            x = tmp[a, 0] * R[b, 0] + tmp[a, 1] * R[b, 1] + tmp[a, 2] * R[b, 2]
-            out[a, b] += x
-            if b != a:
-                out[b, a] += x
+    return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:].reshape(-1, 6)[:nv],
+                       B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0])
 
 
 # -- forward kinematics: the one pass -----------------------------------------------------------------
@@ -112,7 +64,7 @@ def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
     and, when v has entries (len(v) = nv; pass an empty v to skip), its world angular velocity ww_i and
     the world velocity of its origin vw_i:  ω_i = ω_λ + Rw_i S_ang q̇_i,
     v_i = v_λ + ω_λ × (pw_i − pw_λ) + Rw_i S_lin q̇_i  (Eqs. 3–4, 9–11 in world axes)."""
-    nb = mdl[0].shape[0]
+    nb = mdl.parent.shape[0]
     for i in range(nb):
         fk_place(mdl, i, q, Rl, pl, Rw, pw)
     # velocities in a loop of their own: the velocity branch inside the placement loop tripled its cost
@@ -124,7 +76,7 @@ def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
 def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
     """``fk_pass`` for the bodies from the root to body ``tip`` only (its support: what a frame on ``tip``
     depends on; path (nb,) int scratch). Other bodies' entries are left as they were."""
-    parent = mdl[0]
+    parent = mdl.parent
     n, j = 0, tip
     while j >= 0:                                    # tip, its parent, …, the root
         path[n] = j
@@ -139,7 +91,7 @@ def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
 @njit(cache=True, inline="always")
 def fk_place(mdl, i, q, Rl, pl, Rw, pw):
     """Body i's placement in its parent (Rl, pl)[i] and in the world (Rw, pw)[i] (its parent's done first)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0 = mdl[:9]
+    parent, kind, iq, axis, R0, p0 = mdl.parent, mdl.kind, mdl.iq, mdl.axis, mdl.R0, mdl.p0
     joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
     j = parent[i]
     if j < 0:
@@ -158,7 +110,7 @@ def fk_place(mdl, i, q, Rl, pl, Rw, pw):
 def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
     """Body i's world angular velocity ww[i] and origin velocity vw[i] (its parent's done first), without
     scratch arrays: (l, a) = S q̇ of the joint as scalars (joints.joint_velocity)."""
-    parent, kind, iq, iv, nvj, S = mdl[:6]
+    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
     (l0, l1, l2), (a0, a1, a2) = joint_velocity(S, iv[i], nvj[i], v)
     j = parent[i]
     for a in range(3):
@@ -174,41 +126,15 @@ def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
 
 
 @njit(cache=True, inline="always")
-def first_nonfinite_entry(A):
-    """The flat index of the first non-finite entry of the 2-D A, or -1. The common case (all finite) is one
-    branch-free pass (x − x is 0 for a finite x, NaN for ±inf and NaN; measured 0.2 µs per 32 × 32 M less
-    than an early exit per entry); only a bad A is searched for its entry."""
-    n, m = A.shape
-    bad = 0
-    for a in range(n):
-        for b in range(m):
-            bad += not (A[a, b] - A[a, b] == 0.0)
-    if bad == 0:
-        return -1
-    for a in range(n):
-        for b in range(m):
-            if not np.isfinite(A[a, b]):
-                return a * m + b
-    return -1
-
-
-@njit(cache=True, inline="always")
 def nonfinite_input(Q, V, s):
-    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V.
-    The common case (all finite) is one branch-free pass; only a bad state is searched for its entry."""
-    ok = True
-    for k in range(Q.shape[1]):
-        ok &= np.isfinite(Q[s, k])
-    for k in range(V.shape[1]):
-        ok &= np.isfinite(V[s, k])
-    if ok:
-        return -1
-    for k in range(Q.shape[1]):
-        if not np.isfinite(Q[s, k]):
-            return s * Q.shape[1] + k
-    for k in range(V.shape[1]):
-        if not np.isfinite(V[s, k]):
-            return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
+    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V
+    (``spatial.first_nonfinite`` on each row)."""
+    k = first_nonfinite(Q, s)
+    if k >= 0:
+        return s * Q.shape[1] + k
+    k = first_nonfinite(V, s)
+    if k >= 0:
+        return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
     return -1
 
 
@@ -236,29 +162,10 @@ def wrench_block(f, m, P):
 
 
 @njit(cache=True, inline="always")
-def add_force_cross(out, h, scale):
-    """out (6, 6) += scale · h ×̄, h ×̄ = [[0, −[h_l]×], [−[h_l]×, −[h_a]×]] for the momentum h = [h_l; h_a]
-    (Pinocchio's addForceCrossMatrix: h ×̄ m = −m ×* h)."""
-    for r0, c0, k in ((0, 3, 0), (3, 0, 0), (3, 3, 3)):
-        x, y, z = scale * h[k], scale * h[k + 1], scale * h[k + 2]
-        out[r0, c0 + 1] += z
-        out[r0, c0 + 2] -= y
-        out[r0 + 1, c0] -= z
-        out[r0 + 1, c0 + 2] += x
-        out[r0 + 2, c0] += y
-        out[r0 + 2, c0 + 1] -= x
-
-
-@njit(cache=True, inline="always")
 def finite_state(Q, V, A, s):
     """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry
-    (branch-free, without an early exit: numba then keeps the batch loop as fast as the bare recursion)."""
-    ok = True
-    for k in range(Q.shape[1]):
-        ok &= np.isfinite(Q[s, k])
-    for k in range(V.shape[1]):
-        ok &= np.isfinite(V[s, k]) & np.isfinite(A[s, k])
-    return ok
+    (``spatial.first_nonfinite`` on each row)."""
+    return max(first_nonfinite(Q, s), first_nonfinite(V, s), first_nonfinite(A, s)) < 0   # no early exit
 
 
 @njit(cache=True)
@@ -278,7 +185,8 @@ def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
 @njit(cache=True)
 def joint_placements_kernel(I, F, Q, R, p):
     """Placement of every body in its parent for every state: R (N, nb, 3, 3), p (N, nb, 3)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0 = unpack(I, F)[:9]
+    mdl = unpack(I, F)
+    kind, iq, axis, R0, p0 = mdl.kind, mdl.iq, mdl.axis, mdl.R0, mdl.p0
     for s in range(Q.shape[0]):
         q, Rs, ps = Q[s], R[s], p[s]
         for i in range(I.shape[1]):

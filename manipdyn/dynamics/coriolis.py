@@ -27,39 +27,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from .core import add_force_cross, first_nonfinite_entry, fk_pass, kernel_arrays, nonfinite_input, sandwich3, unpack
-from .state import as_batch, fast2, fast_shape, raise_kernel_error, unbatch
-
-
-# 6-vectors inside the kernel are 6-tuples (values: no array views, no allocation in the loops).
-
-@njit(cache=True, inline="always")
-def row6(X, i):
-    """Row i of X (n, 6) as a 6-tuple."""
-    return X[i, 0], X[i, 1], X[i, 2], X[i, 3], X[i, 4], X[i, 5]
-
-
-@njit(cache=True, inline="always")
-def dot6(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
-
-
-@njit(cache=True, inline="always")
-def motion_cross(v, m):
-    """v × m = [ω × m_lin + v_lin × m_ang; ω × m_ang] (RBDA §2.9)."""
-    return (v[4] * m[2] - v[5] * m[1] + v[1] * m[5] - v[2] * m[4],
-            v[5] * m[0] - v[3] * m[2] + v[2] * m[3] - v[0] * m[5],
-            v[3] * m[1] - v[4] * m[0] + v[0] * m[4] - v[1] * m[3],
-            v[4] * m[5] - v[5] * m[4], v[5] * m[3] - v[3] * m[5], v[3] * m[4] - v[4] * m[3])
-
-
-@njit(cache=True, inline="always")
-def force_cross(v, f):
-    """v ×* f = [ω × f_lin; ω × f_ang + v_lin × f_lin] (RBDA §2.9)."""
-    return (v[4] * f[2] - v[5] * f[1], v[5] * f[0] - v[3] * f[2], v[3] * f[1] - v[4] * f[0],
-            v[4] * f[5] - v[5] * f[4] + v[1] * f[2] - v[2] * f[1],
-            v[5] * f[3] - v[3] * f[5] + v[2] * f[0] - v[0] * f[2],
-            v[3] * f[4] - v[4] * f[3] + v[0] * f[1] - v[1] * f[0])
+from ..spatial import add_force_cross, dot6, first_nonfinite_entry, force_cross, motion_cross, row6, sandwich3
+from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
+from .state import as_batch, fast, fast_shape, raise_kernel_error, unbatch
 
 
 @njit(cache=True)
@@ -67,7 +37,7 @@ def coriolis_kernel(I, F, Q, V, C):
     """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns −1, the flat index
     of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
     mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
+    parent, iv, nvj, S, mass, com, inertia = mdl.parent, mdl.iv, mdl.nvj, mdl.S, mdl.mass, mdl.com, mdl.inertia
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     R3, P3, M6, B6 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3)), np.empty((2 * nb, 6, 6)), \
         np.empty((2 * nv, 6))                          # four allocations, cut into the scratch arrays
@@ -176,7 +146,7 @@ def coriolis_matrix(model, q, v):
     """C(q, q̇) (nv, nv) or (N, nv, nv): the Christoffel-consistent Coriolis matrix (module docstring;
     Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew.
     Float64 arrays go straight to the kernel; anything else is checked and converted first."""
-    k = fast2(model, q, v)
+    k = fast(model, q, v)
     if k is not None:                                 # one float64 state
         nv = model.nv
         C = np.empty((nv, nv))

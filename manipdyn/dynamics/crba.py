@@ -23,8 +23,13 @@ import numpy as np
 
 from .._jit import C2, MODEL, STATE, entry, njit
 from ..joints import joint_placement
-from .core import first_nonfinite_entry, kernel_arrays, rot3, sandwich3, unpack
-from .state import as_batch, fast1, fast_shape, raise_kernel_error, unbatch
+from ..errors import InputError
+from ..model import MimicModel
+from ..spatial import first_nonfinite, first_nonfinite_entry, force_up, inertia_motion, merge_inertia, rot3, sandwich3
+from . import mimic
+from .core import kernel_arrays, unpack
+from .lagrange import lagrange_mass_matrix
+from .state import as_batch, fast, fast_shape, raise_kernel_error, unbatch
 
 
 @njit(cache=True, inline="always")
@@ -47,32 +52,12 @@ def merge_weights(parent, mass, mC, W):
 
 
 @njit(cache=True, inline="always")
-def combine(w, c1, c2, I2):
-    """(c2, I2) ← the union of a body (c1; its inertia already in I2) and the composite (c2, I2), one
-    frame, about their common centre of mass: I2 += (m₁m₂/m)(|d|² 1 − d dᵀ), d = c1 − c2;
-    c2 ← (m₁ c1 + m₂ c2)/m; w = (m₁/m, m₂/m, m₁m₂/m). The diagonal is formed from sums of the other two
-    squares (spatial.parallel_axis): a large offset along one axis keeps the small moment about it."""
-    k = w[2]
-    dx, dy, dz = c1[0] - c2[0], c1[1] - c2[1], c1[2] - c2[2]
-    I2[0, 0] += k * (dy * dy + dz * dz)
-    I2[1, 1] += k * (dx * dx + dz * dz)
-    I2[2, 2] += k * (dx * dx + dy * dy)
-    I2[0, 1] -= k * dx * dy
-    I2[1, 0] -= k * dx * dy
-    I2[0, 2] -= k * dx * dz
-    I2[2, 0] -= k * dx * dz
-    I2[1, 2] -= k * dy * dz
-    I2[2, 1] -= k * dy * dz
-    for a in range(3):
-        c2[a] = w[0] * c1[a] + w[1] * c2[a]
-
-
-@njit(cache=True, inline="always")
 def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     """Pass 1: placements (R, p)[i] of every body in its parent (joints.joint_placement), then the
     composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
     carried as centre of mass and inertia about it). arrays = core.unpack(I, F); W from merge_weights."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = arrays[:12]
+    parent, kind, iq, axis, R0, p0 = arrays.parent, arrays.kind, arrays.iq, arrays.axis, arrays.R0, arrays.p0
+    com, inertia = arrays.com, arrays.inertia
     for i in range(parent.shape[0]):
         joint_placement(i, kind, iq, axis, R0, p0, q, R, p)
     for i in range(parent.shape[0]):           # start from each body's own CoM and inertia (loops: cheaper
@@ -88,35 +73,7 @@ def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
         for a in range(3):
             d[a] += p[i, a]
         sandwich3(R[i], IC[i], tmp, IC[j])     # R I_c,i Rᵀ: about its own centre of mass
-        combine(W[i], d, cC[j], IC[j])
-
-
-@njit(cache=True, inline="always")
-def unit_motion_force(S, r, m, c, Ic):
-    """F = I^c s_r = (f, n): the wrench about body i's origin that gives the composite (m, c, I_c) the
-    unit motion s_r = [s_l; s_a] (row r of S): f = m (s_l + s_a × c), its CoM's momentum;
-    n = I_c s_a + c × f."""
-    lx, ly, lz, ax, ay, az = S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]
-    fx = m * (lx + ay * c[2] - az * c[1])
-    fy = m * (ly + az * c[0] - ax * c[2])
-    fz = m * (lz + ax * c[1] - ay * c[0])
-    nx = Ic[0, 0] * ax + Ic[0, 1] * ay + Ic[0, 2] * az + c[1] * fz - c[2] * fy
-    ny = Ic[1, 0] * ax + Ic[1, 1] * ay + Ic[1, 2] * az + c[2] * fx - c[0] * fz
-    nz = Ic[2, 0] * ax + Ic[2, 1] * ay + Ic[2, 2] * az + c[0] * fy - c[1] * fx
-    return fx, fy, fz, nx, ny, nz
-
-
-@njit(cache=True, inline="always")
-def to_parent(R, p, fx, fy, fz, nx, ny, nz):
-    """The wrench (f, n) about body k's origin, in λ(k)'s frame about its origin: f ← R f,
-    n ← R n + p × R f (Eqs. 15, 16)."""
-    gx = R[0, 0] * fx + R[0, 1] * fy + R[0, 2] * fz
-    gy = R[1, 0] * fx + R[1, 1] * fy + R[1, 2] * fz
-    gz = R[2, 0] * fx + R[2, 1] * fy + R[2, 2] * fz
-    mx = R[0, 0] * nx + R[0, 1] * ny + R[0, 2] * nz + p[1] * gz - p[2] * gy
-    my = R[1, 0] * nx + R[1, 1] * ny + R[1, 2] * nz + p[2] * gx - p[0] * gz
-    mz = R[2, 0] * nx + R[2, 1] * ny + R[2, 2] * nz + p[0] * gy - p[1] * gx
-    return gx, gy, gz, mx, my, mz
+        merge_inertia(W[i], d, cC[j], IC[j])
 
 
 @njit(cache=True, inline="always")
@@ -124,11 +81,11 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
     """Pass 2: M (nv, nv) column by column: for every row r of joint i's S, F = I^c_i s_r and
     M_kr = S_kᵀ F for joint i and, F carried up, for every ancestor k (RBDA §6.2; joints.joint_force
     written with scalars); the upper triangle mirrors the lower."""
-    parent, kind, iq, iv, nvj, S = arrays[:6]
+    parent, iv, nvj, S = arrays.parent, arrays.iv, arrays.nvj, arrays.S
     M[:, :] = 0.0                              # bodies on different branches do not couple
     for i in range(parent.shape[0]):
         for r in range(iv[i], iv[i] + nvj[i]):
-            fx, fy, fz, nx, ny, nz = unit_motion_force(S, r, mC[i], cC[i], IC[i])
+            fx, fy, fz, nx, ny, nz = inertia_motion(S, r, mC[i], cC[i], IC[i])
             k = i
             while True:
                 for x in range(iv[k], iv[k] + nvj[k]):     # M[r, rows of k] = S_kᵀ F
@@ -136,7 +93,7 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
                                + S[x, 3] * nx + S[x, 4] * ny + S[x, 5] * nz)
                 if parent[k] < 0:
                     break
-                fx, fy, fz, nx, ny, nz = to_parent(R[k], p[k], fx, fy, fz, nx, ny, nz)
+                fx, fy, fz, nx, ny, nz = force_up(R[k], p[k], fx, fy, fz, nx, ny, nz)
                 k = parent[k]
     for r in range(M.shape[0]):
         for a in range(r):
@@ -151,11 +108,11 @@ def crba_kernel(I, F, Q, M):
     N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
     R3, B3, mC = np.empty((2 * nb + 1, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty(nb)   # scratch, cut below
     R, IC, tmp, p, W, cC, d = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
-    merge_weights(arrays[0], arrays[9], mC, W)
+    merge_weights(arrays.parent, arrays.mass, mC, W)
     for s in range(N):
-        for k in range(nq):
-            if not np.isfinite(Q[s, k]):
-                return s * nq + k
+        k = first_nonfinite(Q, s)
+        if k >= 0:
+            return s * nq + k
         composite_pass(arrays, Q[s], W, R, p, cC, IC, d, tmp)
         column_pass(arrays, R, p, mC, cC, IC, M[s])
         k = first_nonfinite_entry(M[s])        # the result is finite (else an intermediate overflowed)
@@ -173,10 +130,27 @@ def crba_one(I, F, q, M):
 CRBA_ONE = entry(crba_one, *MODEL, STATE, C2)   # the one-state calls' compiled code (``_jit.entry``)
 
 
+def mass_matrix(model, q, method="crba"):
+    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
+    T = ½ q̇ᵀ M q̇ (Eq. 23).
+
+    method="crba" (default, O(n²)): the composite-rigid-body algorithm (this module, compiled).
+    method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
+    (O(n³), compiled: ``lagrange.lagrange_mass_matrix``).
+    """
+    if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
+        return mimic.mass_matrix(model, mass_matrix, q, method=method)
+    if isinstance(method, str) and method == "crba":
+        return crba(model, q)
+    if method != "lagrange":
+        raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
+    return lagrange_mass_matrix(model, q)
+
+
 def crba(model, q):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above).
     Float64 arrays go straight to the kernel; anything else is checked and converted first."""
-    k = fast1(model, q)
+    k = fast(model, q)
     if k is not None:                                 # one float64 state
         nv = model.nv
         M = np.empty((nv, nv))

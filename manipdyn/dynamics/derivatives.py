@@ -45,8 +45,10 @@ import numpy as np
 
 from .._jit import njit
 from ..joints import joint_placement
-from .aba import aba_kernel, cross_force, cross_motion, rigid_inertia
-from .core import add_force_cross, finite_state, first_nonfinite_entry, kernel_arrays, unpack
+from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
+                       spd_inverse, world_inertia, world_motion)
+from .aba import aba_kernel
+from .core import finite_state, kernel_arrays, unpack
 from .state import (
     as_batch,
     fast_shape,
@@ -61,131 +63,10 @@ _QVA, _QVT = ("q", "v", "a"), ("q", "v", "tau")
 OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "dqdd_dtau")
 
 
-# -- 6-vector helpers on rows of (n, 6) arrays, inlined ------------------------------------------------------
-
-@njit(cache=True, inline="always", fastmath=False)
-def dot6(x, y):
-    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2] + x[3] * y[3] + x[4] * y[4] + x[5] * y[5]
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def mat6(Y, x, out, add):
-    """out = Y x (or out += Y x with ``add``) for Y (6, 6), x (6,)."""
-    for a in range(6):
-        s = Y[a, 0] * x[0] + Y[a, 1] * x[1] + Y[a, 2] * x[2] + Y[a, 3] * x[3] + Y[a, 4] * x[4] + Y[a, 5] * x[5]
-        out[a] = out[a] + s if add else s
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def rigid6(Y, x, out, add):
-    """``mat6`` for a spatial inertia Y = [[m 1, −[h]×], [[h]×, Ī]] (``rigid_inertia`` or a sum of them, which
-    keep exact zeros where the structure has them): the 24 products that are not by zero, in mat6's order, so
-    the result is the same to the bit (measured: ~1 µs per state less on a 32-link chain)."""
-    y0 = Y[0, 0] * x[0] + Y[0, 4] * x[4] + Y[0, 5] * x[5]
-    y1 = Y[1, 1] * x[1] + Y[1, 3] * x[3] + Y[1, 5] * x[5]
-    y2 = Y[2, 2] * x[2] + Y[2, 3] * x[3] + Y[2, 4] * x[4]
-    y3 = Y[3, 1] * x[1] + Y[3, 2] * x[2] + Y[3, 3] * x[3] + Y[3, 4] * x[4] + Y[3, 5] * x[5]
-    y4 = Y[4, 0] * x[0] + Y[4, 2] * x[2] + Y[4, 3] * x[3] + Y[4, 4] * x[4] + Y[4, 5] * x[5]
-    y5 = Y[5, 0] * x[0] + Y[5, 1] * x[1] + Y[5, 3] * x[3] + Y[5, 4] * x[4] + Y[5, 5] * x[5]
-    if add:
-        out[0] += y0
-        out[1] += y1
-        out[2] += y2
-        out[3] += y3
-        out[4] += y4
-        out[5] += y5
-    else:
-        out[0], out[1], out[2], out[3], out[4], out[5] = y0, y1, y2, y3, y4, y5
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def world_motion(R, p, s, out):
-    """out = ⁰X_i s = [R s_lin + p × R s_ang; R s_ang] for body i at (R, p) in the world (RBDA Table 2.2)."""
-    for a in range(3):
-        out[3 + a] = R[a, 0] * s[3] + R[a, 1] * s[4] + R[a, 2] * s[5]
-        out[a] = R[a, 0] * s[0] + R[a, 1] * s[1] + R[a, 2] * s[2]
-    out[0] += p[1] * out[5] - p[2] * out[4]
-    out[1] += p[2] * out[3] - p[0] * out[5]
-    out[2] += p[0] * out[4] - p[1] * out[3]
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def world_inertia(m, c, Ic, R, p, T, out):
-    """out (6, 6) = Y_i in the world, about its origin: ``rigid_inertia`` of the CoM R c + p and of R I_C Rᵀ
-    (T (6, 6) scratch)."""
-    for a in range(3):
-        for b in range(3):
-            T[a, b] = R[a, 0] * Ic[0, b] + R[a, 1] * Ic[1, b] + R[a, 2] * Ic[2, b]          # R I_C
-        T[3, a] = p[a] + R[a, 0] * c[0] + R[a, 1] * c[1] + R[a, 2] * c[2]                 # R c + p
-    for a in range(3):
-        for b in range(3):
-            T[a, 3 + b] = T[a, 0] * R[b, 0] + T[a, 1] * R[b, 1] + T[a, 2] * R[b, 2]      # R I_C Rᵀ
-    rigid_inertia(m, T[3, :3], T[:3, 3:], out)
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def inertia_variation(Y, v, h, P, out):
-    """out = Ẏ = v ×* Y − Y v× + h ×̄ (Pinocchio's ``variation`` plus ``addForceCrossMatrix``): with the
-    motion-cross matrix X = v× = [[ω×, v_l×], [0, ω×]] and v ×* = −Xᵀ, Y symmetric: −XᵀY − (XᵀY)ᵀ, plus
-    h ×̄ = [[0, −[h_l]×], [−[h_l]×, −[h_a]×]] (h ×̄ m = −m ×* h, the v-derivative of v ×* h). P (6, 6) scratch."""
-    wx, wy, wz, lx, ly, lz = v[3], v[4], v[5], v[0], v[1], v[2]
-    for k in range(6):                       # P = Xᵀ Y, row by row: Xᵀ = [[−[ω]×, 0], [−[v_l]×, −[ω]×]]
-        y0, y1, y2, y3, y4, y5 = Y[0, k], Y[1, k], Y[2, k], Y[3, k], Y[4, k], Y[5, k]
-        P[0, k] = wz * y1 - wy * y2
-        P[1, k] = wx * y2 - wz * y0
-        P[2, k] = wy * y0 - wx * y1
-        P[3, k] = lz * y1 - ly * y2 + wz * y4 - wy * y5
-        P[4, k] = lx * y2 - lz * y0 + wx * y5 - wz * y3
-        P[5, k] = ly * y0 - lx * y1 + wy * y3 - wx * y4
-    for a in range(6):
-        for k in range(6):
-            out[a, k] = -P[a, k] - P[k, a]
-    add_force_cross(out, h, 1.0)             # + h ×̄
-
-
-@njit(cache=True, inline="always", fastmath=False)
-def spd_inverse(M, L, out):
-    """out = M⁻¹ = L⁻ᵀ L⁻¹ for a symmetric positive definite M (n, n), by Cholesky M = L Lᵀ (L (n, n) scratch,
-    lower triangle), then L⁻¹ (into M's lower triangle: M is overwritten) and the product L⁻ᵀ L⁻¹, as
-    LAPACK's potri (trtri, then lauum's product, here by BLAS).
-    Returns -1, or the first row k whose pivot is not > 0 (M singular there)."""
-    n = M.shape[0]
-    for k in range(n):
-        d = M[k, k]
-        for m in range(k):
-            d -= L[k, m] * L[k, m]
-        if not d > 0.0:
-            return k
-        L[k, k] = np.sqrt(d)
-        for r in range(k + 1, n):
-            x = M[r, k]
-            for m in range(k):
-                x -= L[r, m] * L[k, m]
-            L[r, k] = x / L[k, k]
-    # L⁻¹ by row updates (axpy along contiguous rows: independent multiply-adds, which the compiler
-    # vectorises), not by dot products (a serial chain of dependent additions, ~3x slower at n = 32).
-    for r in range(n):                        # M ← X = L⁻¹ (lower) by forward substitution of L X = 1:
-        for c in range(n):                    # row m is final once rows < m are subtracted, then each later
-            M[r, c] = 1.0 if r == c else 0.0  # row r takes away L_rm (row m)
-    for m in range(n):
-        d = 1.0 / L[m, m]
-        for c in range(m + 1):
-            M[m, c] *= d
-        for r in range(m + 1, n):
-            x = L[r, m]
-            for c in range(m + 1):
-                M[r, c] -= x * M[m, c]
-    np.dot(M.T, M, out)                       # out = Xᵀ X (BLAS; measured 0.6 µs less than the loops at n = 32),
-    for r in range(n):                        # exactly symmetric: the lower triangle mirrored
-        for c in range(r):
-            out[c, r] = out[r, c]
-    return -1
-
-
 @njit(cache=True, inline="always", fastmath=False)
 def first_nonfinite3(D, s):
     """The flat index (which, row, column) within D[:, s] of the first non-finite entry of the three
-    (N, nv, nv) matrices D = (dq, dv, da), or -1 (core.first_nonfinite_entry on each)."""
+    (N, nv, nv) matrices D = (dq, dv, da), or -1 (spatial.first_nonfinite_entry on each)."""
     nv = D[0].shape[1]
     for w in range(3):
         k = first_nonfinite_entry(D[w][s])
@@ -202,7 +83,10 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``state.wrench_rows``; body axes,
     or world axes with ``world``). Returns -1; ≥ 0 a non-finite input (its state); −2 − nb − k a non-finite
     result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = unpack(I, F)
+    mdl = unpack(I, F)
+    parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
+    axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
+    mg = mdl.mg
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     R33, P3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))    # five allocations, cut into blocks
     B6, B66, B63 = np.empty((3 * nb + 4 * nv + 3, 6)), np.empty((2 * nb + 5, 6, 6)), np.empty((nb + 1, 6, 3))

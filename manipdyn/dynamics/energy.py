@@ -10,14 +10,14 @@ import numpy as np
 
 from .._jit import MODEL, STATE, entry, njit
 from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
-from .state import as_batch, fast1, fast2, fast_shape, raise_kernel_error
+from .state import as_batch, fast, fast_shape, raise_kernel_error
 
 
 @njit(cache=True, inline="always")
 def energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
     """T of one state (v (nv,)) or V (v with no entries: potential energy); Rl … vw are core.fk_pass's
     scratch arrays. Non-finite input gives a non-finite energy."""
-    mass, com, inertia, mg = mdl[9:]
+    mass, com, inertia, mg = mdl.mass, mdl.com, mdl.inertia, mdl.mg
     fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw)
     kinetic = v.shape[0] > 0
     e = 0.0
@@ -105,7 +105,7 @@ def _energy(model, call, *arrays):
 
 def kinetic_energy(model, q, v):
     """T = Σ_links ½ m |v_C|² + ½ ωᵀ (R I Rᵀ) ω, v_C = v_o + ω × R c (world), float or (N,)."""
-    k = fast2(model, q, v)
+    k = fast(model, q, v)
     if k is not None:                             # one float64 state: a finite result is the answer
         e = KINETIC_ONE.call(k[0], k[1], q, v)
         if e - e == 0.0:
@@ -115,7 +115,7 @@ def kinetic_energy(model, q, v):
 
 def potential_energy(model, q):
     """V = −Σ_links m gᵀ c (gravity g in the base frame, CoM c in world coordinates), float or (N,)."""
-    k = fast1(model, q)
+    k = fast(model, q)
     if k is not None:
         e = POTENTIAL_ONE.call(k[0], k[1], q)
         if e - e == 0.0:

@@ -21,10 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import MODEL, C1, C2, STATE, entry, njit
+from .._jit import MODEL, ROW, C1, C2, STATE, entry, njit
 from ..errors import InputError
-from .core import first_nonfinite_entry, fk_pass, fk_path, kernel_arrays, nonfinite_input, sandwich3, unpack
-from .state import as_batch, check_output, fast1, fast2, frame_of, quiet, raise_kernel_error, unbatch
+from ..spatial import first_nonfinite, first_nonfinite_entry, rotate6, sandwich3
+from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, unpack
+from .state import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
 
@@ -40,7 +41,7 @@ def point_jacobian(parent, iv, nvj, S, b, Rw, pw, x, J):
     while j >= 0:
         dx, dy, dz = x[0] - pw[j, 0], x[1] - pw[j, 1], x[2] - pw[j, 2]
         for r in range(iv[j], iv[j] + nvj[j]):
-            lx, ly, lz, ax, ay, az = _column(Rw[j], S[r])
+            lx, ly, lz, ax, ay, az = rotate6(Rw[j], S[r])
             J[0, r] = lx + ay * dz - az * dy
             J[1, r] = ly + az * dx - ax * dz
             J[2, r] = lz + ax * dy - ay * dx
@@ -60,21 +61,13 @@ def point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, x, xd, dJ):
         ux, uy, uz = xd[0] - vw[j, 0], xd[1] - vw[j, 1], xd[2] - vw[j, 2]      # ẋ − ȯ_j
         wx, wy, wz = ww[j, 0], ww[j, 1], ww[j, 2]
         for r in range(iv[j], iv[j] + nvj[j]):
-            lx, ly, lz, ax, ay, az = _column(Rw[j], S[r])
+            lx, ly, lz, ax, ay, az = rotate6(Rw[j], S[r])
             bx, by, bz = wy * az - wz * ay, wz * ax - wx * az, wx * ay - wy * ax   # ȧ = ω_j × a
             dJ[0, r] = wy * lz - wz * ly + by * dz - bz * dy + ay * uz - az * uy
             dJ[1, r] = wz * lx - wx * lz + bz * dx - bx * dz + az * ux - ax * uz
             dJ[2, r] = wx * ly - wy * lx + bx * dy - by * dx + ax * uy - ay * ux
             dJ[3, r], dJ[4, r], dJ[5, r] = bx, by, bz
         j = parent[j]
-
-
-@njit(cache=True, inline="always")
-def _column(R, s):
-    """(l, a) = (R s[:3], R s[3:]) as six scalars: a motion-subspace column turned into the world."""
-    return (R[0, 0] * s[0] + R[0, 1] * s[1] + R[0, 2] * s[2], R[1, 0] * s[0] + R[1, 1] * s[1] + R[1, 2] * s[2],
-            R[2, 0] * s[0] + R[2, 1] * s[1] + R[2, 2] * s[2], R[0, 0] * s[3] + R[0, 1] * s[4] + R[0, 2] * s[5],
-            R[1, 0] * s[3] + R[1, 1] * s[4] + R[1, 2] * s[5], R[2, 0] * s[3] + R[2, 1] * s[4] + R[2, 2] * s[5])
 
 
 @njit(cache=True, inline="always")
@@ -125,7 +118,7 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     (Rl, pl) on body b; want ≥ 1: its Jacobian J (N, 6, nv); want = 2: J̇ (N, 6, nv); local: in the frame's
     axes. Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
     mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S = mdl[:6]
+    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
     N, nb = Q.shape[0], I.shape[1]
     # scratch as slices of two arrays, never as separate small arrays: measured 2.3x faster per state (0.28
     # against 0.65 µs on ur5; the same kernel text, only the allocations differ)
@@ -157,14 +150,10 @@ def frame_one(I, F, q, v, X, want, out):
     (the other case's branches and the empty v of J drop out of the machine code)."""
     b, local = int(X[4, 0]), X[4, 2] > 0.0
     mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S = mdl[:6]
+    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
     nb, nv = I.shape[1], S.shape[0]
-    for k in range(q.shape[0]):
-        if not np.isfinite(q[k]):
-            return 0
-    for k in range(v.shape[0]):
-        if not np.isfinite(v[k]):
-            return 0
+    if max(first_nonfinite(q[np.newaxis], 0), first_nonfinite(v[np.newaxis], 0)) >= 0:
+        return 0
     B3, R3, path = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb + 1, 3, 3)), np.empty(nb, np.int64)   # cut below
     Rp, Rw, Rf = R3[:nb], R3[nb:2 * nb], R3[2 * nb]
     pp, pw, ww, vw = B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
@@ -178,11 +167,8 @@ def frame_one(I, F, q, v, X, want, out):
         point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, pf, xd, out)
     if local:
         _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
-    for r in range(6):
-        for c in range(nv):
-            if not np.isfinite(out[r, c]):
-                return -2 - nb - (r * nv + c)
-    return -1
+    k = first_nonfinite_entry(out)
+    return -1 if k < 0 else -2 - nb - k
 
 
 @njit(cache=True)
@@ -205,16 +191,13 @@ def placement_one(I, F, q, X, R, p):
     R3, B3, path = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3)), np.empty(nb, np.int64)
     fk_path(unpack(I, F), q, q[:0], b, path, R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
     body_point(b, R3[nb:], B3[nb:], X[:3], X[3], R, p)
-    ok = True
-    for r in range(3):
-        ok &= np.isfinite(p[r]) & np.isfinite(R[r, 0]) & np.isfinite(R[r, 1]) & np.isfinite(R[r, 2])
-    return -1 if ok else -2
+    return -1 if max(first_nonfinite(p[np.newaxis], 0), first_nonfinite_entry(R)) < 0 else -2
 
 
 # One-state calls go straight to the compiled code (``_jit.entry``): q, v as the caller gave them, the frame row
-JACOBIAN_ONE = entry(jacobian_one, *MODEL, STATE, C2, C2)
-JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, STATE, STATE, C2, C2)
-PLACEMENT_ONE = entry(placement_one, *MODEL, STATE, C2, C2, C1)
+JACOBIAN_ONE = entry(jacobian_one, *MODEL, STATE, ROW, C2)
+JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, STATE, STATE, ROW, C2)
+PLACEMENT_ONE = entry(placement_one, *MODEL, STATE, ROW, C2, C1)
 
 
 @njit(cache=True)
@@ -222,7 +205,7 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
     """For every state and body b: world CoM c (N, nb, 3), its world-aligned Jacobian J (N, nb, 6, nv) and
     the world inertia about the CoM Iw = R I Rᵀ (N, nb, 3, 3) — what the Lagrange route sums over."""
     mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
+    parent, iv, nvj, S, com, inertia = mdl.parent, mdl.iv, mdl.nvj, mdl.S, mdl.com, mdl.inertia
     N, nb = Q.shape[0], I.shape[1]
     R3, B3, v0 = np.empty((2 * nb + 3, 3, 3)), np.empty((4 * nb, 3)), np.empty(0)   # scratch: slices of two
     Rp, Rw, tmp, Rc, eye = R3[:nb], R3[nb:2 * nb], R3[2 * nb], R3[2 * nb + 1], R3[2 * nb + 2]
@@ -238,89 +221,24 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
             sandwich3(Rw[b], inertia[b], tmp, Iw[s, b])
 
 
-@njit(cache=True)
-def lagrange_mass_kernel(I, F, Q, M):
-    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (chapter Eq. 23) for every state of Q (N, nq) into
-    M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
-    columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
-    −2 − nb − k for a non-finite M at flat index k."""
-    mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia = mdl[:12]
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
-    # scratch as slices of a few arrays (separate small arrays measured 2.3x slower per state: frame_kernel)
-    R3, B3, J, cols, v0 = np.empty((2 * nb + 4, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty((6, nv)), \
-        np.empty(nv, np.int64), np.empty(0)
-    Rp, Rw, tmp, Rc, Iw, eye = R3[:nb], R3[nb:2 * nb], R3[2 * nb], R3[2 * nb + 1], R3[2 * nb + 2], R3[2 * nb + 3]
-    pp, pw, ww, c = B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
-    eye[:, :] = 0.0
-    eye[0, 0] = eye[1, 1] = eye[2, 2] = 1.0
-    for s in range(N):
-        for k in range(nq):
-            if not np.isfinite(Q[s, k]):
-                return s * nq + k
-        fk_pass(mdl, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
-        Ms = M[s]
-        Ms[:, :] = 0.0
-        for b in range(nb):
-            body_point(b, Rw, pw, eye, com[b], Rc, c)
-            point_jacobian(parent, iv, nvj, S, b, Rw, pw, c, J)
-            Iw[:, :] = 0.0
-            sandwich3(Rw[b], inertia[b], tmp, Iw)
-            n, j = 0, b                                # the columns of the joints that support b
-            while j >= 0:
-                for r in range(iv[j], iv[j] + nvj[j]):
-                    cols[n] = r
-                    n += 1
-                j = parent[j]
-            for x in range(n):
-                r = cols[x]
-                wx = Iw[0, 0] * J[3, r] + Iw[0, 1] * J[4, r] + Iw[0, 2] * J[5, r]      # I_w J_ω,r
-                wy = Iw[1, 0] * J[3, r] + Iw[1, 1] * J[4, r] + Iw[1, 2] * J[5, r]
-                wz = Iw[2, 0] * J[3, r] + Iw[2, 1] * J[4, r] + Iw[2, 2] * J[5, r]
-                for y in range(x, n):
-                    t = cols[y]
-                    Ms[t, r] += (mass[b] * (J[0, r] * J[0, t] + J[1, r] * J[1, t] + J[2, r] * J[2, t])
-                                 + wx * J[3, t] + wy * J[4, t] + wz * J[5, t])
-        for r in range(nv):                            # cols run from the body down: mirror both ways
-            for t in range(r):
-                x = Ms[r, t] + Ms[t, r]
-                Ms[r, t] = Ms[t, r] = x
-        k = first_nonfinite_entry(Ms)
-        if k >= 0:
-            return -2 - nb - (s * nv * nv + k)
-    return -1
-
-
 # -- Python entry points -----------------------------------------------------------------------------------
 
 def frame_row(model, frame):
-    """(body, X (4, 3) = [R; p]) of a link or frame name: the frame's placement in its body, kept per model
-    (the lookup and the array are built once per name); InputError lists the closest names."""
-    rows = model.__dict__.get("_frame_rows")
-    if rows is None:
-        rows = {}
-        object.__setattr__(model, "_frame_rows", rows)      # a cache, not model data (Model is frozen)
-    row = rows.get(frame) if type(frame) is str else None
-    if row is None:
-        fr = frame_of(model, frame)
-        row = (int(fr.body), np.ascontiguousarray(np.vstack([fr.R, fr.p]), float))
-        rows[frame] = row
-    return row
+    """(body, X (4, 3) = [R; p]) of a link or frame name: the frame's placement in its body
+    (``model.kernel.frame_rows``); InputError lists the closest names."""
+    row = model.kernel.frame_rows.get(frame) if type(frame) is str else None
+    return row if row is not None else model.kernel.frame_rows[frame_of(model, frame).name]
 
 
-def one_state_row(model, frame, want, reference):
-    """(X, shape): X (5, 3) = [R; p; (body, want, local)] of a link or frame name for frame_one /
-    placement_one and the shape (6, nv) of a Jacobian, kept per model and (name, want, reference);
-    InputError lists the closest names, or names a bad reference."""
-    _check_reference(reference)
-    rows = model.__dict__.get("_frame_one_rows")
-    if rows is None:
-        rows = {}
-        object.__setattr__(model, "_frame_one_rows", rows)  # a cache, not model data (Model is frozen)
-    b, X = frame_row(model, frame)
-    row = np.vstack([X, [float(b), float(want), float(reference == "local")]]), (6, model.nv)
-    rows[frame, want, reference] = row
-    return row
+def one_state_row(model, frame, reference):
+    """X (5, 3) = [R; p; (body, 0, local)] of a link or frame name for frame_one / placement_one
+    (``model.kernel.one_state_rows``); InputError lists the closest names, or names a bad reference."""
+    X = model.kernel.one_state_rows.get((frame, reference)) if type(frame) is str and type(reference) is str \
+        else None
+    if X is None:
+        _check_reference(reference)
+        X = model.kernel.one_state_rows[frame_of(model, frame).name, reference]
+    return X
 
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
@@ -341,12 +259,12 @@ def _frame_terms(model, call, frame, Q, V, want, reference):
 
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
-    k = fast1(model, q)
+    k = fast(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            X = model._frame_one_rows[frame, 0, "local_world_aligned"][0]
-        except (AttributeError, KeyError, TypeError):
-            X = one_state_row(model, frame, 0, "local_world_aligned")[0]
+            X = model.kernel.one_state_rows[frame, "local_world_aligned"]
+        except (KeyError, TypeError):                   # an unknown name or reference: named in the error
+            X = one_state_row(model, frame, "local_world_aligned")
         R, p = np.empty((3, 3)), np.empty(3)
         if PLACEMENT_ONE.call(k[0], k[1], q, X, R, p) == -1:
             return R, p
@@ -364,13 +282,13 @@ def _frame_placement(model, q, frame):
 def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
-    k = fast1(model, q)
+    k = fast(model, q)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            X, shape = model._frame_one_rows[frame, 1, reference]
-        except (AttributeError, KeyError, TypeError):
-            X, shape = one_state_row(model, frame, 1, reference)
-        J = np.empty(shape)
+            X = model.kernel.one_state_rows[frame, reference]
+        except (KeyError, TypeError):                   # an unknown name or reference: named in the error
+            X = one_state_row(model, frame, reference)
+        J = np.empty((6, model.nv))
         if JACOBIAN_ONE.call(k[0], k[1], q, X, J) == -1:
             return J
     return _frame_jacobian(model, q, frame, reference)  # checked: names a bad input or result
@@ -387,13 +305,13 @@ def _frame_jacobian(model, q, frame, reference):
 def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
     docstring gives the columns)."""
-    k = fast2(model, q, v)
+    k = fast(model, q, v)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
-            X, shape = model._frame_one_rows[frame, 2, reference]
-        except (AttributeError, KeyError, TypeError):
-            X, shape = one_state_row(model, frame, 2, reference)
-        dJ = np.empty(shape)
+            X = model.kernel.one_state_rows[frame, reference]
+        except (KeyError, TypeError):                   # an unknown name or reference: named in the error
+            X = one_state_row(model, frame, reference)
+        dJ = np.empty((6, model.nv))
         if JACOBIAN_DOT_ONE.call(k[0], k[1], q, v, X, dJ) == -1:
             return dJ
     return _frame_jacobian_dot(model, q, v, frame, reference)   # checked: names a bad input or result

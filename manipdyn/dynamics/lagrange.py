@@ -1,9 +1,9 @@
 """Lagrange's equations of the 2nd kind: τ = M(q) q̈ + C(q, q̇) q̇ + g(q) (chapter Eqs. 22–25).
 
-M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23) — summed over links from their CoM Jacobians
-("lagrange", compiled: kinematics.lagrange_mass_kernel) or by the composite-rigid-body algorithm ("crba",
-the fast route). C (``coriolis_matrix``) is computed in O(n²) by ``coriolis.py``; g = ∂V/∂q, V = −Σ m_b gᵀ
-c_b, by the Newton–Euler recursion at rest (``rnea.gravity_torques``).
+M comes from the kinetic energy T = ½ q̇ᵀ M q̇ (Eq. 23), summed over links from their CoM Jacobians
+(``lagrange_mass_matrix``, compiled: ``lagrange_mass_kernel``; ``mass_matrix(method="lagrange")`` in crba.py,
+whose default is the composite-rigid-body algorithm). C (``coriolis_matrix``) is computed in O(n²) by
+``coriolis.py``; g = ∂V/∂q, V = −Σ m_b gᵀ c_b, by the Newton–Euler recursion at rest (``rnea.gravity_torques``).
 
 The chapter's own route to C, the Christoffel symbols of M, stays here as ``christoffel_coriolis`` (with
 ∂M/∂q derived analytically from the derivatives of the link Jacobians, ``mass_matrix_derivatives``): O(n⁴)
@@ -19,33 +19,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
-from ..model import MimicModel
-from ..spatial import skew
-from .coriolis import coriolis_matrix
-from .core import kernel_arrays
-from .crba import crba
-from .kinematics import com_jacobians, lagrange_mass_kernel, supports
-from .rnea import gravity_torques
-from .state import as_batch, check_output, fast_shape, mimic_call, quiet, raise_kernel_error, unbatch
+from .._jit import njit
+from ..spatial import first_nonfinite, first_nonfinite_entry, sandwich3, skew
+from .core import fk_pass, kernel_arrays, unpack
+from .kinematics import body_point, com_jacobians, point_jacobian, supports
+from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
 
-__all__ = ["mass_matrix", "coriolis_matrix", "gravity_torques", "christoffel_coriolis", "mass_matrix_derivatives"]
+__all__ = ["lagrange_mass_matrix", "christoffel_coriolis", "mass_matrix_derivatives"]
 
 
-def mass_matrix(model, q, method="crba"):
-    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
-    T = ½ q̇ᵀ M q̇ (Eq. 23).
-
-    method="crba" (default, O(n²)): the composite-rigid-body algorithm (dynamics/crba.py, compiled).
-    method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
-    (O(n³), compiled: kinematics.lagrange_mass_kernel).
-    """
-    if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
-        return mimic_call("mass_matrix", model, q, method)
-    if isinstance(method, str) and method == "crba":
-        return crba(model, q)
-    if method != "lagrange":
-        raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
+def lagrange_mass_matrix(model, q):
+    """M(q) (nv, nv) or (N, nv, nv) by the closed form of T = ½ q̇ᵀ M q̇ (Eq. 23), summed over links from their
+    CoM Jacobians: M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb (O(n³), compiled: ``lagrange_mass_kernel``).
+    The route of ``mass_matrix(model, q, method="lagrange")``."""
     nd = fast_shape(model, q)
     if nd == 0:
         (Q,), single = as_batch(model, q=q)
@@ -57,6 +43,59 @@ def mass_matrix(model, q, method="crba"):
     if code != -1:
         raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
     return M
+
+
+@njit(cache=True)
+def lagrange_mass_kernel(I, F, Q, M):
+    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (chapter Eq. 23) for every state of Q (N, nq) into
+    M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
+    columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
+    −2 − nb − k for a non-finite M at flat index k."""
+    mdl = unpack(I, F)
+    parent, iv, nvj, S, mass, com, inertia = mdl.parent, mdl.iv, mdl.nvj, mdl.S, mdl.mass, mdl.com, mdl.inertia
+    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
+    # scratch as slices of a few arrays (separate small arrays measured 2.3x slower per state: frame_kernel)
+    R3, B3, J, cols, v0 = np.empty((2 * nb + 4, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty((6, nv)), \
+        np.empty(nv, np.int64), np.empty(0)
+    Rp, Rw, tmp, Rc, Iw, eye = R3[:nb], R3[nb:2 * nb], R3[2 * nb], R3[2 * nb + 1], R3[2 * nb + 2], R3[2 * nb + 3]
+    pp, pw, ww, c = B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
+    eye[:, :] = 0.0
+    eye[0, 0] = eye[1, 1] = eye[2, 2] = 1.0
+    for s in range(N):
+        k = first_nonfinite(Q, s)
+        if k >= 0:
+            return s * nq + k
+        fk_pass(mdl, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
+        Ms = M[s]
+        Ms[:, :] = 0.0
+        for b in range(nb):
+            body_point(b, Rw, pw, eye, com[b], Rc, c)
+            point_jacobian(parent, iv, nvj, S, b, Rw, pw, c, J)
+            Iw[:, :] = 0.0
+            sandwich3(Rw[b], inertia[b], tmp, Iw)
+            n, j = 0, b                                # the columns of the joints that support b
+            while j >= 0:
+                for r in range(iv[j], iv[j] + nvj[j]):
+                    cols[n] = r
+                    n += 1
+                j = parent[j]
+            for x in range(n):
+                r = cols[x]
+                wx = Iw[0, 0] * J[3, r] + Iw[0, 1] * J[4, r] + Iw[0, 2] * J[5, r]      # I_w J_ω,r
+                wy = Iw[1, 0] * J[3, r] + Iw[1, 1] * J[4, r] + Iw[1, 2] * J[5, r]
+                wz = Iw[2, 0] * J[3, r] + Iw[2, 1] * J[4, r] + Iw[2, 2] * J[5, r]
+                for y in range(x, n):
+                    t = cols[y]
+                    Ms[t, r] += (mass[b] * (J[0, r] * J[0, t] + J[1, r] * J[1, t] + J[2, r] * J[2, t])
+                                 + wx * J[3, t] + wy * J[4, t] + wz * J[5, t])
+        for r in range(nv):                            # cols run from the body down: mirror both ways
+            for t in range(r):
+                x = Ms[r, t] + Ms[t, r]
+                Ms[r, t] = Ms[t, r] = x
+        k = first_nonfinite_entry(Ms)
+        if k >= 0:
+            return -2 - nb - (s * nv * nv + k)
+    return -1
 
 
 def _lagrange_mass_matrix(model, J, Iw):

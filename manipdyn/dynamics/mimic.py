@@ -5,8 +5,11 @@ The one place the linear map is applied (our kernels have no mimic joint; Pinocc
     τ = Gᵀ τ_full(q_full, v_full, a_full)                           (virtual work)
     M = Gᵀ M_full G,   q̈ = M⁻¹ (τ − Gᵀ h_full),  h_full = τ_full(q_full, v_full, 0)
 Independent coordinates follow Pinocchio's mimic model: the full q order with the mimic joints removed.
-The public ``rnea``, ``mass_matrix``, ``gravity_torques``, ``aba`` and ``forward_dynamics`` send a MimicModel
-here (their first lines); every other function takes ``mm.full`` and ``mm.full_state(q, v, a)``.
+
+``TAKES_MIMIC`` is the one list of the public calls that take a MimicModel: each of them sends it here, handing
+over the full-model function the map is built on (so that this module imports no algorithm); every other call
+refuses a MimicModel with a message naming these (``state.check_model``): give it ``mm.full`` and
+``mm.full_state(q, v, a)``.
 """
 from __future__ import annotations
 
@@ -14,11 +17,10 @@ import numpy as np
 
 from ..errors import InputError, SingularError
 from ..model import MimicModel
-from .lagrange import mass_matrix as _mass_matrix
-from .rnea import rnea as _rnea
-from .state import MIMIC
 
-__all__ = ["full_state", "rnea", "crba", "mass_matrix", "gravity_torques", "aba", "forward_dynamics"]
+__all__ = ["TAKES_MIMIC", "full_state", "generalized_force", "mass_matrix", "forward_dynamics"]
+
+TAKES_MIMIC = ("rnea", "nonlinear_effects", "gravity_torques", "mass_matrix", "aba", "forward_dynamics")
 
 
 def _check(mm, name, x, n):
@@ -33,62 +35,35 @@ def full_state(mm, q, v=None, a=None):
     return mm.full_state(q, v, a)
 
 
-def rnea(mm, q, v, a, *, f_ext=None, f_ext_frame="local"):
-    """τ = Gᵀ rnea(full, q_full, G v, G a, f_ext): inverse dynamics in the independent coordinates."""
-    Q, V, A = full_state(mm, q, v, a)
-    return _rnea(mm.full, Q, V, A, f_ext=f_ext, f_ext_frame=f_ext_frame) @ mm.G
-
-
-def crba(mm, q):
-    """M = Gᵀ M_full(q_full) G, (nv, nv) or (N, nv, nv)."""
-    Q, _, _ = full_state(mm, q)
-    M = _mass_matrix(mm.full, Q)
-    return np.einsum("ji,...jk,kl->...il", mm.G, M, mm.G)
-
-
-def mass_matrix(mm, q, method="crba"):
-    """M = Gᵀ M_full G with M_full by ``method`` ("crba" or "lagrange", as manipdyn.mass_matrix)."""
-    Q, _, _ = full_state(mm, q)
-    return np.einsum("ji,...jk,kl->...il", mm.G, _mass_matrix(mm.full, Q, method=method), mm.G)
-
-
-def gravity_torques(mm, q):
-    """g = Gᵀ g_full(q_full) = rnea(q, 0, 0) in the independent coordinates."""
+def generalized_force(mm, full_rnea, q, v=None, a=None, **kw):
+    """τ = Gᵀ rnea(full, q_full, G v, G a, **kw) in the independent coordinates; v, a None stand for zeros
+    (``gravity_torques``: both; ``nonlinear_effects``: a). full_rnea is the public ``rnea``."""
     q = _check(mm, "q", q, mm.nq)
-    z = np.zeros(q.shape[:-1] + (mm.nv,))
-    return rnea(mm, q, z, z)
+    zero = np.zeros(q.shape[:-1] + (mm.nv,))
+    v = zero if v is None else _check(mm, "v", v, mm.nv)
+    Q, V, A = full_state(mm, q, v, zero if a is None else a)
+    return full_rnea(mm.full, Q, V, A, **kw) @ mm.G
 
 
-def nonlinear_effects(mm, q, v):
-    """h = Gᵀ h_full(q_full, q̇_full) = rnea(q, q̇, 0) in the independent coordinates."""
-    v = _check(mm, "v", v, mm.nv)
-    return rnea(mm, q, v, np.zeros_like(v))
+def mass_matrix(mm, full_mass_matrix, q, **kw):
+    """M = Gᵀ M_full(q_full) G, (nv, nv) or (N, nv, nv); full_mass_matrix is the public ``mass_matrix``
+    (``method`` among kw)."""
+    Q, _, _ = full_state(mm, q)
+    return np.einsum("ji,...jk,kl->...il", mm.G, full_mass_matrix(mm.full, Q, **kw), mm.G)
 
 
-def aba(mm, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+def forward_dynamics(mm, full_rnea, full_mass_matrix, q, v, tau, *, f_ext=None, f_ext_frame="local"):
     """q̈ = M⁻¹ (τ − Gᵀ h_full): forward dynamics in the independent coordinates (Cholesky of M = Gᵀ M_full G;
-    no articulated-body recursion exists for the mapped model)."""
+    no articulated-body recursion exists for the mapped model), for ``aba`` and ``forward_dynamics`` alike."""
     Q, V, _ = full_state(mm, q, v)
     tau = _check(mm, "tau", tau, mm.nv)
     if tau.shape[:-1] != V.shape[:-1]:
         raise InputError(f"tau has shape {tau.shape}; v has {np.shape(v)}: one state or the same batch")
-    h = _rnea(mm.full, Q, V, np.zeros_like(V), f_ext=f_ext, f_ext_frame=f_ext_frame) @ mm.G
-    M = crba(mm, q)
+    h = full_rnea(mm.full, Q, V, np.zeros_like(V), f_ext=f_ext, f_ext_frame=f_ext_frame) @ mm.G
+    M = mass_matrix(mm, full_mass_matrix, q)
     try:
         L = np.linalg.cholesky(M)
     except np.linalg.LinAlgError:
         raise SingularError(f"mass matrix of {mm.name!r} (mimic joints honoured) is not positive definite") from None
     r = (tau - h)[..., None]
     return np.linalg.solve(np.swapaxes(L, -1, -2), np.linalg.solve(L, r))[..., 0]
-
-
-def forward_dynamics(mm, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
-    """q̈ as ``aba`` above, whichever method ("aba" or "cholesky"): both are the M⁻¹ route here."""
-    if not (isinstance(method, str) and method in ("aba", "cholesky")):
-        raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
-    return aba(mm, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
-
-
-MIMIC.update(rnea=rnea, mass_matrix=mass_matrix, gravity_torques=gravity_torques,
-             nonlinear_effects=nonlinear_effects, aba=aba,
-             forward_dynamics=forward_dynamics)   # the public functions send a MimicModel here (state.mimic_call)

@@ -30,7 +30,7 @@ and joint j feels its motion-subspace component: the column block of body i in j
 
 The kernel takes the right-hand form: instead of carrying ten wrench columns inward once per ancestor, it
 carries each ancestor's motion subspace outward once per body, ⁱX_j S_j = ⁱX_λ (^λX_j S_j)
-(``aba.motion_to_child``), and projects A_i onto it — one 6-vector moved per ancestor velocity instead of ten.
+(``spatial.motion_to_child``), and projects A_i onto it — one 6-vector moved per ancestor velocity instead of ten.
 
 Single states (nv,), batches (N, nv); the kernel is compiled by numba and runs as plain Python under
 MANIPDYN_NOJIT=1.
@@ -43,9 +43,9 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import InputError
-from .aba import motion_to_child
-from .core import finite_state, first_nonfinite_entry, kernel_arrays, unpack
-from .rnea import outward
+from ..spatial import first_nonfinite_entry, motion_to_child
+from .core import finite_state, kernel_arrays, unpack
+from .rnea import outward, rnea_workspace
 from .state import (
     as_batch,
     as_real,
@@ -163,8 +163,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     """
     mdl = unpack(I, F)
     N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
-    RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
-    work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
+    work = rnea_workspace(nb)
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
     for s in range(N):
         if not finite_state(Q, V, A, s):
@@ -184,7 +183,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
 def body_block(work, i, W):
     """W (10, 6): column k of A_i as a wrench [f; n] about body i's origin, in its axes — the inertial
     wrench of a unit parameter k (module docstring; Atkeson et al. 1986, Eq. 9)."""
-    w, dw, dv = work[3], work[4], work[6]                  # ω'_i, ω̇'_i, v̇'_i of rnea.outward
+    w, dw, dv = work.w, work.dw, work.dv                  # ω'_i, ω̇'_i, v̇'_i of rnea.outward
     wx, wy, wz = w[i, 0], w[i, 1], w[i, 2]
     ax, ay, az = dw[i, 0], dw[i, 1], dw[i, 2]
     gx, gy, gz = dv[i, 0], dv[i, 1], dv[i, 2]              # v̇'_i, with −g
@@ -220,9 +219,9 @@ def inertia_column(W, k, Ia, Iw, w):
 def to_ancestors(mdl, work, i, W, Sx, Y):
     """Y[r, columns of i] = (ⁱX_j S_j)ᵀ A_i = S_jᵀ ʲX*_i A_i for every velocity r of joint i and of each
     ancestor j: the ancestors' motion subspaces carried out to body i, Sx[i, r] = ⁱX_λ Sx[λ, r] (RBDA
-    Table 2.2, ``aba.motion_to_child``; Sx[λ] is complete since λ < i), rather than ten wrenches carried in."""
-    parent, iv, nvj, S = mdl[0], mdl[3], mdl[4], mdl[5]
-    Rl, pl = work[0], work[2]
+    Table 2.2, ``spatial.motion_to_child``; Sx[λ] is complete since λ < i), rather than ten wrenches carried in."""
+    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
+    Rl, pl = work.Rl, work.pl
     lam = parent[i]
     for r in range(iv[i], iv[i] + nvj[i]):                # joint i's own S, in its body frame
         Sx[i, r, :] = S[r]

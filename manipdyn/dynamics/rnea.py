@@ -1,6 +1,6 @@
 """Recursive Newton–Euler inverse dynamics (Luh, Walker & Paul 1980), in the chapter's vector form.
 
-One source: the kernel below is the chapter's recursion (Eqs. 3–18 with the errata of DESIGN.md §6), compiled
+One source: the kernel below is the chapter's recursion (Eqs. 3–18 with the errata of docs/design.md §6), compiled
 by numba, and the same text runs as plain Python under MANIPDYN_NOJIT=1. Every vector is a 3-vector in its own
 link frame (the chapter's primes): body i's frame is its URDF link frame. (R, p) = (Rl[i], pl[i]) is body i in
 its parent λ(i) (``joints.joint_placement``), so the chapter's R^i_{i−1} x is Rᵀ x (``rot_t``). A tree replaces
@@ -15,7 +15,7 @@ body i's origin and axes, the chapter's revolute (Eqs. 3–6) and prismatic (Eqs
     v̇'_i  = dv_in + al + 2 w_in × vl + va × vl           (Eq. 6; prismatic Eq. 12; free flyer: al + va × vl)
     τ_i   = Sᵀ [f'_i; n'_i]                              (Eqs. 17, 18)
 
-Gravity enters as a base acceleration: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g (DESIGN.md §6). A free-flyer root (q = [x y z
+Gravity enters as a base acceleration: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g (docs/design.md §6). A free-flyer root (q = [x y z
 qx qy qz qw], v = [linear; angular] in the body frame) is the same recursion: its τ entries are the wrench
 [f'; n'] the root body needs, in its own frame about its origin.
 
@@ -27,15 +27,17 @@ body axes (K, 3), about which the moment is taken.
 """
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from .._jit import C1, CONTRACT, MODEL, STATE, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from ..model import MimicModel
+from . import mimic
+from ..spatial import add, cross, first_nonfinite, put, rot, rot_t, scale, sub, vec
 from .core import finite_state, kernel_arrays, unpack, wrench_rows_of
-from .state import (as_batch, check_output, fast1, fast2, fast3, fast_shape, fast_wrenches, mimic_call, quiet, raise_kernel_error,
-                    unbatch,
-                    wrench_rows)
+from .state import (as_batch, check_output, fast, fast_shape, fast_wrenches, quiet, raise_kernel_error, unbatch, wrench_rows)
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -56,7 +58,7 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     -------
     tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
     """
-    k = fast3(model, q, v, a) if f_ext is None and f_ext_frame == "local" else None
+    k = fast(model, q, v, a) if f_ext is None and f_ext_frame == "local" else None
     if k is not None:                                           # one float64 state: straight into the kernel
         tau = np.empty(v.shape)
         code = RNEA_ONE.call(k[0], k[1], q, v, a, tau)
@@ -64,7 +66,7 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
             return tau
         raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
     if f_ext is not None:                                       # one state with wrenches: rows kept per model
-        k = fast3(model, q, v, a)
+        k = fast(model, q, v, a)
         ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
         if ext is not None:
             tau = np.empty(v.shape)
@@ -80,7 +82,7 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
         tau = np.empty(v.shape)
         code = rnea_batch(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
     elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
-        return mimic_call("rnea", model, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
+        return mimic.generalized_force(model, rnea, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
     else:                                                       # checked and converted first
         (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
         return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea", single=single)[0], single)
@@ -103,16 +105,16 @@ def gravity_torques(model, q):
 def _bias(model, q, v, call):
     """rnea(q, v, 0) (v = None: rnea(q, 0, 0)) through bias_one / bias_kernel; anything but float64 arrays
     is checked and converted first."""
-    k = fast1(model, q) if v is None else fast2(model, q, v)
+    k = fast(model, q) if v is None else fast(model, q, v)
     if k is not None:                                         # one float64 state: straight into the kernel
-        tau = np.empty(model.state_shapes[1])
+        tau = np.empty(model.kernel.v_shape)
         code = BIAS_ONE.call(k[0], k[1], q, _NO_V if v is None else v, tau)
         if code == -1:
             return tau
     arrays = (q,) if v is None else (q, v)
     nd = fast_shape(model, *arrays)
     if nd == 0 and type(model) is MimicModel:                 # Gᵀ h_full, Gᵀ g_full (dynamics/mimic.py)
-        return mimic_call(call, model, *arrays)
+        return mimic.generalized_force(model, rnea, *arrays)
     if nd == 0:
         batches, single = as_batch(model, **dict(zip(_QVA, arrays)))
         if not model.njoints:
@@ -172,54 +174,7 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False, single=False):
 
 
 # -- the kernel -----------------------------------------------------------------------------------------------
-# 3-vectors inside the recursion are 3-tuples (values: no array views, no allocation in the loops).
-
-@njit(cache=True, inline="always")
-def vec(x, i):
-    """Row i of x (n, 3) as a 3-tuple."""
-    return x[i, 0], x[i, 1], x[i, 2]
-
-
-@njit(cache=True, inline="always")
-def put(x, i, a):
-    """x[i] = a (a 3-tuple)."""
-    x[i, 0], x[i, 1], x[i, 2] = a[0], a[1], a[2]
-
-
-@njit(cache=True, inline="always")
-def add(a, b):
-    return a[0] + b[0], a[1] + b[1], a[2] + b[2]
-
-
-@njit(cache=True, inline="always")
-def sub(a, b):
-    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
-
-
-@njit(cache=True, inline="always")
-def scale(k, a):
-    return k * a[0], k * a[1], k * a[2]
-
-
-@njit(cache=True, inline="always")
-def cross(a, b):
-    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
-
-
-@njit(cache=True, inline="always")
-def rot(R, i, x):
-    """R[i] x for R (n, 3, 3)."""
-    return (R[i, 0, 0] * x[0] + R[i, 0, 1] * x[1] + R[i, 0, 2] * x[2],
-            R[i, 1, 0] * x[0] + R[i, 1, 1] * x[1] + R[i, 1, 2] * x[2],
-            R[i, 2, 0] * x[0] + R[i, 2, 1] * x[1] + R[i, 2, 2] * x[2])
-
-
-@njit(cache=True, inline="always")
-def rot_t(R, i, x):
-    """R[i]ᵀ x for R (n, 3, 3): the chapter's R^i_{i−1} x when R[i] = R^{i−1}_i."""
-    return (R[i, 0, 0] * x[0] + R[i, 1, 0] * x[1] + R[i, 2, 0] * x[2],
-            R[i, 0, 1] * x[0] + R[i, 1, 1] * x[1] + R[i, 2, 1] * x[2],
-            R[i, 0, 2] * x[0] + R[i, 1, 2] * x[1] + R[i, 2, 2] * x[2])
+# 3-vectors inside the recursion are 3-tuples (spatial.py's vec, put, add, cross, rot, rot_t).
 
 
 @njit(cache=True)
@@ -263,6 +218,19 @@ def rnea_batch(I, F, Q, V, A, X, xb, xp, world, tau, T):
     return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
 
 
+Work = namedtuple("Work", "Rl Rw pl w dw vel dv dvc fc nc f n sv")
+Work.__doc__ = """Scratch of one recursion (``rnea_workspace``), per body i (nb rows): Rl, pl its placement in its parent
+(3, 3), (3,); Rw its world orientation (3, 3); the 3-vectors of TERMS: w ω'_i, dw ω̇'_i, vel v'_i, dv v̇'_i,
+dvc v̇'_Ci, fc f'_Ci, nc n'_Ci, f f'_i, n n'_i; sv (4, 3) spare 3-vectors."""
+
+
+@njit(cache=True, inline="always")
+def rnea_workspace(nb):
+    """The ``Work`` of a model with nb bodies, cut from three allocations."""
+    RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
+    return Work(RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
+
+
 @njit(cache=True, inline="always")
 def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
@@ -276,8 +244,7 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """
     mdl = unpack(I, F)
     N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
-    RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
-    work = (RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
+    work = rnea_workspace(nb)
     keep = T.shape[0] > 0
     for s in range(N):
         if not finite_state(Q, V, A, s):
@@ -287,9 +254,9 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
         inward(mdl, work, tau[s])
         if keep:
             store_terms(mdl, work, T[s])
-        for k in range(nv):                    # the result is finite (else an intermediate overflowed)
-            if not np.isfinite(tau[s, k]):
-                return -2 - nb - (s * nv + k)
+        k = first_nonfinite(tau, s)            # the result is finite (else an intermediate overflowed)
+        if k >= 0:
+            return -2 - nb - (s * nv + k)
     return -1
 
 
@@ -298,8 +265,9 @@ def outward(mdl, work, q, v, a, orient, terms):
     """Outward pass i = 1 … nb (Eqs. 3–14): ω'_i, ω̇'_i, v̇'_i of every body, its inertial wrench
     (``inertial``), if terms the origin velocity v'_i (Eqs. 4, 11: no torque needs it), and if orient its
     world orientation Rw_i = Rw_λ R."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
+    axis, R0, p0, mg = mdl.axis, mdl.R0, mdl.p0, mdl.mg
+    Rl, Rw, pl, w, dw, vel, dv = work.Rl, work.Rw, work.pl, work.w, work.dw, work.vel, work.dv
     for i in range(parent.shape[0]):
         joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
         j = parent[i]
@@ -331,8 +299,8 @@ def outward(mdl, work, q, v, a, orient, terms):
 def inertial(i, mdl, work):
     """Body i's inertial wrench about its origin: v̇'_C (Eq. 7, as 32d should read), f'_C (Eq. 13), n'_C
     (Eq. 14), f'_i = f'_C, n'_i = n'_C + p'_C × f'_C (Eq. 16's CoM term)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    mass, com, inertia = mdl.mass, mdl.com, mdl.inertia
+    w, dw, dv, dvc, fc, nc, f, n = work.w, work.dw, work.dv, work.dvc, work.fc, work.nc, work.f, work.n
     c, wi, dwi = vec(com, i), vec(w, i), vec(dw, i)
     dvc_i = add(vec(dv, i), add(cross(dwi, c), cross(wi, cross(wi, c))))   # Eq. 7 (32d as printed is wrong)
     fc_i = scale(mass[i], dvc_i)                                          # Eq. 13: f'_Ci = m_i v̇'_Ci
@@ -348,7 +316,7 @@ def inertial(i, mdl, work):
 def external(work, X, s, xb, xp, world):
     """f'_b −= f_e, n'_b −= n_e + p × f_e for each wrench (f_e, n_e) the environment applies on body b about
     its point p (body axes); world-axes wrenches are first turned into the body: Rw_bᵀ f_e, Rw_bᵀ n_e."""
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    Rw, f, n = work.Rw, work.f, work.n
     for k in range(xb.shape[0]):
         b = xb[k]
         fe, ne = (X[s, k, 0], X[s, k, 1], X[s, k, 2]), (X[s, k, 3], X[s, k, 4], X[s, k, 5])
@@ -362,8 +330,8 @@ def external(work, X, s, xb, xp, world):
 def inward(mdl, work, tau):
     """Inward pass i = nb … 1 (Eqs. 15–18): τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18), then the parent takes
     f'_λ += R f'_i (Eq. 15) and n'_λ += R n'_i + p × R f'_i (Eq. 16; 32h: p^{i−1}_i × R^{i−1}_i f'_i)."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
+    Rl, pl, f, n = work.Rl, work.pl, work.f, work.n
     for i in range(parent.shape[0] - 1, -1, -1):        # children come after parents: complete here
         joint_force(S, iv[i], nvj[i], f[i], n[i], tau)
         j = parent[i]
@@ -377,8 +345,9 @@ def inward(mdl, work, tau):
 def store_terms(mdl, work, T):
     """T (nb, NT) = [ω', ω̇', v', v̇', acc, v̇'_C, f'_C, n'_C, f', n', Rw] per body (TERMS order), with
     acc = v̇' + Rwᵀ g: v̇' without the −g offset of v̇'_0."""
-    parent, kind, iq, iv, nvj, S, axis, R0, p0, mass, com, inertia, mg = mdl
-    Rl, Rw, pl, w, dw, vel, dv, dvc, fc, nc, f, n, sv = work
+    mg = mdl.mg
+    Rw, w, dw, vel, dv, dvc = work.Rw, work.w, work.dw, work.vel, work.dv, work.dvc
+    fc, nc, f, n = work.fc, work.nc, work.f, work.n
     for i in range(T.shape[0]):
         acc = sub(vec(dv, i), rot_t(Rw, i, (mg[0], mg[1], mg[2])))
         for m, x in enumerate((vec(w, i), vec(dw, i), vec(vel, i), vec(dv, i), acc, vec(dvc, i), vec(fc, i),

@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import InputError, NumericalError, SingularError
 from ..model import MimicModel, Model
-from .core import kernel_arrays, wrench_block
+from .core import wrench_block
+from .mimic import TAKES_MIMIC
 
 _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
 
@@ -28,23 +29,11 @@ _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float
 def check_model(model):
     """Refuse anything but a Model (a path or a Pinocchio model are common mistakes)."""
     if isinstance(model, MimicModel):
-        raise InputError(f"{model!r}: a MimicModel (load_urdf(..., mimic=True)) is taken by rnea, mass_matrix, "
-                         f"gravity_torques, aba and forward_dynamics; for other functions use model.full at "
+        raise InputError(f"{model!r}: a MimicModel (load_urdf(..., mimic=True)) is taken by "
+                         f"{', '.join(TAKES_MIMIC)} only; for other functions use model.full at "
                          f"model.full_state(q, v, a)")
     if not isinstance(model, Model):
         raise InputError(f"model must be a manipdyn Model (from load_urdf), not {type(model).__name__}")
-
-
-MIMIC = {}   # public function name -> its MimicModel version; dynamics/mimic.py fills it when imported
-
-
-def mimic_call(name, model, *args, **kw):
-    """A MimicModel given to the public function ``name`` goes to dynamics/mimic.py's ``name``: the one place the
-    mimic map (q_full = Gq q + offset, τ = Gᵀ τ_full, M = Gᵀ M_full G) is applied. (mimic.py registers its
-    functions in MIMIC: it imports the public functions, so they cannot import it.)"""
-    if name not in MIMIC:
-        raise InputError(f"{name} does not take a MimicModel yet (import manipdyn.dynamics.mimic first)")
-    return MIMIC[name](model, *args, **kw)
 
 
 def as_real(name, x):
@@ -204,7 +193,7 @@ def fast_wrenches(model, f_ext, f_ext_frame):
     """One state's f_ext in the kernels' compact form, when it is a dict of one wrench {frame name: (force (3,),
     moment (3,))} of float64 arrays: (force, moment, P) with P (13,) the frame's row for
     ``core.wrench_rows_of`` — [R (9, row by row): frame axes → body axes for "local" (identity for "world"),
-    the frame's origin in body axes (3), the body (-1: the fixed base)], kept on the model per (name, frame).
+    the frame's origin in body axes (3), the body (-1: the fixed base)], from ``model.kernel.wrench_rows``.
     None when anything is unusual (then ``wrench_rows`` checks and converts, and raises the error).
     Finiteness is left to the kernel: a non-finite wrench makes a non-finite result, and the caller then takes
     the checked path. (One wrench only: more would be a tuple type of their own, each count compiled anew.)"""
@@ -218,29 +207,9 @@ def fast_wrenches(model, f_ext, f_ext_frame):
             m.dtype is not _F64 or m.shape != (3,):
         return None
     try:
-        P = model._wrench_rows[name, f_ext_frame]
-    except (AttributeError, KeyError, TypeError):
-        P = _wrench_lookup(model, name, f_ext_frame)
-        if P is None:
-            return None
-    return f, m, P
-
-
-def _wrench_lookup(model, name, frame):
-    """The row P (13,) of ``fast_wrenches`` for a frame name and f_ext_frame, kept in model._wrench_rows; None
-    for an unknown name or frame word."""
-    if type(model) is not Model or frame not in ("local", "world") or type(name) is not str \
-            or name not in model.frames:
+        return f, m, model.kernel.wrench_rows[name, f_ext_frame]
+    except (AttributeError, KeyError, TypeError):        # a MimicModel, an unknown name or frame word
         return None
-    cache = model.__dict__.get("_wrench_rows")
-    if cache is None:
-        cache = {}
-        object.__setattr__(model, "_wrench_rows", cache)     # a cache, not model data (Model is frozen)
-    fr = model.frames[name]
-    R = fr.R if frame == "local" else np.eye(3)
-    P = np.concatenate([np.asarray(R, float).ravel(), np.asarray(fr.p, float), [float(fr.body)]])
-    cache[name, frame] = P
-    return P
 
 
 def fast_wrench_rows(model, f_ext, f_ext_frame):
@@ -283,7 +252,7 @@ def fast_shape(model, *arrays):
     x0 = arrays[0]
     if type(x0) is not _ND or x0.dtype is not _F64 or type(model) is not Model:
         return 0
-    sq, sv = model.state_shapes
+    sq, sv = model.kernel.q_shape, model.kernel.v_shape
     if x0.shape == sq:
         if not sv[0]:
             return 0
@@ -301,49 +270,20 @@ def fast_shape(model, *arrays):
     return 2
 
 
-def _fast_path(model):
-    """((nq,), (nv,), (I, F)) of a Model, kept on it: what the single-state fast paths read on every call."""
-    fp = model.state_shapes + (kernel_arrays(model),)
-    object.__setattr__(model, "_fast_path", fp)          # a cache, not model data (Model is frozen)
-    return fp
-
-
-def fast1(model, q):
-    """The model's kernel arrays (I, F) when q is one float64 configuration (nq,) of a plain Model with nv ≥ 1:
-    the single-state kernels then take it as it is and check finiteness themselves. None otherwise (the
-    caller takes the checked path, which raises the right error). ~60 ns: it runs before every one-state call."""
+def fast(model, q, v=NotImplemented, a=NotImplemented):
+    """The model's kernel arrays (I, F) when q is one float64 configuration (nq,) — and v, a, when passed, float64
+    (nv,) — of a plain Model with nv ≥ 1: the one-state kernels then take them as they are (any memory layout)
+    and check finiteness themselves. None otherwise: the caller takes the checked path, which raises the right
+    error. (Written for speed: it runs before every one-state call, ~60 ns.)"""
     if type(q) is _ND and q.dtype is _F64 and type(model) is Model:
-        try:
-            sq, sv, k = model._fast_path
-        except AttributeError:
-            sq, sv, k = _fast_path(model)
-        if q.shape == sq and sv[0]:
-            return k
-    return None
-
-
-def fast2(model, q, v):
-    """``fast1`` for (q, v): v a float64 (nv,)."""
-    if type(v) is _ND and v.dtype is _F64 and type(q) is _ND and q.dtype is _F64 and type(model) is Model:
-        try:
-            sq, sv, k = model._fast_path
-        except AttributeError:
-            sq, sv, k = _fast_path(model)
-        if q.shape == sq and v.shape == sv and sv[0]:
-            return k
-    return None
-
-
-def fast3(model, q, v, a):
-    """``fast1`` for (q, v, a): v and a float64 (nv,)."""
-    if (type(a) is _ND and a.dtype is _F64 and type(v) is _ND and v.dtype is _F64 and type(q) is _ND
-            and q.dtype is _F64 and type(model) is Model):
-        try:
-            sq, sv, k = model._fast_path
-        except AttributeError:
-            sq, sv, k = _fast_path(model)
-        if q.shape == sq and v.shape == sv and a.shape == sv and sv[0]:
-            return k
+        k = model.kernel
+        if q.shape != k.q_shape or not k.v_shape[0]:
+            return None
+        if v is not NotImplemented and (type(v) is not _ND or v.dtype is not _F64 or v.shape != k.v_shape):
+            return None
+        if a is not NotImplemented and (type(a) is not _ND or a.dtype is not _F64 or a.shape != k.v_shape):
+            return None
+        return k.arrays
     return None
 
 

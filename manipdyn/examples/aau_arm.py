@@ -22,9 +22,11 @@ import numpy as np
 
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot, frame_placement
 from ..dynamics.rnea import rnea
+from ..extras import require
 
 PAYLOAD_KG = 5.0
 G = 9.81
+PLOTS = "manipdyn example aau (Figs. 3-4)"   # the feature that needs matplotlib (the plots extra)
 D_STAR = np.array([0.0, 0.0, -1.0])       # held direction of the tool's z axis: down, the tool plate level
 
 
@@ -176,7 +178,7 @@ def read_csv(path):
 
 def plot(out_dir, model, traj, tau):
     """Fig. 3 (joint rates and accelerations) and Fig. 4 (joint torques) as PNG files."""
-    import matplotlib
+    matplotlib = require("matplotlib", "plots", PLOTS)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)

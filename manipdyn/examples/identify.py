@@ -86,7 +86,7 @@ class Identification:
     rms_test_true: float      # RMS of τ̂' − τ' (noise-free torques)
     rms_test_expected: float  # σ ‖W₁' R₁₁⁻¹‖_F / √(K nv): the expected value of rms_test_true
     rms_tau: float            # RMS of τ' (the scale the errors compare with)
-    max_test_err: float       # max|τ̂' − τ'| / max(max|τ'|, 1) (DESIGN §3 measure)
+    max_test_err: float       # max|τ̂' − τ'| / max(max|τ'|, 1) (docs/design.md §3 measure)
     trajectories: tuple       # ((q, q̇, q̈) identification, (q, q̇, q̈) test), each (K, nv)
 
     @property
@@ -168,7 +168,7 @@ def format_result(res: Identification) -> str:
               f"second trajectory: RMS τ {res.rms_tau:.4g} N·m; prediction error RMS {res.rms_test_true:.4g} N·m "
               f"against the true torques ({100 * res.relative_test_error:.3g} %; expected "
               f"{res.rms_test_expected:.4g}), {res.rms_test:.4g} N·m against the noisy ones",
-              f"  max error measure (DESIGN §3) {res.max_test_err:.3g}"]
+              f"  max error measure (docs/design.md §3) {res.max_test_err:.3g}"]
     return "\n".join(lines)
 
 

@@ -9,7 +9,8 @@ Q = Rz(φ) Ry(θ) Rz(σ − φ), ω = Ψ φ̇ (Eq. 43). Every body turns about O
 (Euler's equation about O for each body, projected; V = Σ m_b gᵀ c_b, Eq. 52's sign). Writing θ̇_i = j_iᵀω
 inside ρ_i (as Eq. 55b does) uses the constraint, so h₀ equals Eq. 60's Ṁq̇ − T_q + V_q only up to
 C_qᵀ(·) — generalized forces the multipliers absorb: the motion and the actuator torques are the same, λ is
-not (the tests check h₀ on the null space of C_q, and the torques against two independent routes). Misprints corrected here (DESIGN.md §6): Ψ(3,3) = cos θ; Eq. 47's e_x, e_y, e_z; Eq. 52's
+not (the tests check h₀ on the null space of C_q, and the torques against two independent routes).
+Misprints corrected here (docs/design.md §6): Ψ(3,3) = cos θ; Eq. 47's e_x, e_y, e_z; Eq. 52's
 T_p needs the platform inertia about O, I_O = I_p + m_p(|p*|² 1 − p* p*ᵀ); Eq. 55b E → E_i; Eq. 57
 Ċ_q q̇ = Ḃθ̇ − Ȧω − AΨ̇φ̇; Eq. 60's right side [τ; Ψᵀm] − (Ṁq̇ − T_q) − V_q, with the external moment m
 (environment on the platform, base axes) doing work m·ω = (Ψᵀm)·φ̇; Eq. 61 τ_a = τ − J⁻ᵀ m, J⁻ᵀ = B A⁻ᵀ.

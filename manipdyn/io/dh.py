@@ -19,7 +19,7 @@ F_i of link i is put ON joint i's axis: F_i = DH_{i-1} · pre_i · (joint motion
               prismatic  pre = Rx(α) Tx(a) Rz(θ) Tz(d_off)   post = 1
 so joint i's origin in F_{i-1} is post_{i-1} · pre_i, and link i's mass properties move from D-H frame i into
 F_i through post_i. (Plugging a standard table into equations written for frames on their own joint axes is
-the chapter's convention clash, DESIGN.md §6.)
+the chapter's convention clash, docs/design.md §6.)
 """
 from __future__ import annotations
 

@@ -20,7 +20,7 @@ What the loader refuses (URDFError naming the file, the link or joint, the attri
 - mimic joints naming a joint that does not exist, or themselves;
 - files larger than ``max_bytes`` (default ``MAX_BYTES``).
 
-The root link (DESIGN.md §3): by default it is the fixed base, body −1; its mass and inertia (with the links
+The root link (docs/design.md §3): by default it is the fixed base, body −1; its mass and inertia (with the links
 fixed to it) move with no joint, so they have no effect on the dynamics — Pinocchio's buildModelFromUrdf
 attaches them to the universe (``model.inertias[0]``), likewise without effect. A URDF describes no base
 joint, so whether a robot is bolted down is the caller's choice: ``root_joint="free_flyer"`` (Pinocchio's
@@ -553,7 +553,7 @@ HANG = 0.6   # a subtree "hangs" when its lowest frame is below the root by >= H
 
 
 def _free_root_shape(root, joints, frames, parts, gravity):
-    """Why a fixed-base tree whose root carries mass looks like a free body, or None (DESIGN: measured on the
+    """Why a fixed-base tree whose root carries mass looks like a free body, or None (docs/design.md §8: measured on the
     zoo, at q = 0, "below" along gravity, extent = the largest distance of a link frame from the root):
     - legs: two or more of the root's subtrees hang (lowest frame >= HANG extent below the root): every
       legged robot and humanoid of example-robot-data (feet at 0.75-1.0 extent); no arm has two (at most one:

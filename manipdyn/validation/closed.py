@@ -14,7 +14,7 @@ import numpy as np
 from ..configuration import integrate, neutral
 from ..constraints import closure_terms, constrained_forward_dynamics, project, rank_report
 from ..constraints.dynamics import dofs
-from ..dynamics.lagrange import mass_matrix
+from ..dynamics.crba import mass_matrix
 from ..errors import ConstraintError, ModelError
 from .measure import error
 from .reference import pin

@@ -1,6 +1,6 @@
 """Term-by-term comparison of our Newton–Euler terms with Pinocchio's, and the report it produces.
 
-Each term is scored by the error measure of validation/measure.py (DESIGN.md §3) over the whole term
+Each term is scored by the error measure of validation/measure.py (docs/design.md §3) over the whole term
 (every link, every component) of one state; a run reports the worst state. Accelerations from a solve are reported as err/κ: κ = cond(M) for a tree,
 κ = cond(M)·cond(Φ_q)² (independent rows) for a closed chain, the conditioning of the solve. Random states: q uniform in [−π, π] (revolute) or within the limits
 (prismatic; [−0.5, 0.5] m when unbounded), a free-flyer root at a position uniform in [−1, 1]³ m with a
@@ -20,7 +20,9 @@ import numpy as np
 from ..dynamics.aba import aba, forward_dynamics
 from ..dynamics.derivatives import aba_derivatives, rnea_derivatives
 from ..dynamics.kinematics import frame_jacobian, frame_jacobian_dot
-from ..dynamics.lagrange import coriolis_matrix, gravity_torques, mass_matrix
+from ..dynamics.coriolis import coriolis_matrix
+from ..dynamics.crba import mass_matrix
+from ..dynamics.rnea import gravity_torques
 from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea, rnea_terms
 from ..configuration import FREE_RANGE
@@ -99,7 +101,7 @@ class Report:
 
 
 def random_states(model, n, rng):
-    """Seeded random (q (n, nq), q̇ (n, nv), q̈ (n, nv)), following DESIGN.md §3 (see the module docstring)."""
+    """Seeded random (q (n, nq), q̇ (n, nv), q̈ (n, nv)), following docs/design.md §3 (see the module docstring)."""
     one = np.flatnonzero(model.kind != FREEFLYER)           # 1-dof joints
     kind, lower, upper = model.kind[one], model.lower[one], model.upper[one]
     lo = np.where(kind == PRISMATIC, np.where(np.isfinite(lower), lower, -0.5), -np.pi)

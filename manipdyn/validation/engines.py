@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import importlib
 import importlib.util
 import logging
 import math
@@ -46,9 +45,10 @@ from pathlib import Path
 import numpy as np
 
 from ..dynamics.aba import aba
-from ..dynamics.lagrange import mass_matrix
+from ..dynamics.crba import mass_matrix
 from ..dynamics.rnea import rnea
-from ..errors import InputError, ManipdynError
+from ..errors import InputError, ManipdynError, MissingExtraError
+from ..extras import install_command, require
 from ..model import FREEFLYER
 from ..spatial import combine_inertias, rpy_matrix
 from .compare import random_states
@@ -57,13 +57,14 @@ from .measure import error
 ENGINES = ("pinocchio", "mujoco", "pybullet", "drake")
 MODULES = {"pinocchio": "pinocchio", "mujoco": "mujoco", "pybullet": "pybullet", "drake": "pydrake"}
 PIP = {"pinocchio": "pin", "mujoco": "mujoco", "pybullet": "pybullet", "drake": "drake"}
+EXTRA = {"pinocchio": "validate", "mujoco": "engines", "pybullet": "engines", "drake": "engines"}   # manipdyn[...]
 TOL = 1e-9                    # a disagreement above this must carry a named cause
 MUJOCO_COMPILER = ('<mujoco><compiler angle="radian" discardvisual="true" fusestatic="false" '
                    'balanceinertia="false" inertiafromgeom="false"/></mujoco>')
 
 
-class EngineMissing(ManipdynError):
-    """The engine's Python package is not installed."""
+class EngineMissing(MissingExtraError):
+    """The engine's Python package is not installed (the referee skips it with a note)."""
 
 
 class EngineRefused(ManipdynError):
@@ -166,6 +167,7 @@ class PinocchioAdapter(Adapter):
     def __init__(self, model, path):
         super().__init__(model, path)
         from .reference import Reference
+        _import("pinocchio")                     # EngineMissing, not EngineRefused, when it is not installed
         try:
             self.ref = Reference(model, path)
         except Exception as exc:                 # bare parser errors, or a joint order unlike ours
@@ -418,15 +420,18 @@ ADAPTERS = {"pinocchio": PinocchioAdapter, "mujoco": MujocoAdapter, "pybullet": 
 def load_engine(name, model, path) -> Adapter:
     """The engine's model of ``path``; EngineMissing when not installed, EngineRefused when it will not load."""
     if not available(name):
-        raise EngineMissing(f"{name} is not installed (pip install {PIP[name]}, or manipdyn[engines])")
+        raise EngineMissing(f"{name} is not installed (pip install {PIP[name]}, or "
+                            f"{install_command(EXTRA[name])})", name=MODULES[name])
     return ADAPTERS[name](model, path)
 
 
 def _import(module):
+    """An engine's module (pinocchio, mujoco, pybullet, pydrake); EngineMissing names its extra."""
+    name = next(e for e, m in MODULES.items() if m == module)
     try:
-        return importlib.import_module(module)
-    except ImportError as exc:
-        raise EngineMissing(f"{module} is not installed") from exc
+        return require(module, EXTRA[name], f"manipdyn validate --against {name}")
+    except MissingExtraError as exc:
+        raise EngineMissing(str(exc), name=module) from exc
 
 
 class _Heard(logging.Handler):
@@ -623,7 +628,7 @@ def neutralised(model, adapter):
 
 @dataclasses.dataclass
 class EngineResult:
-    """One engine against manipdyn: worst errors (DESIGN.md §3; q̈ as err/cond(M)), raw and neutralised."""
+    """One engine against manipdyn: worst errors (docs/design.md §3; q̈ as err/cond(M)), raw and neutralised."""
     engine: str
     status: str                       # "ok", "missing", "refused"
     reason: str = ""
@@ -759,7 +764,7 @@ def _engine_queries(ad, Q, V, A, T):
 
 
 def _errors(theirs, ours) -> dict:
-    """Worst error measure over the states; q̈ as err/cond(M) (DESIGN.md §3), None when either side has none."""
+    """Worst error measure over the states; q̈ as err/cond(M) (docs/design.md §3), None when either side has none."""
     err = {}
     for k in ("tau", "M"):
         err[k] = max(error(x, y) for x, y in zip(theirs[k], ours[k])) if np.all(np.isfinite(theirs[k])) \

@@ -17,6 +17,7 @@ from ..examples import spm as chapter
 from ..examples import spm_params as P
 from ..examples.spm_routes import generic_torques
 from ..examples.spm_urdf import tree_guess
+from ..extras import require
 from ..io.urdf import load_urdf
 from ..paths import bundled_dir
 from .closed import PROXIMAL, ClosedReference, actuator_torques_by_inversion
@@ -26,6 +27,7 @@ from .reference import Reference
 SPM_URDF = bundled_dir() / "spm.urdf"
 SPAN = (0.0, 0.25)            # singularity-free: leg 2's (u₂ × v₂)·w₂ reaches 0 at t ≈ 0.281 s (zero θ̈)
 ACCEL_CASE = (5.0, -5.0, 3.0)  # the non-zero constant actuator accelerations we chose, rad/s²
+FEATURE = "manipdyn example spm (Fig. 7)"
 
 
 @dataclass
@@ -35,7 +37,7 @@ class Routes:
     generic: np.ndarray
     pinocchio: np.ndarray
     fig: chapter.Fig7
-    err_generic: float        # max over samples of DESIGN.md's measure against the chapter's route
+    err_generic: float        # max over samples of the docs/design.md §3 measure against the chapter's route
     err_pinocchio: float
 
 
@@ -58,7 +60,7 @@ def three_routes(samples=51, theta_ddot=(0.0, 0.0, 0.0), span=SPAN, path=SPM_URD
 
 def write(out_dir, routes_by_case):
     """fig7_actuator_torques.png and one CSV per case (t, tau_chapter_i, tau_generic_i, tau_pinocchio_i)."""
-    import matplotlib
+    matplotlib = require("matplotlib", "plots", FEATURE)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     out = Path(out_dir)
@@ -83,6 +85,8 @@ def write(out_dir, routes_by_case):
 
 def main(out_dir, samples=51) -> int:
     """`manipdyn example spm`: both cases, the span, conditioning and the three-route agreement."""
+    require("pinocchio", "validate", FEATURE)          # both extras checked before any work starts
+    require("matplotlib", "plots", FEATURE)
     sing_leg, sing_t = chapter.singular_time()
     print(f"leg {sing_leg}'s (u × v)·w changes sign at t = {sing_t:.3f} s (θ̈ = 0): the chapter's formulation "
           f"divides by it; torques are computed on [{SPAN[0]}, {SPAN[1]}] s")

@@ -1,4 +1,4 @@
-"""The error measure (DESIGN.md §3), used by validate, the bench and the tests alike.
+"""The error measure (docs/design.md §3), used by validate, the bench and the tests alike.
 
 For a term x against a reference y (vector or matrix, SI units):
     err = max|x − y| / max(max|y|, 1)
@@ -13,7 +13,7 @@ from ..errors import ManipdynError
 
 
 def error(x, y) -> float:
-    """err = max|x − y| / max(max|y|, 1)  (DESIGN.md §3)."""
+    """err = max|x − y| / max(max|y|, 1)  (docs/design.md §3)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     if x.shape != y.shape:     # never let broadcasting compare the wrong entries
         raise ManipdynError(f"validation compares arrays of shapes {x.shape} and {y.shape}")

@@ -13,7 +13,9 @@ import time
 
 import numpy as np
 
-from ..dynamics import mimic as mim
+from ..dynamics.aba import aba
+from ..dynamics.crba import mass_matrix
+from ..dynamics.rnea import gravity_torques, rnea
 from ..errors import ManipdynError
 from ..model import MimicModel
 from .compare import Report, TermResult, random_states
@@ -64,7 +66,7 @@ class MimicReference:
 
 
 def independent_states(mm, n, rng):
-    """Seeded (q (n, nq), q̇ (n, nv), q̈ (n, nv), τ (n, nv)) of the independent joints (DESIGN.md §3 ranges)."""
+    """Seeded (q (n, nq), q̇ (n, nv), q̈ (n, nv), τ (n, nv)) of the independent joints (docs/design.md §3 ranges)."""
     full = mm.full
     Q, V, A = random_states(full, n, rng)
     iq = np.concatenate([np.arange(full.idx_q[i], full.idx_q[i] + full.nqs[i]) for i in map(full.joint_index, mm.joint_names)])
@@ -79,7 +81,7 @@ def validate_mimic(mm, urdf_path, *, n_states=1000, seed=0, tol=1e-12, progress=
     t0 = time.perf_counter()
     ref, rng = MimicReference(mm, urdf_path), np.random.default_rng(seed)
     Q, V, A, T = independent_states(mm, n_states, rng)
-    ours = dict(tau=mim.rnea(mm, Q, V, A), g=mim.gravity_torques(mm, Q), M=mim.crba(mm, Q), qdd=mim.aba(mm, Q, V, T))
+    ours = dict(tau=rnea(mm, Q, V, A), g=gravity_torques(mm, Q), M=mass_matrix(mm, Q), qdd=aba(mm, Q, V, T))
     worst = {k: [0.0, 0.0] for k in MIMIC_TERMS}
     for s in range(n_states):
         theirs = ref.terms(Q[s], V[s], A[s], T[s])

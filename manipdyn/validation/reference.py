@@ -16,15 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ManipdynError
+from ..extras import require
 
 
 def pin():
-    """The pinocchio module, imported on first use."""
-    try:
-        import pinocchio
-    except ImportError as exc:  # pragma: no cover - pin is a declared dependency
-        raise ManipdynError("validation needs Pinocchio: pip install pin") from exc
-    return pinocchio
+    """The pinocchio module, imported on first use (MissingExtraError without the validate extra)."""
+    return require("pinocchio", "validate", "manipdyn validate")
 
 
 class Reference:

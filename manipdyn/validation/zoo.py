@@ -1,4 +1,4 @@
-"""The robot zoo: example-robot-data's models that Pinocchio loads (DESIGN.md §8).
+"""The robot zoo: example-robot-data's models that Pinocchio loads (docs/design.md §8).
 
 ARMS are fixed-base arms and hands. FLOATING are the robots that example-robot-data's own Python loaders
 (``example_robot_data.robots_loader``, not shipped in the 6.0 wheel) build with a free flyer: each loader
@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib.metadata
 from pathlib import Path
 
-from ..errors import ManipdynError
+from ..extras import missing
 
 # path under robots/ -> what it exercises
 ARMS = {
@@ -69,7 +69,8 @@ FLOATING = {
 
 
 def robots_dir() -> Path:
-    """example-robot-data's robots/ folder, found from the installed package's files."""
+    """example-robot-data's robots/ folder, found from the installed package's files (its Python module is
+    never imported); MissingExtraError without the validate extra."""
     try:
         files = importlib.metadata.files("example-robot-data") or []
     except importlib.metadata.PackageNotFoundError:
@@ -79,7 +80,7 @@ def robots_dir() -> Path:
         if "robots" in parts and parts[-1].endswith(".urdf"):
             loc = Path(f.locate())
             return Path(*loc.parts[:len(loc.parts) - len(parts) + parts.index("robots") + 1])
-    raise ManipdynError("example-robot-data is not installed (pip install example-robot-data)")
+    raise missing("example_robot_data", "validate", "the robot zoo (manipdyn validate --zoo)")
 
 
 def arm_paths() -> list[Path]:

@@ -149,8 +149,8 @@ class LiveViewer:
     close(), at interpreter exit, and on its own when this process dies (it watches its stdin pipe)."""
 
     def __init__(self):
-        import meshcat
         from .server import start
+        meshcat = _scene.meshcat_module("meshcat")          # before the server starts
         self.proc, self.zmq_url, self.url = start()
         atexit.register(self.close)
         self.vis = meshcat.Visualizer(zmq_url=self.zmq_url)

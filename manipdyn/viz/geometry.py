@@ -26,6 +26,7 @@ from urllib.parse import unquote, urlsplit
 import numpy as np
 
 from ..errors import GeometryWarning, InputError, URDFError
+from ..extras import require
 from ..spatial import rpy_matrix
 
 MAX_URDF_BYTES = 64 << 20        # a URDF larger than this is refused (the loader reads it whole)
@@ -47,6 +48,12 @@ class Visual:
 
 class _Skip(Exception):
     """A visual that is not drawn; the message says why (it becomes a GeometryWarning)."""
+
+
+def meshcat_module(name="meshcat"):
+    """meshcat (or one of its modules, or its umsgpack), imported on first use; MissingExtraError names the
+    viz extra when it is not installed."""
+    return require(name, "viz", "manipdyn play (3-D playback, HTML export)")
 
 
 def valid_package_name(pkg) -> bool:
@@ -192,7 +199,7 @@ def load_visuals(urdf_path, package_dirs=None):
 
 def _visual(link, vis, urdf_path, package_dirs, materials, budget) -> Visual:
     """One <visual> element as a Visual; _Skip says why it cannot be drawn."""
-    import meshcat.geometry as g
+    g = meshcat_module("meshcat.geometry")
     T = np.eye(4)
     origin = vis.find("origin")
     if origin is not None:
@@ -249,8 +256,7 @@ def _material_rgba(mat, materials):
 
 def _mesh(filename, urdf_path, package_dirs, budget):
     """The meshcat geometry of a mesh file: resolved, confined, bounded in size, then read once."""
-    import meshcat.geometry as g
-    import umsgpack
+    g, umsgpack = meshcat_module("meshcat.geometry"), meshcat_module("umsgpack")
     try:
         path = resolve_mesh(filename, urdf_path, package_dirs)
     except URDFError as exc:

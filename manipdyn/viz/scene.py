@@ -26,7 +26,7 @@ from ..configuration import neutral, normalize
 from ..dynamics.core import forward_kinematics
 from ..errors import InputError
 from ..joints import PRISMATIC, REVOLUTE
-from .geometry import load_visuals
+from .geometry import load_visuals, meshcat_module
 
 ROOT = "manipdyn"
 CLOSURE_TOL = 1e-6       # closure gaps above this (m) show the warning marker
@@ -94,7 +94,7 @@ def build(model, urdf_path=None, Q_extent=None, show_frames=False, package_dirs=
 
     Mesh files resolve only inside the URDF's folder or a package root (``package_dirs={"pkg": dir}``, see
     viz/geometry.py); a visual that cannot be drawn is skipped with a GeometryWarning."""
-    import meshcat.geometry as g
+    g = meshcat_module("meshcat.geometry")
     sc = Scene(model)
     Q = neutral(model)[None] if Q_extent is None else np.atleast_2d(Q_extent)
     sc.nodes = body_nodes(model)
@@ -137,7 +137,7 @@ _Y_TO_Z = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])    # meshcat cylind
 
 
 def _add(sc, path, geom, T, rgba):
-    import meshcat.geometry as g
+    g = meshcat_module("meshcat.geometry")
     from meshcat.commands import SetObject, SetTransform
     from meshcat.path import Path as MPath
     color = int(rgba[0] * 255) << 16 | int(rgba[1] * 255) << 8 | int(rgba[2] * 255)
@@ -383,6 +383,7 @@ def camera_commands(v, aspect=ASPECT_LIVE):
     (/manipdyn), the ground and the world axes are all shifted by −centre (the motion's bounding-box centre
     lands on the orbit centre; robot and ground stay together), and the camera sits fit_distance away along
     ``back`` (given in the rotated camera frame, whose y is the world's z)."""
+    meshcat_module("meshcat")
     from meshcat.commands import SetProperty, SetTransform
     from meshcat.path import Path as MPath
     o = fit_distance(v["points"], v["back"], v["pad"], aspect) * np.asarray(v["back"])
@@ -395,7 +396,7 @@ def camera_commands(v, aspect=ASPECT_LIVE):
 def ground_commands(v):
     """The ground under the base: a plate with a grid sized to the motion (/ground, outside the robot's node);
     meshcat's own 20 m grid hidden, its world axes shrunk to ``v["axes"]`` at the origin."""
-    import meshcat.geometry as g
+    g = meshcat_module("meshcat.geometry")
     from meshcat.commands import SetObject, SetProperty, SetTransform
     from meshcat.path import Path as MPath
     half, cell, (cx, cy) = v["ground"]
@@ -468,6 +469,7 @@ def animate(sc: Scene, t, Q, fps=30.0):
 
     At most max_frames(model) frames (MAX_FRAMES = 3000): a longer motion is resampled at a lower fps, said
     in ``sc.notes`` and by a PlaybackWarning. Raises InputError for non-finite, unordered or oversized input."""
+    meshcat_module("meshcat")
     from meshcat.animation import Animation
     from meshcat.commands import SetAnimation
     t, Q = check_trajectory(sc.model, t, Q)
@@ -496,6 +498,7 @@ def animate(sc: Scene, t, Q, fps=30.0):
 class _Recorder:
     """Stand-in visualizer for Animation.at_frame, which only reads its root path."""
     def __init__(self):
+        meshcat_module("meshcat")
         from meshcat.path import Path as MPath
         self.path = MPath()
 
@@ -551,8 +554,8 @@ def html(sc: Scene) -> str:
     """One self-contained HTML page (viz/page.py): meshcat's viewer script inlined, every command embedded
     (msgpack, base64, in a JSON array), the player and plot data in the last script; the title is
     HTML-escaped and every name goes through json_for_script."""
-    import meshcat
-    import umsgpack
+    meshcat = meshcat_module("meshcat")
+    umsgpack = meshcat_module("umsgpack")
 
     from .page import document
     js_path = os.path.join(os.path.dirname(meshcat.__file__), "viewer", "dist", "main.min.js")

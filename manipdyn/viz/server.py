@@ -25,7 +25,8 @@ STOP_TIMEOUT = 3.0       # seconds between SIGTERM and SIGKILL in stop()
 
 
 def _bridge_class():
-    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+    from .geometry import meshcat_module
+    ZMQWebSocketBridge = meshcat_module("meshcat.servers.zmqserver").ZMQWebSocketBridge
 
     class LoopbackBridge(ZMQWebSocketBridge):
         def make_app(self):

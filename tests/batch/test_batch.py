@@ -1,4 +1,4 @@
-"""A batch (N, nv) equals the stack of single-state calls to 1e-14 (DESIGN.md §3 measure)."""
+"""A batch (N, nv) equals the stack of single-state calls to 1e-14 (docs/design.md §3 measure)."""
 import numpy as np
 from conftest import AAU, assert_close, err, zoo_paths
 
@@ -102,5 +102,6 @@ def test_one_state_f_ext_fast_path_equals_the_checked_batch():
                 batch = call(Q, V, A, fx)
                 rows = np.stack([call(Q[s], V[s], A[s], {n: (F[s], M[s]) for n in subset}) for s in range(6)])
                 worst = max(worst, err(batch, rows))
-                assert_close(batch, rows, 1e-14, frame)  # DESIGN §5; batches fuse multiply-adds (_jit.CONTRACT)
+                # docs/design.md §5; batches fuse multiply-adds (_jit.CONTRACT)
+                assert_close(batch, rows, 1e-14, frame)
     print(f"\nworst {worst:.1e}")

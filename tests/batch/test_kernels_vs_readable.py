@@ -1,4 +1,4 @@
-"""Every compiled kernel against an independent reference (DESIGN.md §4b, §5), output array by output
+"""Every compiled kernel against an independent reference (docs/design.md §4b, §5), output array by output
 array, one state (the *_one kernels) and batches of 1 and 7 (the batch kernels), on the bundled models, the
 example-robot-data arms, random trees and random spatial loops — closed-chain kernels also off the closures
 (random q, q̇ that violate them).

@@ -7,7 +7,7 @@
 - the identity M q̈ + h = τ with Pinocchio's M (crba) and h (nonLinearEffects);
 - the same source run uncompiled (MANIPDYN_NOJIT=1, in a subprocess) on three small models, to 1e-14.
 
-q̈ comes from a solve: its error bound scales with cond(M) (DESIGN §3). Every tolerance is within 100× of
+q̈ comes from a solve: its error bound scales with cond(M) (docs/design.md §3). Every tolerance is within 100× of
 the error measured on correct code (written beside it).
 """
 import dataclasses
@@ -53,7 +53,7 @@ class Case:
     to_pin: object                # our q (nq,) -> Pinocchio's q
 
     def states(self, n, seed):
-        """n random states (q, q̇, τ) (DESIGN §3; a free flyer anywhere within 1 m, uniformly oriented)."""
+        """n random states (q, q̇, τ) (docs/design.md §3; a free flyer anywhere within 1 m, uniformly oriented)."""
         return random_states(self.model, n, np.random.default_rng(seed))
 
 

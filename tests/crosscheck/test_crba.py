@@ -149,7 +149,7 @@ def floating_model(path):
 
 
 def floating_states(model, n, rng):
-    """n configurations (DESIGN.md §3): base position N(0, 3²) m, a uniformly random unit quaternion, the
+    """n configurations (docs/design.md §3): base position N(0, 3²) m, a uniformly random unit quaternion, the
     other (1-dof) joints uniform in [−π, π] (prismatic: within limits, or [−0.5, 0.5] m)."""
     Q = np.empty((n, model.nq))
     Q[:, :3] = rng.normal(0.0, 3.0, (n, 3))

@@ -12,7 +12,7 @@ references:
   ∂q̈/∂q = −M⁻¹ ∂τ/∂q at q̈ = aba(q, q̇, τ);
 - batches against stacked single states; the same source run uncompiled (MANIPDYN_NOJIT=1); bad input.
 
-Error measure of DESIGN §3 (``err``); q̈ derivatives (from a solve) scaled by cond(M). Each tolerance is
+Error measure of docs/design.md §3 (``err``); q̈ derivatives (from a solve) scaled by cond(M). Each tolerance is
 within 100× of the worst error measured on correct code over its cases (written beside it).
 """
 import functools

@@ -95,7 +95,7 @@ def test_complete_state_on_a_floating_base(name):
                acc=np.abs(np.einsum("nij,nj->ni", Jc, a) + bias).max())
     fq, fv, fa, _ = complete_state(fixed, M["G"][:, 7:], M["VA"], M["AA"])
     same = dict(q=err(q[:, 7:], fq), v=err(v[:, 6:], fv), a=err(a[:, 6:], fa))
-    print(f"\n{name}: residuals {res}; against the fixed base {same}; iterations {[x.iterations for x in asm]}")
+    print(f"\n{name}: residuals {res}; against the fixed base {same}; iterations {asm.iterations.tolist()}")
     assert res["phi"] <= 1e-11 and res["vel"] <= 1e-12 and res["acc"] <= 1e-11   # measured ≤ 8.1e-13, 1.8e-14, 4.5e-13
     assert all(e <= 1e-12 for e in same.values()), same                           # measured ≤ 2.3e-14
     assert np.array_equal(q[:, :3], M["G"][:, :3]) and np.abs(q[:, 3:7] - M["G"][:, 3:7]).max() <= 4e-16
@@ -242,7 +242,7 @@ def test_simulate_a_floating_closed_chain(name):
     drift, phi, mom = [], [], []
     m_total = float(np.sum(model.mass))
     for dt in (1e-3, 5e-4):
-        r = md.simulate(model, q, v, (0.0, 0.5), dt=dt, method="rk4")
+        r = md.simulate(model, q, v, (0.0, 0.5), dt=dt, integrator="rk4")
         E = md.kinetic_energy(model, r.q, r.v) + md.potential_energy(model, r.q)
         drift.append(np.abs(E - E[0]).max() / md.kinetic_energy(model, r.q, r.v).max())
         phi.append(np.abs(closure_terms(model, r.q)[0]).max())

@@ -68,7 +68,7 @@ def _load(name):
 
 
 def _states(model, n, rng):
-    """n random states (q (n, nq), v, a (n, nv)), DESIGN.md §3; a free flyer's position ~ N(0, 1), its
+    """n random states (q (n, nq), v, a (n, nv)), docs/design.md §3; a free flyer's position ~ N(0, 1), its
     orientation a random unit quaternion."""
     Q = np.empty((n, model.nq))
     for i in range(model.njoints):

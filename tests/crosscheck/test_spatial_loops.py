@@ -369,7 +369,7 @@ def test_energy_conserved_torque_free(name):
     model = L["model"]
     drift, phi = [], []
     for dt in (1e-3, 5e-4):
-        r = md.simulate(model, L["Q"][0], L["V"][0], (0.0, 1.0), dt=dt, method="rk4")
+        r = md.simulate(model, L["Q"][0], L["V"][0], (0.0, 1.0), dt=dt, integrator="rk4")
         E = md.kinetic_energy(model, r.q, r.v) + md.potential_energy(model, r.q)
         drift.append(np.abs(E - E[0]).max() / md.kinetic_energy(model, r.q, r.v).max())
         phi.append(np.abs(closure_terms(model, r.q)[0]).max())
@@ -390,7 +390,7 @@ def test_power_balance_with_actuation(name):
     model, act = L["model"], L["act"]
     tau = np.zeros(model.nv)
     tau[act] = 2.0
-    r = md.simulate(model, L["Q"][0], L["V"][0], (0.0, 0.5), dt=5e-4, method="rk4", tau=tau)
+    r = md.simulate(model, L["Q"][0], L["V"][0], (0.0, 0.5), dt=5e-4, integrator="rk4", tau=tau)
     E = md.kinetic_energy(model, r.q, r.v) + md.potential_energy(model, r.q)
     power = r.v @ tau
     simpson = (power[:-2:2] + 4 * power[1:-1:2] + power[2::2]) * (r.t[2] - r.t[0]) / 6

@@ -1,5 +1,7 @@
 """Closed chains assemble from poor guesses (restarts when Newton from the guess fails); the result is
 checked independently: the closure gap from frame_placement of both sides of the loop."""
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import ROOT
@@ -58,18 +60,24 @@ def test_unassemblable_closure_names_the_closure_and_residual():
 
 
 def test_batch_is_assembled_row_by_row():
+    # one type for one guess and a batch: an Assembly, its fields with a leading axis for the batch
     G = np.array([GUESSES["zeros"], GUESSES["twos"], GUESSES["large_angles"]])
     out = md.assemble(FOURBAR, G)
-    assert isinstance(out, list) and len(out) == 3
-    for g, asm in zip(G, out):
-        assert np.array_equal(asm.q, md.assemble(FOURBAR, g).q)
-        assert closure_gap(FOURBAR, asm.q) <= 1e-12
+    assert type(out) is md.constraints.Assembly and out.q.shape == (3, 3)
+    for k, g in enumerate(G):
+        one = md.assemble(FOURBAR, g)
+        assert type(one) is type(out) and one.q.shape == (3,)
+        for field in dataclasses.fields(one):
+            row, single = getattr(out, field.name)[k], getattr(one, field.name)
+            assert np.shape(row) == np.shape(single) and np.array_equal(row, single), field.name
+        assert closure_gap(FOURBAR, out.q[k]) <= 1e-12
 
 
 def test_complete_state_batch_row_by_row():
     G = np.array([GUESSES["zeros"], GUESSES["twos"]])
     q, v, a, asm = md.complete_state(FOURBAR, G, [[1.0], [-2.0]], [0.5])
-    assert q.shape == v.shape == a.shape == (2, 3) and len(asm) == 2
+    assert q.shape == v.shape == a.shape == (2, 3) and asm.q.shape == (2, 3) and asm.residual.shape == (2,)
+    assert np.array_equal(asm.q, q)
     for k in range(2):
         q1, v1, a1, _ = md.complete_state(FOURBAR, G[k], [[1.0], [-2.0]][k], [0.5])
         assert np.array_equal(q[k], q1) and np.array_equal(v[k], v1) and np.array_equal(a[k], a1)

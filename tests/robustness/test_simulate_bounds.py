@@ -40,17 +40,17 @@ def test_max_steps_is_the_fixed_step_budget():
     assert md.simulate(ARM, Z, Z, (0, 0.1), dt=1e-3, max_steps=100).n_steps == 100
 
 
-@pytest.mark.parametrize("method", ["adaptive", "rk4", "euler"])
+@pytest.mark.parametrize("integrator", ["adaptive", "rk4", "euler"])
 @pytest.mark.parametrize("torque", [1e3, 1e6, 1e12, 1e100], ids=["1e3", "1e6", "1e12", "1e100"])
-def test_huge_torque_ends_in_divergence_error(method, torque):
+def test_huge_torque_ends_in_divergence_error(integrator, torque):
     # runaway: |q̇| passes max_rate (1e4) within a few steps, or an intermediate overflows
     with pytest.raises(md.DivergenceError, match=r"diverged at t = "):
-        md.simulate(ARM, Z, Z, (0, 10), tau=np.full(N5, torque), method=method)
+        md.simulate(ARM, Z, Z, (0, 10), tau=np.full(N5, torque), integrator=integrator)
 
 
 def test_adaptive_step_budget():
     with pytest.raises(md.DivergenceError, match=r"did not reach t = 1 s within max_steps = 5 adaptive steps"):
-        md.simulate(ARM, Q0, Z, (0, 1), method="adaptive", max_steps=5)
+        md.simulate(ARM, Q0, Z, (0, 1), integrator="adaptive", max_steps=5)
 
 
 def test_state_bounds_name_the_joint_and_row():
@@ -84,20 +84,27 @@ def test_torque_shape_error_later_in_the_run_is_still_an_input_error():
 
 
 @pytest.mark.parametrize("kw,match", [
-    (dict(method="rk5"), "method must be"), (dict(forward="lu"), "forward must be"),
-    (dict(stabilization="x"), "stabilization must be"), (dict(method="adaptive", rtol=-1.0), "rtol is -1.0"),
-    (dict(method="adaptive", atol=np.nan), "atol is nan"), (dict(max_steps=0), "max_steps is 0"),
+    (dict(integrator="rk5"), "integrator must be"), (dict(method="lu"), "method must be 'aba' or 'cholesky'"),
+    (dict(stabilization="x"), "stabilization must be"), (dict(integrator="adaptive", rtol=-1.0), "rtol is -1.0"),
+    (dict(integrator="adaptive", atol=np.nan), "atol is nan"), (dict(max_steps=0), "max_steps is 0"),
     (dict(max_rate=np.inf), "max_rate is inf"),
-], ids=["method", "forward", "stabilization", "rtol", "atol", "max_steps", "max_rate"])
+], ids=["integrator", "method", "stabilization", "rtol", "atol", "max_steps", "max_rate"])
 def test_bad_options(kw, match):
     with pytest.raises(md.InputError, match=match):
         md.simulate(ARM, Z, Z, (0, 0.01), **kw)
 
 
+@pytest.mark.parametrize("name", ["euler", "rk4", "adaptive"])
+def test_integrator_name_as_method_points_to_integrator(name):
+    # method= is the forward-dynamics route ("aba", "cholesky"); the integrator is integrator=
+    with pytest.raises(md.InputError, match=f"use integrator='{name}'"):
+        md.simulate(ARM, Z, Z, (0, 0.01), method=name)
+
+
 def test_adaptive_stepping_matches_solve_ivp():
     # independent reference: scipy's own driver on the same right-hand side (same DOP853 steps); measured 0
     from scipy.integrate import solve_ivp
-    r = md.simulate(ARM, Q0, Z, (0, 0.2), method="adaptive", rtol=1e-10, atol=1e-12)
+    r = md.simulate(ARM, Q0, Z, (0, 0.2), integrator="adaptive", rtol=1e-10, atol=1e-12)
     sol = solve_ivp(lambda t, x: np.r_[x[N5:], aba(ARM, x[:N5], x[N5:], Z)], (0, 0.2), np.r_[Q0, Z],
                     method="DOP853", rtol=1e-10, atol=1e-12)
     assert r.t.shape == sol.t.shape

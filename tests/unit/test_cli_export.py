@@ -1,5 +1,5 @@
 """manipdyn export URDF --mjcf FILE: the document written (read back with ElementTree, no MuJoCo needed) and
-the exit codes / one-line errors of DESIGN.md §9."""
+the exit codes / one-line errors of docs/design.md §9."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET

@@ -20,7 +20,7 @@ def test_fourbar_torque_free_10s():
     q, v, _, _ = complete_state(FOURBAR, [0.3, -1.3, -2.0], [3.0], [0.0])
     out = {}
     for stab, kw in (("none", {}), ("baumgarte", dict(baumgarte=(20.0, 20.0))), ("projection", {})):
-        r = md.simulate(FOURBAR, q, v, (0, 10), dt=5e-4, method="rk4", stabilization=stab, **kw)
+        r = md.simulate(FOURBAR, q, v, (0, 10), dt=5e-4, integrator="rk4", stabilization=stab, **kw)
         E = md.kinetic_energy(FOURBAR, r.q, r.v) + md.potential_energy(FOURBAR, r.q)
         out[stab] = (_phi(FOURBAR, r).max(), np.abs(E - E[0]).max() / md.kinetic_energy(FOURBAR, r.q, r.v).max())
     print("\nfour-bar, 10 s torque-free, RK4 dt 0.5 ms: max |Φ| and energy drift")
@@ -48,7 +48,7 @@ def test_spm_held_by_pd_10s(stab):
         tau[..., act] = 2.0 * (q0[act] - q[..., act]) - 0.05 * v[..., act]
         return tau
 
-    r = md.simulate(SPM, q0, v0, (0, 10), dt=5e-4, method="rk4", tau=pd_law, stabilization=stab,
+    r = md.simulate(SPM, q0, v0, (0, 10), dt=5e-4, integrator="rk4", tau=pd_law, stabilization=stab,
                     baumgarte=(20.0, 20.0))
     phi = _phi(SPM, r)
     print(f"\nSPM, PD-held actuators, 10 s, {stab}: max |Φ| {phi.max():.1e}")

@@ -27,12 +27,12 @@ def _rot(q):
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-@pytest.mark.parametrize("method, dt, tol_p, tol_L", [("rk4", 1e-3, 1e-10, 1e-11), ("euler", 1e-3, 2e-2, 5e-3)])
-def test_free_brick_falls_and_tumbles(brick, method, dt, tol_p, tol_L):
+@pytest.mark.parametrize("integrator, dt, tol_p, tol_L", [("rk4", 1e-3, 1e-10, 1e-11), ("euler", 1e-3, 2e-2, 5e-3)])
+def test_free_brick_falls_and_tumbles(brick, integrator, dt, tol_p, tol_L):
     """A tumbling brick (distinct principal moments, ω off every axis) under gravity over 1 s."""
     q0 = md.normalize(brick, np.array([0.1, -0.2, 0.3, 0.2, -0.1, 0.3, 0.9]))
     v0 = np.array([0.5, -0.3, 0.8, 2.0, -1.5, 3.0])
-    sim = md.simulate(brick, q0, v0, (0.0, 1.0), dt=dt, method=method)
+    sim = md.simulate(brick, q0, v0, (0.0, 1.0), dt=dt, integrator=integrator)
     g = brick.gravity
     p_ref = q0[:3] + _rot(q0) @ v0[:3] + 0.5 * g             # CoM at the origin: p(1) exactly
     assert np.abs(sim.q[-1, :3] - p_ref).max() < tol_p        # rk4 measured 1.6e-11; euler 8.2e-3
@@ -50,10 +50,10 @@ def test_rk4_is_fourth_order_on_a_legged_robot():
     m = md.load_urdf(path, root_joint="free_flyer", gravity=[0.0, 0.0, 0.0])
     rng = np.random.default_rng(1)
     q0, v0 = md.random_configuration(m, rng), rng.normal(0.0, 1.0, m.nv)
-    ref = md.simulate(m, q0, v0, (0.0, 0.4), method="adaptive", rtol=1e-12, atol=1e-13)
+    ref = md.simulate(m, q0, v0, (0.0, 0.4), integrator="adaptive", rtol=1e-12, atol=1e-13)
     errs = []
     for dt in (8e-3, 4e-3, 2e-3):
-        s = md.simulate(m, q0, v0, (0.0, 0.4), dt=dt, method="rk4")
+        s = md.simulate(m, q0, v0, (0.0, 0.4), dt=dt, integrator="rk4")
         errs.append(np.abs(md.difference(m, ref.q[-1], s.q[-1])).max())
     orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all(orders > 3.5), (errs, orders)               # measured 4.07, 4.00

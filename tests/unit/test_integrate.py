@@ -29,20 +29,20 @@ def test_gravity_torques_are_the_gradient_of_the_potential():
         assert_close(md.gravity_torques(MODEL, q), grad, 1e-8, "∂V/∂q")  # measured 4.2e-10 (central difference, h = 1e-6)
 
 
-def _final_error(method, h, ref):
-    r = simulate(MODEL, Q0, V0, (0.0, 1.0), dt=h, method=method)
+def _final_error(integrator, h, ref):
+    r = simulate(MODEL, Q0, V0, (0.0, 1.0), dt=h, integrator=integrator)
     return np.abs(np.r_[r.q[-1], r.v[-1]] - ref).max()
 
 
 def test_measured_convergence_orders():
     # AAU arm under gravity, 1 s; the adaptive reference at rtol 1e-12. Steps in the asymptotic regime:
     # RK4 5, 2.5, 1.25 ms; semi-implicit Euler 0.5, 0.25, 0.125 ms.
-    r = simulate(MODEL, Q0, V0, (0.0, 1.0), method="adaptive", rtol=1e-12, atol=1e-13)
+    r = simulate(MODEL, Q0, V0, (0.0, 1.0), integrator="adaptive", rtol=1e-12, atol=1e-13)
     ref = np.r_[r.q[-1], r.v[-1]]
-    for method, hs, order in (("rk4", (5e-3, 2.5e-3, 1.25e-3), 4.0), ("euler", (5e-4, 2.5e-4, 1.25e-4), 1.0)):
-        e = [_final_error(method, h, ref) for h in hs]
+    for integrator, hs, order in (("rk4", (5e-3, 2.5e-3, 1.25e-3), 4.0), ("euler", (5e-4, 2.5e-4, 1.25e-4), 1.0)):
+        e = [_final_error(integrator, h, ref) for h in hs]
         slope = np.polyfit(np.log(hs), np.log(e), 1)[0]
-        print(f"\n{method}: errors {['%.2e' % x for x in e]}, measured order {slope:.2f}")
+        print(f"\n{integrator}: errors {['%.2e' % x for x in e]}, measured order {slope:.2f}")
         assert abs(slope - order) <= 0.3
 
 
@@ -52,10 +52,10 @@ def test_energy_drift_torque_free():
         E = kinetic_energy(MODEL, r.q, r.v) + potential_energy(MODEL, r.q)
         return np.abs(E - E[0]).max() / kinetic_energy(MODEL, r.q, r.v).max()
 
-    rows = [("adaptive rtol 1e-12", drift(simulate(MODEL, Q0, V0, (0, 10), method="adaptive", rtol=1e-12,
+    rows = [("adaptive rtol 1e-12", drift(simulate(MODEL, Q0, V0, (0, 10), integrator="adaptive", rtol=1e-12,
                                                    atol=1e-13)))]
-    for method, h in (("rk4", 4e-3), ("rk4", 2e-3), ("euler", 1e-3), ("euler", 5e-4)):
-        rows.append((f"{method} dt {h:g}", drift(simulate(MODEL, Q0, V0, (0, 10), dt=h, method=method))))
+    for integrator, h in (("rk4", 4e-3), ("rk4", 2e-3), ("euler", 1e-3), ("euler", 5e-4)):
+        rows.append((f"{integrator} dt {h:g}", drift(simulate(MODEL, Q0, V0, (0, 10), dt=h, integrator=integrator))))
     print("\nenergy drift over 10 s, torque-free AAU arm under gravity")
     for name, d in rows:
         print(f"  {name:<22} {d:.2e}")
@@ -68,18 +68,32 @@ def test_energy_drift_torque_free():
 
 def test_batch_equals_single_runs():
     Q, V, _ = random_states(MODEL, 4, np.random.default_rng(3))
-    batch = simulate(MODEL, Q, V, (0, 0.2), dt=1e-3, method="rk4")
+    batch = simulate(MODEL, Q, V, (0, 0.2), dt=1e-3, integrator="rk4")
     assert batch.q.shape == (4, 201, MODEL.nv) and batch.t.shape == (201,)
     for k in range(4):
-        one = simulate(MODEL, Q[k], V[k], (0, 0.2), dt=1e-3, method="rk4")
+        one = simulate(MODEL, Q[k], V[k], (0, 0.2), dt=1e-3, integrator="rk4")
         assert_close(batch.q[k], one.q, 1e-15, "q rows")  # measured 0 (bit-identical)
         assert_close(batch.v[k], one.v, 1e-15, "v rows")  # measured 0 (bit-identical)
     with pytest.raises(md.InputError, match="one initial state at a time"):
-        simulate(MODEL, Q, V, (0, 0.1), method="adaptive")
+        simulate(MODEL, Q, V, (0, 0.1), integrator="adaptive")
+
+
+@pytest.mark.parametrize("integrator", ["euler", "rk4"])
+def test_dynamics_routes_give_the_same_trajectory(integrator):
+    # method= is the forward-dynamics route, as in forward_dynamics: ABA and the Cholesky route (CRBA, RNEA
+    # bias) are independent algorithms for the same q̈, so their trajectories agree to round-off
+    Q, V, _ = random_states(MODEL, 3, np.random.default_rng(4))
+    default = simulate(MODEL, Q, V, (0, 0.2), dt=1e-3, integrator=integrator)
+    runs = {m: simulate(MODEL, Q, V, (0, 0.2), dt=1e-3, integrator=integrator, method=m) for m in ("aba", "cholesky")}
+    assert default.integrator == runs["cholesky"].integrator == integrator
+    assert np.array_equal(runs["aba"].q, default.q)             # "aba" is the default route
+    assert not np.array_equal(runs["cholesky"].q, default.q)   # the other route was taken
+    assert_close(runs["cholesky"].q, default.q, 1e-13, "q")     # measured 8.0e-16 (euler), 3.7e-16 (rk4)
+    assert_close(runs["cholesky"].v, default.v, 1e-13, "v")     # measured 4.1e-15 (euler), 1.6e-15 (rk4)
 
 
 def test_torque_forms_and_gravity_compensation():
-    hold = simulate(MODEL, Q0, np.zeros(5), (0, 1), dt=2e-3, method="rk4",
+    hold = simulate(MODEL, Q0, np.zeros(5), (0, 1), dt=2e-3, integrator="rk4",
                     tau=lambda t, q, v: md.rnea(MODEL, q, v, np.zeros_like(q)))
     assert_close(hold.q[-1], Q0, 5e-13, "gravity-compensated arm stays put")  # measured 9.9e-15
     const = simulate(MODEL, Q0, V0, (0, 0.1), dt=1e-3, tau=np.ones(5))

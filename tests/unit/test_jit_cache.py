@@ -96,7 +96,10 @@ def test_cache_folder_is_keyed_by_every_kernel_source(tmp_path):
     assert _jit.cache_dir(pkg, user_base="").name == first.name
     path.write_text(text + "\n# edited\n")
     _jit.cache_dir(pkg, user_base="")
-    assert not in_tree.exists()                                          # stale in-tree folders are pruned
+    assert in_tree.exists()                                   # choosing a folder removes nothing (no side effect)
+    gone = _jit.prune_stale(pkg)                              # warmup prunes the stale folders, keeps the current
+    assert in_tree in gone and not in_tree.exists() and _jit.cache_dir(pkg, user_base="").exists()
+    assert len(list((pkg / "__pycache__").glob("numba-*"))) == 1
 
 
 def _jitted_functions(tree):

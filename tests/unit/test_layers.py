@@ -1,8 +1,8 @@
-"""Imports go one way (DESIGN.md §2): every import statement in manipdyn/, read from the source with ast —
+"""Imports go one way (docs/design.md §2): every import statement in manipdyn/, read from the source with ast —
 imports inside functions too, which an import-only test never sees — points to the same layer or one below,
 and no chain of imports between manipdyn's modules comes back to where it started.
 
-Layers, bottom up: errors/_jit/paths → spatial → model (model, joints, reduce) → io → dynamics →
+Layers, bottom up: errors/_jit/paths/extras → spatial → model (model, joints, reduce) → io → dynamics →
 constraints → simulation → the package's public API (manipdyn/__init__.py) → examples → validation →
 bench → viz → cli. Closed chains (constraints/) sit on top of tree dynamics (dynamics/); simulation uses
 both. A module that is in no layer fails the test until it is placed.
@@ -15,7 +15,7 @@ import pytest
 from conftest import ROOT
 
 PKG = ROOT / "manipdyn"
-LAYERS = (("base", ("manipdyn.errors", "manipdyn._jit", "manipdyn.paths")),
+LAYERS = (("base", ("manipdyn.errors", "manipdyn._jit", "manipdyn.paths", "manipdyn.extras")),
           ("spatial", ("manipdyn.spatial",)),
           ("model", ("manipdyn.model", "manipdyn.joints", "manipdyn.reduce")),
           ("io", ("manipdyn.io",)),
@@ -129,7 +129,7 @@ def test_imports_point_down_the_layers():
     ("model", ("io", "dynamics", "constraints")), ("spatial", ("dynamics", "constraints")),
     ("io", ("dynamics", "constraints"))])
 def test_named_layers_stay_below(low, high):
-    # the rules of DESIGN.md §2 spelled out, so that a change of LAYERS cannot quietly drop one
+    # the rules of docs/design.md §2 spelled out, so that a change of LAYERS cannot quietly drop one
     names = [n for n, _ in LAYERS]
     assert all(names.index(low) < names.index(h) for h in high)
     g, _ = graph()
@@ -188,3 +188,60 @@ def test_other_engines_are_imported_only_by_the_referee_and_lazily():
     assert any(found[m] for m in ENGINE_HOSTS)                 # the scan sees them
     assert {m for m, e in found.items() if e} <= set(ENGINE_HOSTS)
     assert [(m, line, n) for m, e in found.items() for line, n, top in e if top] == []
+
+
+# -- one kernel toolkit: algebra lives in spatial.py, algorithms borrow only algorithms ----------------------
+
+ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "energy", "derivatives", "regressor")
+# What one algorithm module may take from another: an algorithm built on another one (the M⁻¹ route runs the
+# CRBA and the Newton–Euler kernel, the derivatives differentiate the ABA, the regressor reuses the outward
+# pass, the Lagrange M sums the frame Jacobians) — never a helper of the algebra, which lives in spatial.py.
+BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_one", "outward", "rnea_workspace"},
+            "crba": {"crba", "crba_kernel", "mass_matrix"},
+            "aba": {"aba_kernel"},
+            "lagrange": {"lagrange_mass_matrix"},
+            "kinematics": {"body_point", "point_jacobian", "point_jacobian_dot", "point_velocity", "com_jacobians",
+                           "supports"}}
+
+
+def toolkit():
+    """Names of the compiled functions spatial.py defines (the kernel toolkit)."""
+    tree = ast.parse((PKG / "spatial.py").read_text(encoding="utf-8"))
+    return {f.name for f in tree.body if isinstance(f, ast.FunctionDef) and f.decorator_list}
+
+
+def borrowed_helpers(pkg=PKG):
+    """'file:line imports NAME from ALGORITHM' for every name taken from an algorithm module that is not in
+    BORROWED, and 'file:line defines NAME' for every toolkit name defined outside spatial.py."""
+    tools, out = toolkit(), []
+    for path in sorted(pkg.rglob("*.py")):
+        if path.name in ("spatial.py", "__init__.py"):       # the toolkit itself; re-exports
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        rel = path.relative_to(pkg.parent)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and node.name in tools:
+                out.append(f"{rel}:{node.lineno} defines {node.name} (spatial.py's)")
+            if isinstance(node, ast.ImportFrom) and node.module:
+                src = node.module.split(".")[-1]
+                in_dynamics = node.module.startswith(("dynamics.", "manipdyn.dynamics.")) or \
+                    (node.level == 1 and path.parent.name == "dynamics")
+                if src in ALGORITHMS and in_dynamics:
+                    out += [f"{rel}:{node.lineno} imports {a.name} from {src}" for a in node.names
+                            if a.name not in BORROWED.get(src, set()) and path.parent.name in ("dynamics", "constraints")
+                            and path.stem != src]
+    return out
+
+
+def test_algebra_is_written_once_and_no_algorithm_borrows_helpers():
+    assert {"cross", "rot_t", "motion_cross", "force_cross", "dot6", "rigid_inertia", "first_nonfinite"} <= toolkit()
+    assert borrowed_helpers() == []
+
+
+def test_the_toolkit_check_bites(tmp_path):
+    pkg = tmp_path / "manipdyn"
+    (pkg / "dynamics").mkdir(parents=True)
+    (pkg / "spatial.py").write_text((PKG / "spatial.py").read_text(encoding="utf-8"))
+    (pkg / "dynamics" / "coriolis.py").write_text("from .aba import cholesky_kernel\n\n\ndef dot6(a, b):\n    pass\n")
+    assert borrowed_helpers(pkg) == ["manipdyn/dynamics/coriolis.py:1 imports cholesky_kernel from aba",
+                                     "manipdyn/dynamics/coriolis.py:4 defines dot6 (spatial.py's)"]

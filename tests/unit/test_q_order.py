@@ -1,4 +1,4 @@
-"""q order on a tree whose joint-name order, child-link-name order and file order all differ (DESIGN.md §3).
+"""q order on a tree whose joint-name order, child-link-name order and file order all differ (docs/design.md §3).
 
 Pinocchio numbers joints depth-first from the root, the children of a link in the order of their joint
 names, fixed joints skipped (their child's joints visited in the fixed joint's place).

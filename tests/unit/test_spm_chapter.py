@@ -166,7 +166,7 @@ def test_forward_dynamics_under_the_tree_torques(k):
 
 def test_inverse_kinematics_branches_match_design():
     th = np.degrees(S.inverse_kinematics(S.platform_rotation(P.PHI0)))
-    expected = np.array([[-62.58, 77.84], [-50.85, 32.72], [-85.33, 84.32]])    # DESIGN.md §6, 2 decimals
+    expected = np.array([[-62.58, 77.84], [-50.85, 32.72], [-85.33, 84.32]])    # docs/design.md §6, 2 decimals
     assert np.abs(th - expected).max() <= 0.005          # measured 0.0048: the reference is rounded to 0.01°
 
 

@@ -1,4 +1,4 @@
-"""method="euler" is symplectic (semi-implicit) Euler, told apart from explicit Euler by what only it does.
+"""integrator="euler" is symplectic (semi-implicit) Euler, told apart from explicit Euler by what only it does.
 
 A pendulum of length L (point mass, ω₀² = g/L, M constant) has q̈ = f(q) = −ω₀² sin q. One step of
 symplectic Euler, v₁ = v + h f(q), q₁ = q + h v₁, has Jacobian [[1 + h² f′, h], [h f′, 1]] with determinant
@@ -21,7 +21,7 @@ PERIOD = 2 * np.pi / W0
 
 
 def _step(x, h):
-    r = md.simulate(PENDULUM, x[:1], x[1:], (0.0, h), dt=h, method="euler")
+    r = md.simulate(PENDULUM, x[:1], x[1:], (0.0, h), dt=h, integrator="euler")
     return np.r_[r.q[-1], r.v[-1]]
 
 
@@ -38,7 +38,7 @@ def test_one_step_map_preserves_area(q0):
 
 def test_energy_error_stays_bounded_over_fifty_periods():
     h = 0.01
-    r = md.simulate(PENDULUM, np.array([0.3]), np.array([0.0]), (0.0, 50 * PERIOD), dt=h, method="euler")
+    r = md.simulate(PENDULUM, np.array([0.3]), np.array([0.0]), (0.0, 50 * PERIOD), dt=h, integrator="euler")
     E = md.kinetic_energy(PENDULUM, r.q, r.v) + md.potential_energy(PENDULUM, r.q)
     dE = np.abs(E - E[0]) / (MASS * G * L * (1 - np.cos(0.3)))            # relative to the swing's energy
     five = int(round(5 * PERIOD / h))

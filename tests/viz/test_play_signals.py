@@ -53,7 +53,7 @@ def test_spm_demo_marks_the_leg_singularity():
     m = viz.demo_motion(model, path)
     sc = viz.scene_for(model, path, m.pop("t"), m.pop("Q"), **m)
     (mark,) = sc.plots["marks"]
-    # DESIGN.md §6: leg 2's (u₂ × v₂)·w₂ reaches 0 at t ≈ 0.28 s (checked at 1 ms steps)
+    # docs/design.md §6: leg 2's (u₂ × v₂)·w₂ reaches 0 at t ≈ 0.28 s (checked at 1 ms steps)
     assert mark["label"] == "leg 2 singular" and 0.275 < mark["t"] < 0.29
     assert sc.fps == viz.SPM_FPS and len(sc.times) == 61 and sc.times[-1] == pytest.approx(0.25, abs=1e-12)
     assert [g["key"] for g in sc.plots["groups"]] == ["q", "v", "tau", "gap"]
