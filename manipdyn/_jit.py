@@ -102,10 +102,10 @@ _CACHE = None if NOJIT else cache_dir()
 # Floating point: kernels round as written (no fast-math), so that for the same formula they give Pinocchio's
 # numbers to the last bits. CONTRACT lets LLVM fuse a·b + c into one fused multiply-add (nothing else of
 # fast-math: no reassociation, NaN and ±inf keep their meaning, so the finiteness checks stay exact); it is
-# given only to the two batch entries whose speed target needs it — rnea.rnea_batch (batched rnea 0.55x ->
-# 0.48x rneaInParallel(1), target 0.5x) and aba.cholesky_batch (1.02x -> 0.98x Pinocchio's loop on chain32) —
+# given only to the two kernels whose batch speed target needs it — rnea.rnea_kernel (batched rnea 0.55x ->
+# 0.48x rneaInParallel(1), target 0.5x) and aba.cholesky_kernel (1.02x -> 0.98x Pinocchio's loop on chain32) —
 # and costs their results a rounding change of the order of 1e-16 (measured: batched rnea's worst error against
-# Pinocchio 3.8e-16 -> 4.2e-16 on ur5). One state, in whatever form it comes, rounds as written.
+# Pinocchio 3.8e-16 -> 4.2e-16 on ur5). Each kernel is compiled once, so one state and a batch round alike.
 FASTMATH = False
 CONTRACT = {"contract"}
 
@@ -117,8 +117,8 @@ class entry:
     a one-state call whose inputs are already checked (``state.fast``: float64 ndarrays of the model's
     shapes) calls ``entry.call`` instead: the compiled function for ``types``, loaded from the disk cache
     (or compiled) on first use. It checks nothing — an argument of another dtype or number of dimensions
-    would be read as the declared type — so its callers pass exactly these types. ``STATE`` inputs are
-    declared with any strides and read only: a strided or read-only q is read correctly. Under
+    would be read as the declared type — so its callers pass exactly these types. Arrays are declared with
+    any strides (``A1``…): a strided or read-only q is read correctly (no kernel writes its inputs). Under
     MANIPDYN_NOJIT ``call`` is the Python function."""
     __slots__ = ("kernel", "types", "call")
 
@@ -131,12 +131,19 @@ class entry:
         return self.call(*args)
 
 
-MODEL = (numba.types.Array(numba.int64, 2, "C", readonly=True),
-         numba.types.Array(numba.float64, 3, "C", readonly=True))   # Model.kernel's (I, F), read-only
-STATE = numba.types.Array(numba.float64, 1, "A", readonly=True)   # one state's q, v or a, as the caller gave it
-
-C1, C2 = (numba.types.Array(numba.float64, n, "C") for n in (1, 2))   # float64 in C order: results
-ROW = numba.types.Array(numba.float64, 2, "C", readonly=True)       # a frame's row of Model.kernel
+# The kernels' argument types. Every kernel is compiled for one list of types (its ``entry`` and every
+# compiled caller pass exactly these), so that no kernel is compiled twice: the model's two arrays as
+# Model.kernel holds them (C order), and every other array — inputs, results, scratch — of layout
+# "A" (any strides): one state (a row view of it), a batch, a strided or read-only array and a kernel's own
+# scratch all reach the same machine code. A compiled caller turns an array of its own into this layout with
+# a full slice (``x[::1]``, ``x[:, :]``, ``x[:, :, :]``: a view, no copy).
+MODEL = (numba.types.Array(numba.int64, 2, "C"),
+         numba.types.Array(numba.float64, 3, "C"))   # Model.kernel's (I, F): read-only arrays, which no kernel
+#                                                      writes; declared writable so that their empty views can
+#                                                      stand for "no rows" (core.no_wrenches) without allocating
+A1, A2, A3 = (numba.types.Array(numba.float64, n, "A") for n in (1, 2, 3))   # float64 arrays, any strides
+I1 = numba.types.Array(numba.int64, 1, "A")                                   # int64 indices, any strides
+FLAG = numba.types.boolean
 
 
 def njit(*args, cache=False, **options):

@@ -368,6 +368,8 @@ class KernelForm:
     closure_ints: np.ndarray   # (nc, 3) int64 [parent body, child body, number of orientation pairs (−1: coupling)]
     closure_floats: np.ndarray  # (nc, 24) [pp (3), pc (3), a_1..a_3 (9), b_1..b_3 (9)]; a coupling: [ratio, 0, ...]
     closure_labels: tuple      # (m,) the name of every closure row ("<closure>.x|y|z|r1|r2|r3|c")
+    result_shapes: tuple       # one state's result of a route (dynamics/route.py), by route.SHAPES: (nv,), (nv, nv),
+    #                            (nv, 10 nb) (the regressor)
 
     @classmethod
     def of(cls, model) -> "KernelForm":
@@ -404,7 +406,8 @@ class KernelForm:
         return cls((model.nq,), (model.nv,), (I, F), I, F, config,
                    MappingProxyType({name: i for i, name in enumerate(model.joint_names)}),
                    MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
-                   ints, floats, labels)
+                   ints, floats, labels,
+                   ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)))
 
 
 def perpendicular_pair(e):

@@ -23,20 +23,22 @@ import warnings
 
 import numpy as np
 
-# Each group compiles its own kernels (about equal compile time on this machine): a kernel compiled by two
-# workers with different signatures would keep only one worker's entry in its cache index. The one shared
-# kernel, aba_kernel (called by aba_derivatives), gets the same signatures from both, so nothing is lost — the
-# bench's cold start (a fresh process after warmup: 0.34 s for all first calls) shows no recompile.
-GROUPS = (("rnea", "aba", "crba", "fd", "fext", "closed"),
-          ("bias", "derivatives", "regressor", "coriolis", "lagrange", "frames", "energy", "config"))
+# Each group compiles its own kernels, in about equal time on this machine: a kernel that both workers need
+# would be compiled twice (and, with different signatures, only one worker's entry would survive in its cache
+# index). The kernels several calls share stay within one group: rnea_kernel and crba_kernel (rnea, the bias
+# forces, the Cholesky route, the closed chain) in the first, aba_kernel (aba, the derivatives) in the second.
+GROUPS = (("rnea", "bias", "crba", "fd", "fext", "closed", "regressor", "coriolis", "energy"),
+          ("aba", "aba_fext", "derivatives", "frames", "lagrange", "config"))
 
 
-def _models():
+def _models(closed=True):
+    """The AAU arm and (if ``closed``) the four-bar linkage, a closed chain; else None in its place."""
     from .io.urdf import load_urdf
     from .paths import bundled_dir
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return load_urdf(bundled_dir() / "aau_arm.urdf"), load_urdf(bundled_dir() / "fourbar.urdf")
+        return (load_urdf(bundled_dir() / "aau_arm.urdf"),
+                load_urdf(bundled_dir() / "fourbar.urdf") if closed else None)
 
 
 def _calls(arm, closed):
@@ -53,6 +55,10 @@ def _calls(arm, closed):
     def both(name, f, **kw):                      # one state and a batch of the call f(arm, q, v, a, **kw)
         return [(name, lambda: f(arm, q, v, a, **kw)), (name + " batch", lambda: f(arm, Q, V, A, **kw))]
 
+    def with_wrenches(f):                         # f(arm, q, v, a, f_ext=...) in both frames, one state and a batch
+        return [(f"{f.__name__} f_ext {frame}{n}", lambda w=w, frame=frame, x=x: f(arm, *x, f_ext=w, f_ext_frame=frame))
+                for frame in ("local", "world") for n, w, x in (("", fx, (q, v, a)), (" batch", FX, (Q, V, A)))]
+
     def closed_calls():
         qc = assemble(closed, md.neutral(closed)).q
         tau = np.zeros(closed.nv)
@@ -65,12 +71,10 @@ def _calls(arm, closed):
         aba=both("aba", md.aba),
         crba=[("mass_matrix", lambda: md.mass_matrix(arm, q)), ("mass_matrix batch", lambda: md.mass_matrix(arm, Q))],
         fd=both("forward_dynamics cholesky", md.forward_dynamics, method="cholesky"),
-        fext=[(f"{f.__name__} f_ext {frame}{n}", lambda f=f, w=w, frame=frame, x=x: f(arm, *x, f_ext=w,
-                                                                                        f_ext_frame=frame))
-              for f in (md.rnea, md.aba) for frame in ("local", "world")
-              for n, w, x in (("", fx, (q, v, a)), (" batch", FX, (Q, V, A)))]
+        fext=with_wrenches(md.rnea)
         + [("forward_dynamics cholesky f_ext", lambda: md.forward_dynamics(arm, q, v, a, f_ext=fx, method="cholesky"))],
-        closed=closed_calls(),
+        aba_fext=with_wrenches(md.aba),
+        closed=closed_calls() if closed is not None else [],
         bias=[("gravity_torques", lambda: md.gravity_torques(arm, q)), ("gravity_torques batch",
                                                                         lambda: md.gravity_torques(arm, Q)),
               ("nonlinear_effects", lambda: md.nonlinear_effects(arm, q, v)),
@@ -96,9 +100,9 @@ def _calls(arm, closed):
 
 def first_calls(group=None):
     """Make every public call once (group None: all; else the groups of GROUPS[group]); {name: seconds}."""
-    arm, closed = _models()
-    calls = _calls(arm, closed)
     keys = [k for g in (GROUPS if group is None else (GROUPS[group],)) for k in g]
+    arm, closed = _models("closed" in keys)
+    calls = _calls(arm, closed)
     out = {}
     for k in keys:
         for name, f in calls[k]:

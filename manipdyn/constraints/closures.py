@@ -19,9 +19,10 @@ path(X) = the joints from the common ancestor of bodies A and B down to X (gener
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-from .._jit import njit
+from .._jit import A2, A3, MODEL, entry, njit
 from ..dynamics.core import fk_pass, kernel_arrays, nonfinite_input, unpack
 from ..spatial import cross3, rot3
 from ..dynamics.kinematics import body_point, point_jacobian, point_jacobian_dot, point_velocity
@@ -64,7 +65,7 @@ def closure_scratch(nb, nv):
             R3[2 * nb:2 * nb + 2], B3[4 * nb:4 * nb + 2], B3[4 * nb + 2:4 * nb + 4], eye, B3[4 * nb + 4:])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)                 # compiled once, called (not inlined) by closure_kernel and constrained_fd_kernel
 def closure_rows(I, F, CI, CF, q, v, W, Phi, Jc, bias):
     """Φ (m,), Φ_q (m, nv) and, when v has entries, Φ̇_q q̇ (m,) of one state q (nq,), v (nv,), rows in
     row_labels order (the module docstring gives them); W = closure_scratch(nb, nv)."""
@@ -170,6 +171,11 @@ def closure_kernel(I, F, CI, CF, Q, V, Phi, Jc, bias):
     return -1
 
 
+# The compiled code every call reaches (``_jit.entry``): closures in kernel form (``closure_arrays``)
+CLOSURE_FORM = (numba.types.Array(numba.int64, 2, "C"), numba.types.Array(numba.float64, 2, "C"))
+CLOSURE = entry(closure_kernel, *MODEL, *CLOSURE_FORM, A2, A2, A2, A3, A2)
+
+
 @quiet
 def closure_terms(model, q, v=None):
     """Φ (N, m), Φ_q (N, m, nv) and, with v, Φ̇_q q̇ (N, m) (None without v) for a batch q (N, nq), v (N, nv),
@@ -192,9 +198,9 @@ def _closure_terms(model, Q, V=None):
     N, m = Q.shape[0], n_rows(model)
     Phi, Jc, bias = np.empty((N, m)), np.empty((N, m, model.nv)), np.empty((N, m))
     if m:
-        Q = np.ascontiguousarray(Q, float)
-        Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V, float)
-        code = closure_kernel(*kernel_arrays(model), *closure_arrays(model), Q, Vk, Phi, Jc, bias)
+        Q = np.asarray(Q, float)
+        Vk = np.empty((N, 0)) if V is None else np.asarray(V, float)
+        code = CLOSURE.call(*kernel_arrays(model), *closure_arrays(model), Q, Vk, Phi, Jc, bias)
         if code != -1:
             raise_kernel_error(model, code, ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, Vk),
                                "closure_terms")

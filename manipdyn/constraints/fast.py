@@ -4,37 +4,39 @@ closures.independent_rows) and Eq. 27 on them by the Schur complement with Chole
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-from .._jit import njit
-from ..dynamics.core import kernel_arrays, nonfinite_input
-from ..spatial import first_nonfinite
+from .._jit import A2, I1, MODEL, entry, njit
+from ..dynamics.core import kernel_arrays, no_wrenches, nonfinite_input
+from ..spatial import cholesky, cholesky_solve, first_nonfinite
 from ..dynamics.crba import crba_kernel
-from ..dynamics.rnea import rnea_one
+from ..dynamics.rnea import rnea_kernel
 from ..errors import NumericalError, SingularError
-from .closures import RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
+from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
 
 
 @njit(cache=True)
 def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
     (I, F): core.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
-    Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite."""
+    Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite, -3 if
+    G M⁻¹ Gᵀ is not (the kept rows G are dependent to working precision)."""
     N, nq, nv = Q.shape[0], Q.shape[1], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
     W = closure_scratch(I.shape[1], nv)
-    M = np.empty((1, nv, nv))
-    h = np.empty((1, nv))
-    zero = np.zeros(nv)
+    M, h, Z = np.empty((1, nv, nv))[:, :, :], np.empty((1, nv))[:, :], np.zeros((1, nv))[:, :]   # the kernels'
+    X, xb, xp, world = no_wrenches(I, F)                                                   # layout (_jit: "A")
+    T0 = F[:0, :, :]                                      # no per-link terms
     for s in range(N):
         k = nonfinite_input(Q, V, s)
         if k < 0 and first_nonfinite(T, s) >= 0:
             k = N * nq + s * nv + first_nonfinite(T, s)
         if k >= 0:
             return k
-        closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi, Jc, bias)
-        crba_kernel(I, F, Q[s:s + 1], M)
-        rnea_one(I, F, Q[s], V[s], zero, h[0])                                 # h = C q̇ + g
+        closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[::1], Jc[:, :], bias[::1])   # (views: closure_kernel's layout)
+        crba_kernel(I, F, Q[s:s + 1, :], M)
+        rnea_kernel(I, F, Q[s:s + 1, :], V[s:s + 1, :], Z, X, xb, xp, world, h, T0)   # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):
@@ -57,21 +59,32 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
         cr = np.empty(r)
         for l in range(r):
             G[l], cr[l] = Jc[keep[l]], c[keep[l]]
-        for i in range(nv):
-            if not M[0, i, i] > 0.0:
-                return -2
-        L = np.linalg.cholesky(M[0])
-        Minv_r = np.linalg.solve(L.T, np.linalg.solve(L, T[s] - h[0]))
+        L = M[0]                                              # M = L Lᵀ in place (spatial.cholesky)
+        if cholesky(L, nv, 0.0) >= 0:
+            return -2
+        Minv_r = T[s] - h[0]                                  # M⁻¹ (τ − h)
+        cholesky_solve(L, nv, Minv_r)
         LAM[s] = 0.0
         if r == 0:
             QDD[s] = Minv_r
             continue
-        Minv_Gt = np.linalg.solve(L.T, np.linalg.solve(L, np.ascontiguousarray(G.T)))
-        lam = np.linalg.solve(G @ Minv_Gt, G @ Minv_r - cr)
-        QDD[s] = Minv_r - Minv_Gt @ lam
+        Minv_Gt = np.empty((r, nv))                           # row l: M⁻¹ G_lᵀ
+        for l in range(r):
+            Minv_Gt[l] = G[l]
+            cholesky_solve(L, nv, Minv_Gt[l])
+        S = G @ Minv_Gt.T                                     # G M⁻¹ Gᵀ (r, r): positive definite, G of full rank
+        lam = G @ Minv_r - cr
+        if cholesky(S, r, 0.0) >= 0:
+            return -3
+        cholesky_solve(S, r, lam)
+        QDD[s] = Minv_r - Minv_Gt.T @ lam
         for l in range(r):
             LAM[s, keep[l]] = lam[l]
     return -1
+
+
+CONSTRAINED_FD = entry(constrained_fd_kernel, *MODEL, *CLOSURE_FORM, numba.int64, A2, A2, A2, numba.float64,
+                       numba.float64, numba.float64, A2, A2, I1)   # its compiled code (``_jit.entry``)
 
 
 def constrained_fd_fast(model, Q, V, T, baumgarte=None):
@@ -81,10 +94,8 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     m = n_rows(model)
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(V.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
-    try:
-        code = constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL,
-                                     QDD, LAM, RANK)
-    except np.linalg.LinAlgError:
+    code = CONSTRAINED_FD.call(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    if code == -3:
         _overflowed(model, Q, V)
         raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "
                             f"(a singular configuration, or closures that cannot hold together)") from None

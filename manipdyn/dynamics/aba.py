@@ -31,17 +31,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import CONTRACT, njit
+from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
 from ..joints import joint_placement
-from ..model import MimicModel
 from . import mimic
 from ..spatial import (cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_to_parent,
                        inertia_to_parent, motion_to_child, rigid_inertia)
-from .core import kernel_arrays, unpack, wrench_rows_of
+from .core import no_wrenches, unpack, wrench_rows_of
 from .crba import crba, crba_kernel
-from .rnea import NT, rnea, rnea_kernel
-from .state import (as_batch, check_f_ext, fast, fast_shape, fast_wrench_rows, fast_wrenches, raise_kernel_error, unbatch, wrench_rows)
+from .rnea import rnea, rnea_kernel
+from .route import route
 
 
 # -- the articulated-body algorithm -----------------------------------------------------------------------
@@ -264,14 +263,12 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     return -1
 
 
-_NO_X, _NO_BODY, _NO_POINT = np.empty((1, 0, 6)), np.empty(0, np.int64), np.empty((0, 3))   # no wrenches
-
-
 @njit(cache=True)
 def aba_one(I, F, q, v, tau, out):
-    """One state (nq,), (nv,) without external wrenches: aba_kernel on views, no Python-side reshapes."""
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_BODY, _NO_POINT,
-                      False, out[np.newaxis, :])
+    """One state (nq,), (nv,) without external wrenches: aba_kernel on row views, no Python-side reshapes."""
+    X, xb, xp, world = no_wrenches(I, F)
+    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
+                      out[np.newaxis, :])
 
 
 @njit(cache=True)
@@ -282,72 +279,9 @@ def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
                       out[np.newaxis, :])
 
 
-# -- Python entry points ----------------------------------------------------------------------------------
-
-def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
-    """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
-
-    Parameters
-    ----------
-    q : (nq,) or (N, nq) configuration; v, tau : (nv,) or (N, nv) velocities and generalized forces (a free
-        flyer's: [linear; angular] in the body frame, as Pinocchio's).
-    f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, the wrench the environment applies
-        on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or the world's.
-    Returns
-    -------
-    qdd : (nv,) or (N, nv).
-
-    Raises SingularError naming the joint whose articulated inertia D_i = S_iᵀ I^A_i S_i is singular (a
-    moving subtree without mass or inertia: M is singular there).
-    """
-    k = fast(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
-    if k is not None:                                           # one float64 state: straight into the kernel
-        qdd = np.empty(v.shape)
-        code = aba_one(k[0], k[1], q, v, tau, qdd)
-        if code == -1:
-            return qdd
-        raise_kernel_error(model, code, ("q", "v", "tau"), (q, v, tau), "aba", "q̈", qdd)
-    nd = fast_shape(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else 0
-    if f_ext is not None:                                       # one state with wrenches: rows kept per model
-        k = fast(model, q, v, tau)
-        ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
-        if ext is not None:
-            qdd = np.empty(v.shape)
-            if aba_fext_one(k[0], k[1], q, v, tau, *ext, f_ext_frame == "world", qdd) == -1:
-                return qdd                                      # else the checked path says what is wrong
-    if nd == 1:
-        Q, V, T = q, v, tau
-        qdd = np.empty(v.shape)
-        code = aba_one(*kernel_arrays(model), q, v, tau, qdd)
-    else:
-        if nd == 2:
-            (Q, V, T), single = (q, v, tau), False
-            ext = wrench_rows(model, None, "local", Q.shape[0])
-        elif type(model) is MimicModel:                         # q̈ = M⁻¹ (τ − Gᵀ h_full) (dynamics/mimic.py)
-            return mimic.forward_dynamics(model, rnea, crba, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
-        else:                                                   # checked and converted first
-            (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
-            ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
-            if model.njoints == 0:
-                return unbatch(np.zeros(V.shape), single)
-        Q, V, T = (np.ascontiguousarray(x) for x in (Q, V, T))   # one compiled layout
-        qdd = np.empty(V.shape)
-        code = aba_kernel(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world", qdd)
-        qdd = unbatch(qdd, single)
-        Q, V, T = (unbatch(x, single) for x in (Q, V, T))
-    if code != -1:
-        raise_kernel_error(model, code, ("q", "v", "tau"), (Q, V, T), "aba", "q̈", qdd)
-    return qdd
-
+# -- the M⁻¹ route ----------------------------------------------------------------------------------------
 
 @njit(cache=True, fastmath=CONTRACT)
-def cholesky_batch(I, F, Q, V, Tau, X, body, point, world, out):
-    """``cholesky_kernel`` for a batch of states, compiled with fused multiply-adds (_jit.CONTRACT: its speed
-    target needs them); one state, whatever its form, goes through the kernel as written."""
-    return cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out)
-
-
-@njit(cache=True, inline="always")
 def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ = M⁻¹ (τ − h) for every state (the M⁻¹ route): M by the CRBA (crba.crba_kernel), factored in place,
     M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_kernel) into out, then out ← L⁻ᵀ L⁻¹
@@ -356,7 +290,7 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, 16))                                    # states per chunk (measured 5 % faster than
-    M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), np.zeros((0, 0, NT))   # one M of all N states)
+    M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), F[:0, :, :]   # one M of all N states; T0: no terms)
     iv, nvj = I[3], I[4]
     for s in range(N):
         if first_nonfinite(Tau, s) >= 0:
@@ -364,13 +298,13 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     for s0 in range(0, N, C):
         s1 = min(N, s0 + C)
         n = s1 - s0
-        code = crba_kernel(I, F, Q[s0:s1], M[:n])
+        code = crba_kernel(I, F, Q[s0:s1], M[:n, :, :])
         if code <= -2 - nb:                                   # a non-finite M: reported in its state's q̈
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
             return -2 - nb - s * nv
         if code == -1:                                        # h into out
-            code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n], X[s0:s1] if X.shape[0] > 1 else X, body, point,
+            code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
                                world, out[s0:s1], T0)
         if code != -1:                                        # a non-finite input, or h (in out)
             return code - s0 * nv if code <= -2 - nb else code
@@ -395,50 +329,57 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 @njit(cache=True)
 def cholesky_one(I, F, q, v, tau, out):
     """One state without external wrenches: cholesky_kernel with N = 1."""
-    return cholesky_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_BODY, _NO_POINT,
-                           False, out[np.newaxis, :])
+    X, xb, xp, world = no_wrenches(I, F)
+    return cholesky_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
+                           out[np.newaxis, :])
+
+
+@njit(cache=True)
+def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
+    """One state with one external wrench in ``state.fast_wrenches``' form: cholesky_kernel with N = 1."""
+    X, xb, xp = wrench_rows_of(f, m, P)
+    return cholesky_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
+                           out[np.newaxis, :])
+
+
+# -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
+
+_QVT, _FD = ("q", "v", "tau"), (*MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2)      # (the batch kernels' types)
+_ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1)
+
+
+@route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_kernel, *_FD), wrenches=True,
+       wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
+def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+    """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
+
+    Parameters
+    ----------
+    q : (nq,) or (N, nq) configuration; v, tau : (nv,) or (N, nv) velocities and generalized forces (a free
+        flyer's: [linear; angular] in the body frame, as Pinocchio's).
+    f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, the wrench the environment applies
+        on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or the world's.
+    Returns
+    -------
+    qdd : (nv,) or (N, nv).
+
+    Raises SingularError naming the joint whose articulated inertia D_i = S_iᵀ I^A_i S_i is singular (a
+    moving subtree without mass or inertia: M is singular there).
+    """
+
+
+@route("forward_dynamics", _QVT, "q̈", "v", entry(cholesky_one, *_ONE), entry(cholesky_kernel, *_FD), wrenches=True,
+       wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
+       mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
+def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+    """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``."""
 
 
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
-    if type(model) is MimicModel:
-        if not (isinstance(method, str) and method in ("aba", "cholesky")):
-            raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
-        return mimic.forward_dynamics(model, rnea, crba, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
     if method != "cholesky":
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
-    return _cholesky(model, q, v, tau, f_ext, f_ext_frame)
-
-
-def _cholesky(model, q, v, tau, f_ext, f_ext_frame):
-    """q̈ by the M⁻¹ route (cholesky_kernel): Cholesky of the CRBA mass matrix, right-hand side
-    τ − rnea(q, q̇, 0, f_ext)."""
-    k = fast(model, q, v, tau) if f_ext is None and f_ext_frame == "local" else None
-    if k is not None:                                          # one float64 state: straight into the kernel
-        qdd = np.empty(v.shape)
-        if cholesky_one(k[0], k[1], q, v, tau, qdd) == -1:
-            return qdd
-    ext = fast_wrench_rows(model, f_ext, f_ext_frame) if f_ext is not None else None
-    if fast_shape(model, q, v, tau) == 1 and (f_ext is None and f_ext_frame == "local" or ext is not None):
-        Q, V, T = q[None], v[None], tau[None]                  # one state: no checks or conversions needed
-        if ext is None:
-            ext = wrench_rows(model, None, "local", 1)
-        single = True
-    else:
-        (Q, V, T), single = as_batch(model, q=q, v=v, tau=tau)
-        ext = wrench_rows(model, f_ext, f_ext_frame, Q.shape[0])
-        if model.nv == 0:
-            return unbatch(np.zeros(V.shape), single)
-        Q, V, T = (np.ascontiguousarray(x) for x in (Q, V, T))
-    qdd = np.empty(V.shape)
-    code = (cholesky_kernel if single else cholesky_batch)(*kernel_arrays(model), Q, V, T, *ext, f_ext_frame == "world",
-                                                           qdd)
-    if code != -1:
-        if f_ext is not None:                                  # a non-finite wrench is the cause to report
-            check_f_ext(model, f_ext, f_ext_frame, Q.shape[0])
-        raise_kernel_error(model, code, ("q", "v", "tau"), tuple(unbatch(x, single) for x in (Q, V, T)),
-                           "forward_dynamics", "q̈", unbatch(qdd, single))
-    return unbatch(qdd, single)
+    return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)

@@ -152,13 +152,16 @@ def wrench_rows_of(f, m, P):
             X[0, k, r] = P[3 * r] * f[0] + P[3 * r + 1] * f[1] + P[3 * r + 2] * f[2]
             X[0, k, 3 + r] = P[3 * r] * m[0] + P[3 * r + 1] * m[1] + P[3 * r + 2] * m[2]
             point[k, r] = P[9 + r]
-    return X, body, point
+    return X[:, :, :], body[::1], point[:, :]          # views of the kernels' layout (_jit: "A")
 
 
-@njit(cache=True)
-def wrench_block(f, m, P):
-    """``wrench_rows_of``, called from Python."""
-    return wrench_rows_of(f, m, P)
+@njit(cache=True, inline="always")
+def no_wrenches(I, F):
+    """X (1, 0, 3), body (0,), point (0, 3), world = False: no external wrench, in the layout of ``wrench_rows_of``
+    — views with no rows of the model's arrays (I, F), so that a one-state call allocates nothing for them (X's
+    entries are never read without a wrench); world a run-time bool, not the constant False, for which numba
+    would compile anew."""
+    return F[:1, :0, :], I[0, :0][::1], F[0, :0, :], np.bool_(False)
 
 
 @njit(cache=True, inline="always")

@@ -26,10 +26,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..spatial import add_force_cross, dot6, first_nonfinite_entry, force_cross, motion_cross, row6, sandwich3
-from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
-from .state import as_batch, fast, fast_shape, raise_kernel_error, unbatch
+from .core import fk_pass, nonfinite_input, unpack
+from .route import route
 
 
 @njit(cache=True)
@@ -142,27 +142,8 @@ def coriolis_one(I, F, q, v, C):
     return coriolis_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], C[np.newaxis, :, :])
 
 
+@route("coriolis_matrix", ("q", "v"), "C", "vv", entry(coriolis_one, *MODEL, A1, A1, A2),
+       entry(coriolis_kernel, *MODEL, A2, A2, A3))
 def coriolis_matrix(model, q, v):
     """C(q, q̇) (nv, nv) or (N, nv, nv): the Christoffel-consistent Coriolis matrix (module docstring;
-    Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew.
-    Float64 arrays go straight to the kernel; anything else is checked and converted first."""
-    k = fast(model, q, v)
-    if k is not None:                                 # one float64 state
-        nv = model.nv
-        C = np.empty((nv, nv))
-        code = coriolis_one(k[0], k[1], q, v, C)
-        if code == -1:
-            return C
-        raise_kernel_error(model, code, ("q", "v"), (q, v), "coriolis_matrix", "C", C)
-    nd = fast_shape(model, q, v)
-    if nd == 0:
-        (Q, Vb), single = as_batch(model, q=q, v=v)
-        if not model.njoints:
-            return unbatch(np.zeros((Q.shape[0], 0, 0)), single)
-        q, v, nd = unbatch(Q, single), unbatch(Vb, single), 1 if single else 2
-    nv = model.nv
-    C = np.empty(q.shape[:-1] + (nv, nv))
-    code = (coriolis_one if nd == 1 else coriolis_kernel)(*kernel_arrays(model), q, v, C)
-    if code != -1:
-        raise_kernel_error(model, code, ("q", "v"), (q, v), "coriolis_matrix", "C", C)
-    return C
+    Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew."""

@@ -21,15 +21,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import C2, MODEL, STATE, entry, njit
+from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..joints import joint_placement
 from ..errors import InputError
 from ..model import MimicModel
 from ..spatial import first_nonfinite, first_nonfinite_entry, force_up, inertia_motion, merge_inertia, rot3, sandwich3
 from . import mimic
-from .core import kernel_arrays, unpack
+from .core import unpack
 from .lagrange import lagrange_mass_matrix
-from .state import as_batch, fast, fast_shape, raise_kernel_error, unbatch
+from .route import route
 
 
 @njit(cache=True, inline="always")
@@ -100,7 +100,7 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
             M[a, r] = M[r, a]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def crba_kernel(I, F, Q, M):
     """M(q) (N, nv, nv) for every state of Q (N, nq) by the composite-rigid-body algorithm (RBDA §6.2).
     Returns −1, the flat index of the first non-finite q, or −2 − nb − (flat index) of a non-finite M."""
@@ -127,9 +127,6 @@ def crba_one(I, F, q, M):
     return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
 
 
-CRBA_ONE = entry(crba_one, *MODEL, STATE, C2)   # the one-state calls' compiled code (``_jit.entry``)
-
-
 def mass_matrix(model, q, method="crba"):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
     T = ½ q̇ᵀ M q̇ (Eq. 23).
@@ -147,26 +144,7 @@ def mass_matrix(model, q, method="crba"):
     return lagrange_mass_matrix(model, q)
 
 
+@route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_kernel, *MODEL, A2, A3))
 def crba(model, q):
-    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above).
-    Float64 arrays go straight to the kernel; anything else is checked and converted first."""
-    k = fast(model, q)
-    if k is not None:                                 # one float64 state
-        nv = model.nv
-        M = np.empty((nv, nv))
-        code = CRBA_ONE.call(k[0], k[1], q, M)
-        if code == -1:
-            return M
-        raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
-    nd = fast_shape(model, q)
-    if nd == 0:
-        (Q,), single = as_batch(model, q=q)
-        if not model.njoints:
-            return unbatch(np.zeros((Q.shape[0], 0, 0)), single)
-        q, nd = unbatch(Q, single), 1 if single else 2
-    nv = model.nv
-    M = np.empty(q.shape[:-1] + (nv, nv))
-    code = (CRBA_ONE.call if nd == 1 else crba_kernel)(*kernel_arrays(model), q, M)
-    if code != -1:
-        raise_kernel_error(model, code, ("q",), (q,), "mass_matrix", "M", M)
-    return M
+    """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
+    route: dynamics/route.py)."""

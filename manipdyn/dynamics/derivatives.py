@@ -43,12 +43,12 @@ import numpy as np
 # q̈ they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on
 # solo12), and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
 
-from .._jit import njit
+from .._jit import A1, A2, A3, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_placement
 from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
                        spd_inverse, world_inertia, world_motion)
 from .aba import aba_kernel
-from .core import finite_state, kernel_arrays, unpack
+from .core import finite_state, kernel_arrays, no_wrenches, unpack
 from .state import (
     as_batch,
     fast_shape,
@@ -58,7 +58,6 @@ from .state import (
     wrench_rows,
 )
 
-_NO_X, _NO_B, _NO_P = np.empty((1, 0, 6)), np.empty(0, np.int64), np.empty((0, 3))   # no external wrench
 _QVA, _QVT = ("q", "v", "a"), ("q", "v", "tau")
 OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "dqdd_dtau")
 
@@ -296,11 +295,11 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
     code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
     if code != -1:
         return code - N * nv if code <= -2 - nb else code   # non-finite entries: after q̈'s codes
-    W = np.empty((4 * nv, nv))              # Cholesky factor (lower triangle); M, then L⁻¹; −M⁻¹; a copy of D
-    L, M, Mn, T = W[:nv], W[nv:2 * nv], W[2 * nv:3 * nv], W[3 * nv:]
-    for s in range(N):
+    W = np.empty((5 * nv, nv))              # Cholesky factor (lower triangle); M, then L⁻¹; −M⁻¹; a copy of D;
+    L, M, Mn, T, P = W[:nv], W[nv:2 * nv], W[2 * nv:3 * nv], W[3 * nv:4 * nv], W[4 * nv:]   # BLAS results
+    for s in range(N):                      # (BLAS writes C-ordered arrays only: P, then copied out)
         M[:, :] = Minv[s]
-        k = spd_inverse(M, L, Minv[s])
+        k = spd_inverse(M, L, P)
         if k >= 0:
             i = 0
             while I[3, i] + I[4, i] <= k:                 # the joint of velocity row k
@@ -308,10 +307,11 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
             return -2 - i
         for r in range(nv):
             for c in range(nv):
-                Mn[r, c] = -Minv[s, r, c]
+                Minv[s, r, c], Mn[r, c] = P[r, c], -P[r, c]
         for D in (dq[s], dv[s]):                          # D ← −M⁻¹ D (BLAS: 2 n³ flops, the bulk at n ≳ 20)
             T[:, :] = D
-            np.dot(Mn, T, D)
+            np.dot(Mn, T, P)
+            D[:, :] = P
         k = first_nonfinite3((dq, dv, Minv), s)
         if k >= 0:
             return -2 - nb - N * nv - (s * 3 * nv * nv + k)
@@ -320,17 +320,26 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
 
 @njit(cache=True, fastmath=False)
 def rnea_derivatives_one(I, F, q, v, a, dq, dv, da):
-    """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
-    return rnea_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B,
-                                   _NO_P, False, dq[np.newaxis], dv[np.newaxis], da[np.newaxis])
+    """One state (nq,), (nv,), no external wrench: the kernel on row views, no Python-side reshapes."""
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
+                                   dq[np.newaxis, :, :], dv[np.newaxis, :, :], da[np.newaxis, :, :])
 
 
 @njit(cache=True, fastmath=False)
 def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
-    """One state (nq,), (nv,), no external wrench: the kernel on views, no Python-side reshapes."""
-    return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], _NO_X, _NO_B,
-                                  _NO_P, False, qdd[np.newaxis, :], dq[np.newaxis], dv[np.newaxis],
-                                  Minv[np.newaxis])
+    """One state (nq,), (nv,), no external wrench: the kernel on row views, no Python-side reshapes."""
+    X, xb, xp, world = no_wrenches(I, F)
+    return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
+                                  qdd[np.newaxis, :], dq[np.newaxis, :, :], dv[np.newaxis, :, :],
+                                  Minv[np.newaxis, :, :])
+
+
+# The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state
+RNEA_DERIVATIVES = entry(rnea_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A3, A3, A3)
+ABA_DERIVATIVES = entry(aba_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3, A3, A3)
+RNEA_DERIVATIVES_ONE = entry(rnea_derivatives_one, *MODEL, A1, A1, A1, A2, A2, A2)
+ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, A1, A1, A1, A1, A2, A2, A2)
 
 
 # -- Python entry points ----------------------------------------------------------------------------------
@@ -370,9 +379,9 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd):
         D = (np.empty((nv, nv)), np.empty((nv, nv)), np.empty((nv, nv)))
         if fd:
             qdd = np.empty(nv)
-            code = aba_derivatives_one(*kernel_arrays(model), q, v, x, qdd, *D)
+            code = ABA_DERIVATIVES_ONE.call(*kernel_arrays(model), q, v, x, qdd, *D)
         else:
-            code = rnea_derivatives_one(*kernel_arrays(model), q, v, x, *D)
+            code = RNEA_DERIVATIVES_ONE.call(*kernel_arrays(model), q, v, x, *D)
         if code == -1:
             return D
         Q, V, Xs, D = q[None], v[None], x[None], tuple(d[None] for d in D)
@@ -385,12 +394,11 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd):
         D = tuple(np.empty((3, N, nv, nv)))   # one block, three views; every entry written (fresh zeros cost
         # 2.6 µs per state on chain32's 24 MB). One block, not three: malloc then keeps it in its heap between
         # calls (three 8 MB blocks went back to the OS each call: ~950 page faults, 3 µs per state)
-        Q, V, Xs = (np.ascontiguousarray(y) for y in (Q, V, Xs))
         if fd:
             qdd = np.empty((N, nv))
-            code = aba_derivatives_kernel(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", qdd, *D)
+            code = ABA_DERIVATIVES.call(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", qdd, *D)
         else:
-            code = rnea_derivatives_kernel(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", *D)
+            code = RNEA_DERIVATIVES.call(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", *D)
         if code == -1:
             return tuple(unbatch(d, single) for d in D)
     _raise(model, code, names, (Q, V, Xs), call, outs, D, qdd if fd else None)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import MODEL, STATE, entry, njit
+from .._jit import A1, A2, MODEL, entry, njit
 from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
 from .state import as_batch, fast, fast_shape, raise_kernel_error
 
@@ -61,22 +61,25 @@ def energy_kernel(I, F, Q, V, out):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def energy_one(I, F, q, v):
-    """The energy of one state (``energy_of``): q (nq,), v (nv,) or (0,); non-finite for a non-finite input."""
-    nb = I.shape[1]
-    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
-    return energy_of(unpack(I, F), q, v, R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:])
+    """The energy of one state q (nq,), v (nv,) or (0,) (potential): ``energy_kernel`` on row views; NaN for a
+    non-finite input or result."""
+    out = np.empty(1)[::1]
+    code = energy_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], out)
+    return out[0] if code == -1 else np.nan
 
 
 @njit(cache=True)
 def potential_one(I, F, q):
-    """V of one state q (nq,): energy_one with no velocities (the kinetic branch drops out of the machine code)."""
+    """V of one state q (nq,): energy_one with no velocities."""
     return energy_one(I, F, q, q[:0])
 
 
-KINETIC_ONE = entry(energy_one, *MODEL, STATE, STATE)   # the one-state calls' compiled code (``_jit.entry``)
-POTENTIAL_ONE = entry(potential_one, *MODEL, STATE)
+# The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state
+ENERGY = entry(energy_kernel, *MODEL, A2, A2, A1)
+KINETIC_ONE = entry(energy_one, *MODEL, A1, A1)
+POTENTIAL_ONE = entry(potential_one, *MODEL, A1)
 
 
 def _energy(model, call, *arrays):
@@ -96,7 +99,7 @@ def _energy(model, call, *arrays):
     Q = batches[0]
     Vb = batches[1] if kinetic else np.empty((Q.shape[0], 0))
     out = np.empty(Q.shape[0])
-    code = energy_kernel(*kernel_arrays(model), Q, Vb, out)
+    code = ENERGY.call(*kernel_arrays(model), Q, Vb, out)
     if code != -1:
         raise_kernel_error(model, code, ("q", "v")[:len(arrays)], batches, call, "T" if kinetic else "V",
                            out)

@@ -19,9 +19,10 @@ with ω' = Rᵀ ω the frame's angular velocity in its own axes (its axes turn w
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 
-from .._jit import MODEL, ROW, C1, C2, STATE, entry, njit
+from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..errors import InputError
 from ..spatial import first_nonfinite, first_nonfinite_entry, rotate6, sandwich3
 from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, unpack
@@ -141,13 +142,12 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def frame_one(I, F, q, v, X, want, out):
     """One state q (nq,) [v (nv,)]: for the frame row X (5, 3) = [R; p; (b, want, local)] (``one_state_row``:
     the frame's placement [R; p] in body b) — want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out
     (6, nv); local: in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a
-    non-finite out (flat k). Compiled through jacobian_one and jacobian_dot_one, where want is a constant
-    (the other case's branches and the empty v of J drop out of the machine code)."""
+    non-finite out (flat k). Compiled once, for jacobian_one and jacobian_dot_one."""
     b, local = int(X[4, 0]), X[4, 2] > 0.0
     mdl = unpack(I, F)
     parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
@@ -174,13 +174,13 @@ def frame_one(I, F, q, v, X, want, out):
 @njit(cache=True)
 def jacobian_one(I, F, q, X, out):
     """frame_one's J (6, nv) of one state q (nq,)."""
-    return frame_one(I, F, q, q[:0], X, 1, out)
+    return frame_one(I, F, q, q[:0], X, np.int64(1), out)   # (a run-time int: one compiled frame_one)
 
 
 @njit(cache=True)
 def jacobian_dot_one(I, F, q, v, X, out):
     """frame_one's J̇ (6, nv) of one state q (nq,), v (nv,)."""
-    return frame_one(I, F, q, v, X, 2, out)
+    return frame_one(I, F, q, v, X, np.int64(2), out)
 
 
 @njit(cache=True)
@@ -194,10 +194,12 @@ def placement_one(I, F, q, X, R, p):
     return -1 if max(first_nonfinite(p[np.newaxis], 0), first_nonfinite_entry(R)) < 0 else -2
 
 
-# One-state calls go straight to the compiled code (``_jit.entry``): q, v as the caller gave them, the frame row
-JACOBIAN_ONE = entry(jacobian_one, *MODEL, STATE, ROW, C2)
-JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, STATE, STATE, ROW, C2)
-PLACEMENT_ONE = entry(placement_one, *MODEL, STATE, ROW, C2, C1)
+# The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state with
+# its frame row
+FRAME = entry(frame_kernel, *MODEL, A2, A2, numba.int64, A2, A1, numba.int64, numba.boolean, A3, A2, A3, A3)
+JACOBIAN_ONE = entry(jacobian_one, *MODEL, A1, A2, A2)
+JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, A1, A1, A2, A2)
+PLACEMENT_ONE = entry(placement_one, *MODEL, A1, A2, A2, A1)
 
 
 @njit(cache=True)
@@ -248,9 +250,8 @@ def _frame_terms(model, call, frame, Q, V, want, reference):
     Rf, pf = np.empty((N, 3, 3)), np.empty((N, 3))
     J = np.zeros((N, 6, nv)) if want >= 1 else np.empty((N, 0, 0))
     dJ = np.zeros((N, 6, nv)) if want == 2 else np.empty((N, 0, 0))
-    Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V)
-    code = frame_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), Vk, b, X[:3], X[3], want,
-                        reference == "local", Rf, pf, J, dJ)
+    Vk = np.empty((N, 0)) if V is None else V
+    code = FRAME.call(*kernel_arrays(model), Q, Vk, b, X[:3], X[3], want, reference == "local", Rf, pf, J, dJ)
     if code != -1:
         names, batches = ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, V)
         raise_kernel_error(model, code, names, batches, call)

@@ -41,59 +41,21 @@ import dataclasses
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..errors import InputError
 from ..spatial import first_nonfinite_entry, motion_to_child
-from .core import finite_state, kernel_arrays, unpack
+from .core import finite_state, unpack
 from .rnea import outward, rnea_workspace
+from .route import route
 from .state import (
-    as_batch,
     as_real,
     check_finite,
     check_model,
-    fast_shape,
-    raise_kernel_error,
-    unbatch,
 )
 
 NP = 10                                          # dynamic parameters per body
 PARAMETER_NAMES = ("m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
 _QVA = ("q", "v", "a")
-
-
-def joint_torque_regressor(model, q, v, a):
-    """Y (nv, 10 nb) with τ = Y π = rnea(q, q̇, q̈) (gravity included), π = dynamic_parameters(model).
-
-    Parameters
-    ----------
-    q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations.
-    Returns
-    -------
-    Y : (nv, 10 nb) or (N, nv, 10 nb); columns 10 i … 10 i + 9 belong to body i (PARAMETER_NAMES order).
-    References
-    ----------
-    Atkeson, An & Hollerbach (1986), Eq. 9; Pinocchio's computeJointTorqueRegressor (same layout).
-    """
-    nd = fast_shape(model, q, v, a)
-    if nd == 1:                                  # one state: straight into the kernel, no reshapes
-        Y = np.empty((model.nv, NP * model.njoints))
-        code = regressor_one(*kernel_arrays(model), q, v, a, Y)
-    elif nd == 2:
-        Y = np.empty((q.shape[0], model.nv, NP * model.njoints))
-        code = regressor_kernel(*kernel_arrays(model), q, v, a, Y)
-    else:                                        # checked and converted first
-        (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-        Y = np.zeros((Q.shape[0], model.nv, NP * model.njoints))
-        code = -1
-        if model.nv and Q.shape[0]:
-            Q, V, A = (np.ascontiguousarray(x) for x in (Q, V, A))
-            code = regressor_kernel(*kernel_arrays(model), Q, V, A, Y)
-        if code != -1:
-            raise_kernel_error(model, code, _QVA, (Q, V, A), "joint_torque_regressor", "Y", Y)
-        return unbatch(Y, single)
-    if code != -1:
-        raise_kernel_error(model, code, _QVA, (q, v, a), "joint_torque_regressor", "Y", Y)
-    return Y
 
 
 # -- the parameters, and back ---------------------------------------------------------------------------------
@@ -149,10 +111,10 @@ def model_with_parameters(model, pi, *, tol=1e-12):
 @njit(cache=True)
 def regressor_one(I, F, q, v, a, Y):
     """Y (nv, 10 nb) of one state q (nq,), v, a (nv,): ``regressor_kernel`` with N = 1."""
-    return regressor_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], Y[np.newaxis])
+    return regressor_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], Y[np.newaxis, :, :])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def regressor_kernel(I, F, Q, V, A, Y):
     """Y[s] = [(ⁱX_j S_j)ᵀ A_i]_{j, i} for every state s: the outward pass, then each body's block A_i
     projected onto its own and its ancestors' motion subspaces (module docstring).
@@ -177,6 +139,8 @@ def regressor_kernel(I, F, Q, V, A, Y):
         if k >= 0:
             return -2 - nb - (s * nv * NP * nb + k)
     return -1
+
+
 
 
 @njit(cache=True, inline="always")
@@ -240,3 +204,22 @@ def project(s, W, Y, r, c0):
     for k in range(NP):
         Y[r, c0 + k] = (s[0] * W[k, 0] + s[1] * W[k, 1] + s[2] * W[k, 2]
                         + s[3] * W[k, 3] + s[4] * W[k, 4] + s[5] * W[k, 5])
+
+
+# -- the public call: its route (dynamics/route.py) -------------------------------------------------------------
+
+@route("joint_torque_regressor", _QVA, "Y", "regressor", entry(regressor_one, *MODEL, A1, A1, A1, A2),
+       entry(regressor_kernel, *MODEL, A2, A2, A2, A3))
+def joint_torque_regressor(model, q, v, a):
+    """Y (nv, 10 nb) with τ = Y π = rnea(q, q̇, q̈) (gravity included), π = dynamic_parameters(model).
+
+    Parameters
+    ----------
+    q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations.
+    Returns
+    -------
+    Y : (nv, 10 nb) or (N, nv, 10 nb); columns 10 i … 10 i + 9 belong to body i (PARAMETER_NAMES order).
+    References
+    ----------
+    Atkeson, An & Hollerbach (1986), Eq. 9; Pinocchio's computeJointTorqueRegressor (same layout).
+    """

@@ -31,102 +31,19 @@ from collections import namedtuple
 
 import numpy as np
 
-from .._jit import C1, CONTRACT, MODEL, STATE, entry, njit
+from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
-from ..model import MimicModel
 from . import mimic
 from ..spatial import add, cross, first_nonfinite, put, rot, rot_t, scale, sub, vec
-from .core import finite_state, kernel_arrays, unpack, wrench_rows_of
-from .state import (as_batch, check_output, fast, fast_shape, fast_wrenches, quiet, raise_kernel_error, unbatch, wrench_rows)
+from .core import finite_state, kernel_arrays, no_wrenches, unpack, wrench_rows_of
+from .route import route
+from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
 _NO_X, _NO_B, _NO_P, _NO_T = np.zeros((0, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 0, NT))
+# (no external wrench and no per-link terms, as a batch call from Python passes them)
 _QVA = ("q", "v", "a")
-_NO_V = np.empty(0)
-
-
-def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
-    """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) − Σ J_kᵀ f_ext,k, by the chapter's Eqs. 3–18 (32a–i).
-
-    Parameters
-    ----------
-    q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations (model.v_names order).
-    f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, wrench the environment applies
-        on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or world axes.
-    Returns
-    -------
-    tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
-    """
-    k = fast(model, q, v, a) if f_ext is None and f_ext_frame == "local" else None
-    if k is not None:                                           # one float64 state: straight into the kernel
-        tau = np.empty(v.shape)
-        code = RNEA_ONE.call(k[0], k[1], q, v, a, tau)
-        if code == -1:
-            return tau
-        raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
-    if f_ext is not None:                                       # one state with wrenches: rows kept per model
-        k = fast(model, q, v, a)
-        ext = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
-        if ext is not None:
-            tau = np.empty(v.shape)
-            if rnea_fext_one(k[0], k[1], q, v, a, *ext, f_ext_frame == "world", tau) == -1:
-                return tau
-        nd = 0                                                  # else the checked path says what is wrong
-    else:
-        nd = fast_shape(model, q, v, a) if f_ext_frame == "local" else 0
-    if nd == 1:                                                 # one state, no Python-side reshapes
-        tau = np.empty(v.shape)
-        code = RNEA_ONE.call(*kernel_arrays(model), q, v, a, tau)
-    elif nd == 2 and f_ext is None:
-        tau = np.empty(v.shape)
-        code = rnea_batch(*kernel_arrays(model), q, v, a, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
-    elif type(model) is MimicModel:                             # τ = Gᵀ τ_full (dynamics/mimic.py)
-        return mimic.generalized_force(model, rnea, q, v, a, f_ext=f_ext, f_ext_frame=f_ext_frame)
-    else:                                                       # checked and converted first
-        (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-        return unbatch(_run(model, Q, V, A, f_ext, f_ext_frame, "rnea", single=single)[0], single)
-    if code != -1:
-        raise_kernel_error(model, code, _QVA, (q, v, a), "rnea", "tau", tau)
-    return tau
-
-
-def nonlinear_effects(model, q, v):
-    """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
-    nonLinearEffects), τ = M q̈ + h."""
-    return _bias(model, q, v, "nonlinear_effects")
-
-
-def gravity_torques(model, q):
-    """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0."""
-    return _bias(model, q, None, "gravity_torques")
-
-
-def _bias(model, q, v, call):
-    """rnea(q, v, 0) (v = None: rnea(q, 0, 0)) through bias_one / bias_kernel; anything but float64 arrays
-    is checked and converted first."""
-    k = fast(model, q) if v is None else fast(model, q, v)
-    if k is not None:                                         # one float64 state: straight into the kernel
-        tau = np.empty(model.kernel.v_shape)
-        code = BIAS_ONE.call(k[0], k[1], q, _NO_V if v is None else v, tau)
-        if code == -1:
-            return tau
-    arrays = (q,) if v is None else (q, v)
-    nd = fast_shape(model, *arrays)
-    if nd == 0 and type(model) is MimicModel:                 # Gᵀ h_full, Gᵀ g_full (dynamics/mimic.py)
-        return mimic.generalized_force(model, rnea, *arrays)
-    if nd == 0:
-        batches, single = as_batch(model, **dict(zip(_QVA, arrays)))
-        if not model.njoints:
-            return unbatch(np.zeros((batches[0].shape[0], model.nv)), single)
-        arrays, nd = tuple(unbatch(x, single) for x in batches), 1 if single else 2
-    q = arrays[0]
-    v = arrays[1] if len(arrays) > 1 else np.empty(q.shape[:-1] + (0,))
-    tau = np.empty(q.shape[:-1] + (model.nv,))
-    code = (BIAS_ONE.call if nd == 1 else bias_kernel)(*kernel_arrays(model), q, v, tau)
-    if code != -1:
-        raise_kernel_error(model, code, _QVA[:len(arrays)], arrays, call, "g" if len(arrays) == 1 else "h", tau)
-    return tau
 
 
 def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
@@ -145,7 +62,7 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
       tau      (N, nv) joint torques/forces (Eqs. 17, 18); a free-flyer root's six entries are its f, n
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True, single=single)
+    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True)
     out = {k: T[:, :, 3 * m:3 * m + 3] for m, k in enumerate(TERMS)}
     out["R"] = T[:, :, 3 * len(TERMS):].reshape(T.shape[:2] + (3, 3))
     inputs = dict(q=Q, v=V, a=A)
@@ -156,18 +73,15 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
 
 
 @quiet
-def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False, single=False):
+def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
     """The kernel on checked batches Q (N, nq), V, A (N, nv): τ (N, nv) and the per-link terms (N, nb, NT)
-    (or an empty array); f_ext checked and converted first. A batch goes through rnea_batch (fused
-    multiply-adds), one state (``single``) through the kernel as written, as the one-state fast paths do."""
+    (or an empty array); f_ext checked and converted first."""
     N, nb = Q.shape[0], model.njoints
     X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
     tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT) if terms else (0, nb, NT))
     if nb == 0:
         return tau, T
-    Q, V, A = (np.ascontiguousarray(x) for x in (Q, V, A))
-    code = (rnea_kernel if single else rnea_batch)(*kernel_arrays(model), Q, V, A, X, body, point,
-                                                   f_ext_frame == "world", tau, T)
+    code = RNEA.call(*kernel_arrays(model), Q, V, A, X, body, point, f_ext_frame == "world", tau, T)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (Q, V, A), call, "tau", tau)
     return tau, T
@@ -179,9 +93,11 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False, single=False):
 
 @njit(cache=True)
 def rnea_one(I, F, q, v, a, tau):
-    """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` with N = 1."""
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], _NO_X, _NO_B, _NO_P, False,
-                       tau[np.newaxis, :], np.zeros((0, 0, NT)))
+    """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` on row views
+    (F[:0]: no per-link terms, as an empty view)."""
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
+                       tau[np.newaxis, :], F[:0, :, :])
 
 
 @njit(cache=True)
@@ -189,33 +105,34 @@ def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
     """τ (nv,) of one state with one external wrench in ``state.fast_wrenches``' form: ``rnea_kernel``, N = 1."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
-                       tau[np.newaxis, :], np.zeros((0, 0, NT)))
+                       tau[np.newaxis, :], F[:0, :, :])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def bias_kernel(I, F, Q, V, tau):
-    """τ = rnea(q, v, 0) for every state of Q (N, nq), V (N, nv) — or rnea(q, 0, 0) when V has no columns —
-    into tau (N, nv): ``rnea_kernel`` with zero accelerations."""
-    Z = np.zeros((Q.shape[0], tau.shape[1]))
-    return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, Z, _NO_X, _NO_B, _NO_P, False, tau, np.zeros((0, 0, NT)))
+    """τ = rnea(q, v, 0) for every state of Q (N, nq), V (N, nv) — rnea(q, 0, 0) when V has no columns — into
+    tau (N, nv): ``rnea_kernel`` with zero accelerations."""
+    Z = np.zeros(tau.shape)[:, :]
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, Z, X, xb, xp, world, tau, F[:0, :, :])
+
+
+@njit(cache=True)
+def gravity_kernel(I, F, Q, tau):
+    """τ = rnea(q, 0, 0) for every state of Q (N, nq): ``bias_kernel`` without velocities."""
+    return bias_kernel(I, F, Q, Q[:, :0], tau)
 
 
 @njit(cache=True)
 def bias_one(I, F, q, v, tau):
-    """One state: q (nq,), v (nv,) or (0,), tau (nv,), through bias_kernel."""
+    """One state q (nq,), v (nv,), tau (nv,): ``bias_kernel`` on row views."""
     return bias_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :])
 
 
-# The one-state calls' compiled code (``_jit.entry``): q, v, a as the caller gave them
-RNEA_ONE = entry(rnea_one, *MODEL, STATE, STATE, STATE, C1)
-BIAS_ONE = entry(bias_one, *MODEL, STATE, STATE, C1)
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def rnea_batch(I, F, Q, V, A, X, xb, xp, world, tau, T):
-    """``rnea_kernel`` for a batch of states, compiled with fused multiply-adds (_jit.CONTRACT: batched rnea's
-    speed target needs them); one state, whatever its form, goes through the kernel as written."""
-    return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
+@njit(cache=True)
+def gravity_one(I, F, q, tau):
+    """One state q (nq,), tau (nv,): ``gravity_kernel`` on row views."""
+    return gravity_kernel(I, F, q[np.newaxis, :], tau[np.newaxis, :])
 
 
 Work = namedtuple("Work", "Rl Rw pl w dw vel dv dvc fc nc f n sv")
@@ -231,7 +148,7 @@ def rnea_workspace(nb):
     return Work(RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, fastmath=CONTRACT)
 def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
 
@@ -258,6 +175,11 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
         if k >= 0:
             return -2 - nb - (s * nv + k)
     return -1
+
+
+# The compiled code every call reaches (``_jit.entry``; arrays of any strides)
+RNEA = entry(rnea_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
+
 
 
 @njit(cache=True, inline="always")
@@ -356,3 +278,35 @@ def store_terms(mdl, work, T):
         for r in range(3):
             for c in range(3):
                 T[i, 30 + 3 * r + c] = Rw[i, r, c]
+
+
+# -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
+
+@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,), wrenches=True,
+       wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
+       mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
+def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
+    """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) − Σ J_kᵀ f_ext,k, by the chapter's Eqs. 3–18 (32a–i).
+
+    Parameters
+    ----------
+    q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations (model.v_names order).
+    f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, wrench the environment applies
+        on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or world axes.
+    Returns
+    -------
+    tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
+    """
+
+
+@route("nonlinear_effects", ("q", "v"), "h", "v", entry(bias_one, *MODEL, A1, A1, A1),
+       entry(bias_kernel, *MODEL, A2, A2, A2), mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
+def nonlinear_effects(model, q, v):
+    """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
+    nonLinearEffects), τ = M q̈ + h."""
+
+
+@route("gravity_torques", ("q",), "g", "v", entry(gravity_one, *MODEL, A1, A1), entry(gravity_kernel, *MODEL, A2, A2),
+       mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
+def gravity_torques(model, q):
+    """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0."""

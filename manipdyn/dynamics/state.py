@@ -20,7 +20,6 @@ import numpy as np
 
 from ..errors import InputError, NumericalError, SingularError
 from ..model import MimicModel, Model
-from .core import wrench_block
 from .mimic import TAKES_MIMIC
 
 _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
@@ -212,35 +211,6 @@ def fast_wrenches(model, f_ext, f_ext_frame):
         return None
 
 
-def fast_wrench_rows(model, f_ext, f_ext_frame):
-    """``wrench_rows`` for one state from ``fast_wrenches``: X (1, K, 6), body (K,), point (K, 3); None when
-    ``fast_wrenches`` is."""
-    fw = fast_wrenches(model, f_ext, f_ext_frame)
-    return None if fw is None else wrench_block(*fw)
-
-
-def external_wrenches(model, f_ext, f_ext_frame, N, R_world=None):
-    """Convert f_ext = {frame: (force, moment)} to per-body (force, moment about the body origin) in body axes.
-
-    The wrench is what the environment applies on the body, about the named frame's origin, expressed in
-    that frame (f_ext_frame="local") or in world axes ("world"). Returns F, Mo of shape (nb, N, 3), or None.
-    R_world (nb, N, 3, 3) is the bodies' orientation, needed for "world". Wrenches on the fixed base
-    (frames of the root body) change no joint torque and are dropped. (``wrench_rows``, summed per body.)
-    """
-    X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
-    if not f_ext:
-        return None
-    F, Mo = np.zeros((model.njoints, N, 3)), np.zeros((model.njoints, N, 3))
-    for k, b in enumerate(body):
-        f, m = X[:, k, :3], X[:, k, 3:]
-        if f_ext_frame == "world":       # world axes -> body axes
-            f = np.einsum("nji,nj->ni", R_world[b], f)
-            m = np.einsum("nji,nj->ni", R_world[b], m)
-        F[b] += f
-        Mo[b] += m + np.cross(point[k], f)     # moment about the body origin
-    return F, Mo
-
-
 _F64, _ND = np.dtype(np.float64), np.ndarray
 
 
@@ -274,7 +244,7 @@ def fast(model, q, v=NotImplemented, a=NotImplemented):
     """The model's kernel arrays (I, F) when q is one float64 configuration (nq,) — and v, a, when passed, float64
     (nv,) — of a plain Model with nv ≥ 1: the one-state kernels then take them as they are (any memory layout)
     and check finiteness themselves. None otherwise: the caller takes the checked path, which raises the right
-    error. (Written for speed: it runs before every one-state call, ~60 ns.)"""
+    error. (Written for speed: it runs before every one-state call.)"""
     if type(q) is _ND and q.dtype is _F64 and type(model) is Model:
         k = model.kernel
         if q.shape != k.q_shape or not k.v_shape[0]:

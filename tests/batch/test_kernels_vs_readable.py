@@ -20,8 +20,8 @@ from conftest import ROOT, err, inertial_xml, urdf, zoo_paths
 import manipdyn as md
 from manipdyn.constraints.closures import RANK_RTOL, closure_terms, independent_rows
 from manipdyn.constraints.dynamics import _kkt
-from manipdyn.constraints.closures import closure_arrays, closure_kernel
-from manipdyn.constraints.fast import constrained_fd_kernel
+from manipdyn.constraints.closures import CLOSURE, closure_arrays
+from manipdyn.constraints.fast import CONSTRAINED_FD
 from manipdyn.dynamics.core import kernel_arrays as core_arrays
 from manipdyn.spatial import rpy_matrix
 from manipdyn.validation import random_states
@@ -183,7 +183,7 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
     CI, CF = closure_arrays(model)
     m = sum(c.n_rows for c in model.constraints)
     Phi, Jc, bias = np.empty((N, m)), np.empty((N, m, model.nv)), np.empty((N, m))
-    assert closure_kernel(I, F, CI, CF, Q, V, Phi, Jc, bias) == -1
+    assert CLOSURE.call(I, F, CI, CF, Q, V, Phi, Jc, bias) == -1
     ref, to_pin_q = _pin_closures(name)
     out = {"phi": 0.0, "jac": 0.0, "bias": 0.0}
     for s in range(N):
@@ -191,7 +191,7 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
             out[key] = max(out[key], err(x, y))
     alpha, beta = (0.0, 0.0) if baumgarte is None else baumgarte
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((N, m)), np.empty(N, np.int64)
-    code = constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    code = CONSTRAINED_FD.call(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
     assert code == -1, f"kernel returned {code}"
     qdd, lam, rank = readable_constrained_fd(model, Q, V, T, baumgarte)
     assert RANK.tolist() == rank.tolist(), f"rank {RANK} != readable {rank}"

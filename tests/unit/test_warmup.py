@@ -10,6 +10,9 @@ from manipdyn.cli import main
 # kernels no public dynamics call reaches: the validation layer's and playback's helpers (they compile on
 # their own first use, which is not a public function's first call)
 NOT_PUBLIC = {"com_jacobians_kernel", "fk_kernel", "joint_placements_kernel"}
+# kernels only other kernels call: their machine code is part of their callers', loaded from the cache with them
+# (their own dispatcher then lists no signature)
+CALLED_BY_KERNELS = {"closure_rows", "frame_one"}
 
 
 def kernels():
@@ -31,7 +34,7 @@ def kernels():
 def test_first_calls_compile_every_public_kernel():
     calls = warmup.first_calls()
     assert len(calls) >= 40 and all(t >= 0 for t in calls.values())
-    missed = sorted(n for n, d in kernels().items() if not d.signatures and n not in NOT_PUBLIC)
+    missed = sorted(n for n, d in kernels().items() if not d.signatures and n not in NOT_PUBLIC | CALLED_BY_KERNELS)
     assert missed == []          # a kernel added without a warmup call fails here
 
 

@@ -1,0 +1,141 @@
+"""The one path from a public call to its compiled kernel.
+
+A public algorithm that maps states to one array per state (``rnea``, the bias forces, ``aba``, the Cholesky
+route, the CRBA, the Coriolis matrix, the regressor) is its signature and docstring under ``@route(...)``, the
+declaration of its path: the compiled entries that compute it (``_jit.entry``: one state, a batch), the names of
+its state arguments (``q…`` has nq entries, every other name nv: ``state.is_config``), the name and shape of one
+state's result, whether it takes external wrenches, and how a MimicModel maps onto it. The path, the same for
+every such call (docs/design.md §2):
+
+  1. one float64 state of a plain Model (``state.fast``): the one-state entry, no checks in Python — the
+     kernel checks finiteness itself and returns a code;
+  2. one state with one wrench {frame: (force (3,), moment (3,))} of float64 arrays: the one-state wrench entry;
+  3. float64 batches of the model's shapes (``state.fast_shape``): the batch entry;
+  4. a MimicModel: the route's map onto the full model (``dynamics/mimic.py``; the calls that have one are
+     ``mimic.TAKES_MIMIC``, every other refuses it by name);
+  5. anything else: ``state.as_batch``'s checks and conversions (an error names the argument), the wrenches
+     checked and laid out (``state.wrench_rows``), then the batch entry;
+  6. a kernel code other than −1: ``state.raise_kernel_error``, the typed error naming the input, the joint or
+     the result entry at fault.
+
+The kernels' convention: ``one(I, F, *state, out)`` and ``batch(I, F, *states, [X, body, point, world,] out,
+*tail)`` return −1, or a code; (I, F) = ``Model.kernel.arrays``; every array of any strides (``_jit.A1``…).
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from ..model import MimicModel
+from .state import as_batch, check_f_ext, fast, fast_shape, fast_wrenches, raise_kernel_error, unbatch, wrench_rows
+
+
+_MISSING = NotImplemented      # a state argument the call was not given (state.fast's sentinel too)
+SHAPES = ("v", "vv", "regressor")   # one state's result: (nv,), (nv, nv), (nv, 10 nb) — Model.kernel.result_shapes
+
+
+def route(call, names, result, shape, one, batch, **options):
+    """Decorator: the public function below it — its signature and docstring — runs the path of
+    ``Route(call, names, result, shape, one, batch, **options)`` (its body is not run: write the docstring only).
+    Step 1 runs inside the returned function itself, with its arguments by name (q [, v [, a]]), so that a
+    one-state call costs one Python frame and no argument packing (measured: ~150 ns less than ``*x``)."""
+    r = Route(call, names, result, shape, one, batch, **options)
+    no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
+
+    def bind(public):
+        def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local"):
+            # (no keyword-only parameters: their defaults cost a dict lookup each per call; the public signature,
+            # which inspect and the docs show, is the decorated function's)
+            if tau is not _MISSING:                             # the third state by its name in aba's calls
+                a = r.by_name(a, tau)
+            if f_ext is None and f_ext_frame == "local" and (v is _MISSING) is no_v and (a is _MISSING) is no_a:
+                k = fast(model, q, v, a)
+                if k is not None:                               # 1. one float64 state: straight in
+                    out = np.empty(model.kernel.result_shapes[shape])
+                    code = one.call(k[0], k[1], q, out) if no_v else one.call(k[0], k[1], q, v, out) if no_a \
+                        else one.call(k[0], k[1], q, v, a, out)
+                    if code == -1:
+                        return out
+                    r.fail(model, code, r.given(q, v, a), out)
+            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame)
+        path = functools.wraps(public)(path)
+        path.route = r
+        return path
+    return bind
+
+
+class Route:
+    """How one public call reaches its kernel (the module docstring gives the path; ``route`` binds it to
+    the public function).
+
+    call      the public name (errors name it)
+    names     its state arguments in order, e.g. ("q", "v", "a")
+    result    the result's name in errors ("tau", "q̈", "M", ...)
+    shape     one state's result shape, one of SHAPES: "v" (nv,), "vv" (nv, nv), "regressor" (nv, 10 nb)
+    one       entry of the one-state kernel: one(I, F, *state, out)
+    batch     entry of the batch kernel: batch(I, F, *states, [X, body, point, world,] out, *tail)
+    tail      constant arguments after out (rnea's empty per-link terms)
+    wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``state.wrench_rows``
+    wrench_one  entry for one state with one wrench: (I, F, *state, force, moment, row, world, out)
+    mimic     mimic(model, *states, **wrench keywords) for a MimicModel, or None (refused, by name)
+    """
+    __slots__ = ("call", "names", "result", "shape", "one", "batch", "tail", "wrenches", "wrench_one", "mimic")
+
+    def __init__(self, call, names, result, shape, one, batch, *, tail=(), wrenches=False, wrench_one=None,
+                 mimic=None):
+        self.call, self.names, self.result, self.shape = call, tuple(names), result, shape
+        self.one, self.batch, self.tail = one, batch, tuple(tail)
+        self.wrenches, self.wrench_one, self.mimic = wrenches, wrench_one, mimic
+
+    def by_name(self, a, tau):
+        """The third state argument given as ``tau=...`` (aba's and forward_dynamics' name for it)."""
+        if len(self.names) < 3 or self.names[2] != "tau" or a is not _MISSING:
+            raise TypeError(f"{self.call}() got an unexpected keyword argument 'tau'")
+        return tau
+
+    def given(self, *x):
+        """The state arguments a call was given, in order (those not given left out)."""
+        return tuple(y for y in x if y is not _MISSING)
+
+    def checked(self, model, x, f_ext=None, f_ext_frame="local"):
+        """Steps 2–6 of the path: one state with one wrench, batches, a MimicModel, checked and converted input."""
+        if len(x) != len(self.names):
+            n = len(self.names)
+            raise TypeError(f"{self.call}() takes the model and {n} state array{'s' * (n > 1)} "
+                            f"({', '.join(self.names)}); {len(x)} given")
+        if not self.wrenches and (f_ext is not None or f_ext_frame != "local"):
+            raise TypeError(f"{self.call}() takes no external wrenches (f_ext, f_ext_frame)")
+        if f_ext is not None and self.wrench_one is not None:
+            k = fast(model, *x)                                 # 2. one state, one wrench
+            w = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
+            if w is not None:
+                out = np.empty(model.kernel.result_shapes[SHAPES.index(self.shape)])
+                if self.wrench_one.call(*k, *x, *w, f_ext_frame == "world", out) == -1:
+                    return out                                  # else the checked path says what is wrong
+        if f_ext is None and f_ext_frame == "local" and fast_shape(model, *x) == 2:
+            states, single = x, False                           # 3. float64 batches
+        elif type(model) is MimicModel and self.mimic is not None:
+            kw = dict(f_ext=f_ext, f_ext_frame=f_ext_frame) if self.wrenches else {}
+            return self.mimic(model, *x, **kw)                  # 4. a MimicModel
+        else:                                                   # 5. checked and converted
+            states, single = as_batch(model, **dict(zip(self.names, x)))
+        N, shape = states[0].shape[0], model.kernel.result_shapes[SHAPES.index(self.shape)]
+        if not model.nv:                                        # no moving joint: nothing to compute
+            return unbatch(np.zeros((N,) + shape), single)
+        if self.wrenches:
+            with np.errstate(over="ignore", invalid="ignore"):  # (an overflow comes back as a kernel code)
+                ext = (*wrench_rows(model, f_ext, f_ext_frame, N), f_ext_frame == "world")
+        else:
+            ext = ()
+        out = np.empty((N,) + shape)
+        code = self.batch.call(*model.kernel.arrays, *states, *ext, out, *self.tail)
+        if code != -1:
+            self.fail(model, code, states, out, f_ext, f_ext_frame)
+        return unbatch(out, single)
+
+    def fail(self, model, code, states, out, f_ext=None, f_ext_frame="local"):
+        """6. Raise the error a kernel code stands for (a non-finite wrench first: it is the cause)."""
+        if f_ext is not None:
+            check_f_ext(model, f_ext, f_ext_frame, states[0].shape[0] if states[0].ndim == 2 else 1)
+        raise_kernel_error(model, code, self.names, states, self.call, self.result, out)
