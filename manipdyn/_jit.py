@@ -143,6 +143,8 @@ MODEL = (numba.types.Array(numba.int64, 2, "C"),
 #                                                      stand for "no rows" (core.no_wrenches) without allocating
 A1, A2, A3 = (numba.types.Array(numba.float64, n, "A") for n in (1, 2, 3))   # float64 arrays, any strides
 I1 = numba.types.Array(numba.int64, 1, "A")                                   # int64 indices, any strides
+C2, C3 = (numba.types.Array(numba.float64, n, "C") for n in (2, 3))   # results a call allocates itself, in C
+#                                                                     order where BLAS writes into them
 FLAG = numba.types.boolean
 
 

@@ -43,7 +43,7 @@ import numpy as np
 # q̈ they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on
 # solo12), and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
 
-from .._jit import A1, A2, A3, FLAG, I1, MODEL, entry, njit
+from .._jit import A1, A2, A3, C2, C3, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_placement
 from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
                        spd_inverse, world_inertia, world_motion)
@@ -295,11 +295,11 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
     code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
     if code != -1:
         return code - N * nv if code <= -2 - nb else code   # non-finite entries: after q̈'s codes
-    W = np.empty((5 * nv, nv))              # Cholesky factor (lower triangle); M, then L⁻¹; −M⁻¹; a copy of D;
-    L, M, Mn, T, P = W[:nv], W[nv:2 * nv], W[2 * nv:3 * nv], W[3 * nv:4 * nv], W[4 * nv:]   # BLAS results
-    for s in range(N):                      # (BLAS writes C-ordered arrays only: P, then copied out)
+    W = np.empty((4 * nv, nv))              # Cholesky factor (lower triangle); M, then L⁻¹; −M⁻¹; a copy of D
+    L, M, Mn, T = W[:nv], W[nv:2 * nv], W[2 * nv:3 * nv], W[3 * nv:]
+    for s in range(N):
         M[:, :] = Minv[s]
-        k = spd_inverse(M, L, P)
+        k = spd_inverse(M, L, Minv[s])
         if k >= 0:
             i = 0
             while I[3, i] + I[4, i] <= k:                 # the joint of velocity row k
@@ -307,15 +307,20 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
             return -2 - i
         for r in range(nv):
             for c in range(nv):
-                Minv[s, r, c], Mn[r, c] = P[r, c], -P[r, c]
+                Mn[r, c] = -Minv[s, r, c]
         for D in (dq[s], dv[s]):                          # D ← −M⁻¹ D (BLAS: 2 n³ flops, the bulk at n ≳ 20)
             T[:, :] = D
-            np.dot(Mn, T, P)
-            D[:, :] = P
+            np.dot(Mn, T, D)
         k = first_nonfinite3((dq, dv, Minv), s)
         if k >= 0:
             return -2 - nb - N * nv - (s * 3 * nv * nv + k)
     return -1
+
+
+@njit(cache=True, inline="always")
+def one_block(D):
+    """D (nv, nv), C order, as a batch of one (1, nv, nv), still C order (a newaxis view would not be)."""
+    return D.reshape(1, D.shape[0], D.shape[1])
 
 
 @njit(cache=True, fastmath=False)
@@ -323,7 +328,7 @@ def rnea_derivatives_one(I, F, q, v, a, dq, dv, da):
     """One state (nq,), (nv,), no external wrench: the kernel on row views, no Python-side reshapes."""
     X, xb, xp, world = no_wrenches(I, F)
     return rnea_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
-                                   dq[np.newaxis, :, :], dv[np.newaxis, :, :], da[np.newaxis, :, :])
+                                   one_block(dq), one_block(dv), one_block(da))
 
 
 @njit(cache=True, fastmath=False)
@@ -331,15 +336,15 @@ def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
     """One state (nq,), (nv,), no external wrench: the kernel on row views, no Python-side reshapes."""
     X, xb, xp, world = no_wrenches(I, F)
     return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
-                                  qdd[np.newaxis, :], dq[np.newaxis, :, :], dv[np.newaxis, :, :],
-                                  Minv[np.newaxis, :, :])
+                                  qdd[np.newaxis, :], one_block(dq), one_block(dv), one_block(Minv))
 
 
-# The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state
-RNEA_DERIVATIVES = entry(rnea_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A3, A3, A3)
-ABA_DERIVATIVES = entry(aba_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3, A3, A3)
-RNEA_DERIVATIVES_ONE = entry(rnea_derivatives_one, *MODEL, A1, A1, A1, A2, A2, A2)
-ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, A1, A1, A1, A1, A2, A2, A2)
+# The compiled code every call reaches (``_jit.entry``): inputs of any strides; the three matrices, which these
+# calls allocate themselves, in C order (BLAS writes −M⁻¹ D into them)
+RNEA_DERIVATIVES = entry(rnea_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, C3, C3, C3)
+ABA_DERIVATIVES = entry(aba_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, C3, C3, C3)
+RNEA_DERIVATIVES_ONE = entry(rnea_derivatives_one, *MODEL, A1, A1, A1, C2, C2, C2)
+ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, A1, A1, A1, A1, C2, C2, C2)
 
 
 # -- Python entry points ----------------------------------------------------------------------------------
