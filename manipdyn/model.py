@@ -13,7 +13,7 @@ Conventions owned here:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -105,6 +105,11 @@ class Constraint:
         return {"revolute": 5, "spherical": 3, "fixed": 6, "coupling": 1}[self.type]
 
 
+def _rebuild(cls, kw):
+    """A model from its constructor's arguments (``Model.__reduce__``)."""
+    return cls(**kw)
+
+
 @dataclass(frozen=True, eq=False)
 class Model:
     """Kinematic tree with merged rigid bodies; immutable (arrays are read-only, mappings are proxies).
@@ -172,6 +177,13 @@ class Model:
     v_names: tuple = field(init=False, repr=False)      # (nv,) the joint's name, or "root_joint.wx" for a free flyer's
     v_joint: np.ndarray = field(init=False, repr=False)  # (nv,) the joint each entry of v belongs to
     kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
+
+    def __reduce__(self):
+        """Pickle the description only (what the constructor takes); the derived data, ``kernel`` included, is
+        built again on loading: a model travels to worker processes (``--jobs``, a Dask cluster) as it was loaded."""
+        kw = {f.name: getattr(self, f.name) for f in fields(self) if f.init}
+        kw.update({key: dict(kw[key]) for key in ("frames", "merged", "locked")})
+        return _rebuild, (type(self), kw)
 
     @property
     def njoints(self) -> int:

@@ -1,10 +1,15 @@
 """Planted-fault harness: does the test suite catch each named semantic bug of scripts/fault_catalog.py?
 
 For every fault: copy the repo (manipdyn/, tests/, urdf/, scripts/, pyproject.toml) to a temporary
-directory, apply the fault there (one exact text replacement), and run pytest in the copy with a fresh
-numba cache (NUMBA_CACHE_DIR empty, no __pycache__) and PYTHONPATH = the copy: the fault's relevant
-tests first, then, if they all pass, the rest of the suite. A fault is *caught* when some test fails
-(the first failing test is reported), *missed* when the whole suite passes.
+directory, apply the fault there (one exact text replacement), and run pytest in the copy with PYTHONPATH =
+the copy: the fault's relevant tests first, then, if they all pass, the rest of the suite. A fault is
+*caught* when some test fails (the first failing test is reported), *missed* when the whole suite passes.
+
+Compiled code: each worker (``--jobs``) copies into its own folder, the same path fault after fault, with its
+own numba cache (NUMBA_CACHE_DIR; no __pycache__ is copied). The cache is keyed by a hash of every kernel
+source (``manipdyn/_jit.py``), so a fault in a kernel source compiles afresh into a folder of its own (removed
+after the fault), and a fault anywhere else loads the unchanged kernels the worker compiled before — never a
+stale kernel, and minutes less per fault.
 
     python scripts/plant_faults.py --list
     python scripts/plant_faults.py --only spm-eq59a-drop-term integrate-explicit-euler
@@ -20,6 +25,7 @@ import argparse
 import datetime as _dt
 import json
 import os
+import queue
 import random
 import re
 import shutil
@@ -138,13 +144,26 @@ def _rest_args(relevant):
     return args
 
 
-def run_fault(fault: Fault, *, rest=True, timeout=3600.0, keep=False, root=ROOT) -> Outcome:
-    """Plant one fault in a fresh copy and run the tests; relevant paths first, then (if rest) the others."""
-    t0 = time.perf_counter()
-    tmp = Path(tempfile.mkdtemp(prefix=f"fault-{fault.name}-"))
+def _kernel_cache_folder(root=ROOT) -> str:
+    """The numba cache folder name of the unfaulted kernel sources (manipdyn/_jit.py's key)."""
+    sys.path.insert(0, str(root))
     try:
+        from manipdyn._jit import source_hash
+        return f"numba-{source_hash(root / 'manipdyn')[:16]}"
+    finally:
+        sys.path.remove(str(root))
+
+
+def run_fault(fault: Fault, *, rest=True, timeout=3600.0, keep=False, root=ROOT, slot=None) -> Outcome:
+    """Plant one fault in a fresh copy and run the tests; relevant paths first, then (if rest) the others.
+    slot: a worker's folder, whose copy path and numba cache (kernels of the unfaulted sources) the worker's
+    faults share (module docstring); None: a temporary folder and an empty cache."""
+    t0 = time.perf_counter()
+    tmp = Path(tempfile.mkdtemp(prefix=f"fault-{fault.name}-")) if slot is None else slot
+    try:
+        shutil.rmtree(tmp / "repo", ignore_errors=True)
         copy_root, cache = make_copy(tmp / "repo", root), tmp / "numba-cache"
-        cache.mkdir()
+        cache.mkdir(exist_ok=True)
         apply_fault(fault, copy_root)
         rest_args = _rest_args(fault.relevant) + (["-n", str(REST_WORKERS)] if REST_WORKERS > 1 else [])
         phases = [("relevant", list(fault.relevant))] + ([("rest", rest_args)] if rest else [])
@@ -165,8 +184,13 @@ def run_fault(fault: Fault, *, rest=True, timeout=3600.0, keep=False, root=ROOT)
     finally:
         if keep:
             print(f"  kept copy of {fault.name} at {tmp}", file=sys.stderr)
-        else:
+        elif slot is None:
             shutil.rmtree(tmp, ignore_errors=True)
+        else:                                         # keep only the unfaulted kernels' cache
+            keep_folder = _kernel_cache_folder(root)
+            for d in (tmp / "numba-cache").glob("numba-*"):
+                if d.name != keep_folder:
+                    shutil.rmtree(d, ignore_errors=True)
 
 
 def rotation(k: int, seed=None, faults=FAULTS):
@@ -263,8 +287,18 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     print(f"planting {len(chosen)} fault(s), {args.jobs} at a time", flush=True)
 
+    base = Path(tempfile.mkdtemp(prefix="plant-faults-"))
+    slots = queue.Queue()
+    for k in range(args.jobs):
+        (base / f"worker{k}").mkdir()
+        slots.put(base / f"worker{k}")
+
     def one(f):
-        o = run_fault(f, rest=not args.no_rest, timeout=args.timeout, keep=args.keep)
+        slot = slots.get()
+        try:
+            o = run_fault(f, rest=not args.no_rest, timeout=args.timeout, keep=args.keep, slot=slot)
+        finally:
+            slots.put(slot)
         print(f"{o.status:<7} {o.name:<42} {o.seconds:7.1f} s  {o.caught_by}", flush=True)
         if o.status == "error":
             print(o.detail, file=sys.stderr)
@@ -292,6 +326,9 @@ def main(argv=None) -> int:
         print(f"interrupted after {len(done)} of {len(chosen)} faults"
               + (f"; partial report in {args.report}" if args.report and done else ""), file=sys.stderr)
         return 130
+    finally:
+        if not args.keep:
+            shutil.rmtree(base, ignore_errors=True)
     outcomes = [done[f.name] for f in chosen]
     report(True)
     secs = time.perf_counter() - t0

@@ -22,7 +22,7 @@ from ..io.urdf import load_urdf
 from ..validation.compare import random_states
 from ..validation.measure import error
 from ..validation.reference import Reference, pin
-from .timing import per_call, random_chain
+from .timing import per_call, per_call_pair, random_chain
 
 
 def _load(path, **kw):
@@ -178,8 +178,7 @@ def latency(sts, quick=False):
         for name, c in table.items():
             err = max(_err(c, c.ours(Q[s], V[s], A[s]), c.theirs(s), conds[s]) for s in range(len(Q)))
             q, v, a = Q[0], V[0], A[0]
-            t_ours = per_call(lambda: c.ours(q, v, a), repeat=3 if quick else 7)
-            t_pin = per_call(lambda: c.theirs(0), repeat=3 if quick else 7)
+            t_ours, t_pin = per_call_pair(lambda: c.ours(q, v, a), lambda: c.theirs(0), repeat=3 if quick else 7)
             rows.append(dict(robot=st.label, call=name, pin_route=c.route, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                              ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
     return rows
@@ -191,7 +190,8 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
     (conversions outside the timing); at ``sizes``, and at ``big`` for the calls with an InParallel route.
     The error is the worst over ``sample`` states spread through the batch."""
     P, rows = pin(), []
-    timed = (lambda f: per_call(f, repeat=2, min_time=0)) if quick else (lambda f: per_call(f, repeat=5))
+    timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
+        (lambda f, g: per_call_pair(f, g, repeat=5))
     for st in sts:
         model, pm = st.model, st.pm
         pool = P.ModelPool(pm, 1)
@@ -219,8 +219,7 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
                 else:
                     theirs, route, pin_s = (lambda: [c.theirs(s) for s in range(N)]), "loop", c.theirs
                 err = max(_err(c, _row(mine, s), pin_s(s), conds[s]) for s in picks)
-                t_ours = timed(lambda: c.ours(Q, V, A)) / N
-                t_pin = timed(theirs) / N
+                t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A), theirs))
                 rows.append(dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                                  pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
     return rows
@@ -238,8 +237,7 @@ def closed_latency(spm_path, quick=False):
     q, v = Qm[0], Vm[0]
     for _ in range(100):             # first calls (kernels loaded, caches filled) and the CPU's clock settle first
         constrained_forward_dynamics(model, q, v, tau), cref.qdd(q, v, tau)
-    t_ours = per_call(lambda: constrained_forward_dynamics(model, q, v, tau), repeat=5)
-    t_pin = per_call(lambda: cref.qdd(q, v, tau), repeat=5)
+    t_ours, t_pin = per_call_pair(lambda: constrained_forward_dynamics(model, q, v, tau), lambda: cref.qdd(q, v, tau))
     err = max(error(constrained_forward_dynamics(model, Qm[s], Vm[s], tau)[0], cref.qdd(Qm[s], Vm[s], tau))
               for s in range(len(Qm)))
     return [dict(robot=model.name, call="constrained_forward_dynamics", ours_us=t_ours * 1e6,
@@ -306,7 +304,7 @@ def scaling(ns, quick=False):
             ("aba batch/state", lambda: aba(model, Q, V, A), lambda: P.abaInParallel(1, pool, QT, VT, AT, out)),
         ):
             ours()
-            t_o, t_p = per_call(ours, repeat=3), per_call(theirs, repeat=3)
+            t_o, t_p = per_call_pair(ours, theirs, repeat=3)
             if call.endswith("batch/state"):
                 t_o, t_p = t_o / N, t_p / N
             rows.append(dict(n=n, call=call, ours_us=t_o * 1e6, pin_us=t_p * 1e6, ratio=t_o / t_p))

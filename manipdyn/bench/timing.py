@@ -25,6 +25,26 @@ def per_call(f, repeat=5, min_time=0.05) -> float:
     return min(timer.repeat(repeat=repeat, number=number)) / number
 
 
+def per_call_pair(f, g, repeat=5, min_time=0.05) -> tuple:
+    """Seconds per call of f() and of g(), timed in alternation: ``repeat`` rounds, each one run of f then one
+    of g (loop counts calibrated as ``per_call``'s), the best run of each. A ratio of the two then compares
+    runs minutes apart no more than seconds apart (a CPU clock that drifts, a neighbour process, moves both)."""
+    timers, numbers = [], []
+    for h in (f, g):
+        timer, number = timeit.Timer(h), 1
+        if min_time > 0:
+            while (t := timer.timeit(number)) < 0.002:
+                number *= 10
+            number = max(1, int(number * min_time / t))
+        timers.append(timer)
+        numbers.append(number)
+    best = [float("inf"), float("inf")]
+    for _ in range(repeat):
+        for k in (0, 1):
+            best[k] = min(best[k], timers[k].timeit(numbers[k]) / numbers[k])
+    return best[0], best[1]
+
+
 def machine() -> dict:
     """What the numbers were measured on."""
     cpu = "unknown"

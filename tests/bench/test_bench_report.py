@@ -8,6 +8,7 @@ from manipdyn.cli import main
 def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     from manipdyn.bench import sections
     monkeypatch.setattr(sections, "per_call", lambda f, repeat=1, min_time=0: (f(), 1e-6)[1])  # no timing loops
+    monkeypatch.setattr(sections, "per_call_pair", lambda f, g, repeat=1, min_time=0: (f(), g(), 1e-6, 1e-6)[2:])
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "report.json").read_text())
     for key in ("machine", "latency", "closed_latency", "batched", "throughput", "scaling", "slopes", "reduced",
