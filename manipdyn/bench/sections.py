@@ -191,7 +191,8 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
     The error is the worst over ``sample`` states spread through the batch."""
     P, rows = pin(), []
     timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
-        (lambda f, g: per_call_pair(f, g, repeat=5))
+        (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # short runs, many rounds: a burst of
+    #                                            noise on this shared machine spoils a few rounds, not the best
     for st in sts:
         model, pm = st.model, st.pm
         pool = P.ModelPool(pm, 1)
