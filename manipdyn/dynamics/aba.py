@@ -380,6 +380,6 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
     if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
-    if method != "cholesky":
+    if not (isinstance(method, str) and method == "cholesky"):          # (an array compares elementwise)
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
     return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)

@@ -139,7 +139,7 @@ def mass_matrix(model, q, method="crba"):
         return mimic.mass_matrix(model, mass_matrix, q, method=method)
     if isinstance(method, str) and method == "crba":
         return crba(model, q)
-    if method != "lagrange":
+    if not (isinstance(method, str) and method == "lagrange"):          # (an array compares elementwise)
         raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
     return lagrange_mass_matrix(model, q)
 
