@@ -149,9 +149,11 @@ FLAG = numba.types.boolean
 
 
 def njit(*args, cache=False, **options):
-    """numba.njit with fastmath=FASTMATH; with cache=True the disk cache is the keyed folder above. Under
-    MANIPDYN_NOJIT=1 the function is returned as it is."""
+    """numba.njit with fastmath=FASTMATH and nogil (a kernel releases Python's lock while it runs, so that the
+    chunks of a batch run on several threads at once: dynamics/route.py); with cache=True the disk cache is the
+    keyed folder above. Under MANIPDYN_NOJIT=1 the function is returned as it is."""
     options.setdefault("fastmath", FASTMATH)
+    options.setdefault("nogil", True)
 
     def decorate(func):
         if NOJIT:

@@ -226,6 +226,13 @@ FAULTS = (
           ("tests/robustness/test_api_outputs.py", "tests/robustness/test_api_inputs.py"),
           "the one-state path returns the result whatever the kernel's code: a non-finite input, a singular "
           "joint or an overflowed result comes back as numbers"),
+    Fault("route-chunk-result-index-not-shifted", "rnea", "manipdyn/dynamics/route.py",
+          "            return code - a * size\n", "            return code\n",
+          ("tests/batch/test_threads.py",), "a batch split over threads names an overflowed result by its row in "
+          "the chunk, not in the batch"),
+    Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",
+          "*(y[a:b] for y in states)", "*(y[:b - a] for y in states)",
+          ("tests/batch/test_threads.py",), "every chunk of a threaded batch reads the batch's first rows"),
     Fault("energy-kinetic-com-offset-dropped", "kinematics", "manipdyn/dynamics/energy.py",
           "ux = vw[b, 0] + wy * cz - wz * cy",
           "ux = vw[b, 0]",

@@ -153,11 +153,15 @@ def markdown(d) -> str:
          _table(d["batched"], ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"]
                 + (["refused"] if any("refused" in r for r in d["batched"]) else []),
                 dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
-         "\n### Throughput against N (rnea, aba, mass_matrix)\n\n",
-         _table(d["throughput"], ["robot", "call", "N", "ours_us", "pin_loop_us", "pin_par1_us", "pin_par_all_us",
-                                  "ratio_par1", "ratio_loop"],
-                dict(ours_us="{:.3f}", pin_loop_us="{:.3f}", pin_par1_us="{:.3f}", pin_par_all_us="{:.3f}",
-                     ratio_par1=x, ratio_loop=x)),
+         "\n### Throughput against N (rnea, aba, mass_matrix), one thread and every core\n\n"
+         "ours_us on one thread (`threads=1`), ours_all_us on every core (`threads=None`, the default: "
+         f"{d['throughput'][0].get('cores', '?') if d['throughput'] else '?'} here); all_over_one = ours_all_us ÷ "
+         "ours_us; Pinocchio's InParallel on 1 thread and on every core (ratio_par1, ratio_par_all: ours ÷ "
+         "theirs at the same thread count).\n\n",
+         _table(d["throughput"], ["robot", "call", "N", "ours_us", "ours_all_us", "all_over_one", "pin_loop_us",
+                                  "pin_par1_us", "pin_par_all_us", "ratio_par1", "ratio_par_all", "ratio_loop"],
+                dict(ours_us="{:.3f}", ours_all_us="{:.3f}", all_over_one="{:.2f}", pin_loop_us="{:.3f}",
+                     pin_par1_us="{:.3f}", pin_par_all_us="{:.3f}", ratio_par1=x, ratio_par_all=x, ratio_loop=x)),
          "\n## c. Scaling on random serial chains\n\n![scaling](scaling.png)\n\n",
          _table(d["scaling"], ["n", "call", "ours_us", "pin_us", "ratio"], dict(ours_us=us, pin_us=us, ratio=x)),
          "\nFitted log-log slopes (time ∝ n^slope):\n\n",

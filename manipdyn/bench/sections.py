@@ -82,12 +82,14 @@ def _sym(M):
     return np.triu(M) + np.triu(M, 1).T
 
 
-def cases(P, st, Q, V, A, f_ext=True):
+def cases(P, st, Q, V, A, f_ext=True, threads=None):
     """Every public call that takes a state, with Pinocchio's route for states Q, V, A (A is τ for the forward
     calls); the conversions (q in Pinocchio's order, fext per joint) are made here, outside any timing.
-    ``f_ext=False`` leaves out the two f_ext calls (and their conversions).
+    ``f_ext=False`` leaves out the two f_ext calls (and their conversions); ``threads``: the threads of the
+    calls that spread a batch over threads (dynamics/route.py; None: their default, every core).
     Returns ({call: Case}, Pinocchio's q per state, cond(s) = cond(M) of state s)."""
     model, pm = st.model, st.pm
+    th = {} if threads is None else dict(threads=threads)
     pd = pm.createData()
     frame = model.body_names[-1]
     fid = pm.getFrameId(frame)
@@ -104,17 +106,17 @@ def cases(P, st, Q, V, A, f_ext=True):
         return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
 
     out = {
-        "rnea": Case(lambda q, v, a: rnea(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
-        "aba": Case(lambda q, v, a: aba(model, q, v, a), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
-        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix(model, q), lambda s: P.crba(pm, pd, PQ[s]), "crba",
+        "rnea": Case(lambda q, v, a: rnea(model, q, v, a, **th), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
+        "aba": Case(lambda q, v, a: aba(model, q, v, a, **th), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
+        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix(model, q, **th), lambda s: P.crba(pm, pd, PQ[s]), "crba",
                                    None, as_pin=_sym),
         "mass_matrix (lagrange)": Case(lambda q, v, a: mass_matrix(model, q, method="lagrange"),
                                        lambda s: P.crba(pm, pd, PQ[s]), "crba", None, as_pin=_sym),
-        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix(model, q, v),
+        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix(model, q, v, **th),
                                 lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), "computeCoriolisMatrix", None),
-        "gravity_torques": Case(lambda q, v, a: gravity_torques(model, q),
+        "gravity_torques": Case(lambda q, v, a: gravity_torques(model, q, **th),
                                 lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity", None),
-        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects(model, q, v),
+        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects(model, q, v, **th),
                                   lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), "nonLinearEffects", None),
         "frame_placement": Case(lambda q, v, a: frame_placement(model, q, frame), placement,
                                 "forwardKinematics + updateFramePlacement", None,
@@ -130,7 +132,7 @@ def cases(P, st, Q, V, A, f_ext=True):
         "potential_energy": Case(lambda q, v, a: potential_energy(model, q),
                                  lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), "computePotentialEnergy", None,
                                  as_ours=np.atleast_1d, as_pin=np.atleast_1d),
-        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics(model, q, v, a, method="cholesky"),
+        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics(model, q, v, a, method="cholesky", **th),
                                             lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
         "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives(model, q, v, a),
                                  lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),
@@ -138,16 +140,16 @@ def cases(P, st, Q, V, A, f_ext=True):
         "aba_derivatives": Case(lambda q, v, a: aba_derivatives(model, q, v, a),
                                 lambda s: P.computeABADerivatives(pm, pd, PQ[s], V[s], A[s]),
                                 "computeABADerivatives", None),
-        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor(model, q, v, a),
+        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor(model, q, v, a, **th),
                                        lambda s: P.computeJointTorqueRegressor(pm, pd, PQ[s], V[s], A[s]),
                                        "computeJointTorqueRegressor", None,
                                        as_pin=lambda Y: np.reshape(Y, (nv, 10 * nb))),   # eigenpy: 1 × n is (n,)
     }
     if f_ext:
         PF = [_pin_fext(P, pm, pd, pq, fx) for pq in PQ]
-        out["rnea with f_ext"] = Case(lambda q, v, a: rnea(model, q, v, a, f_ext=fx),
+        out["rnea with f_ext"] = Case(lambda q, v, a: rnea(model, q, v, a, f_ext=fx, **th),
                                       lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), "rnea(fext)", None)
-        out["aba with f_ext"] = Case(lambda q, v, a: aba(model, q, v, a, f_ext=fx),
+        out["aba with f_ext"] = Case(lambda q, v, a: aba(model, q, v, a, f_ext=fx, **th),
                                      lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), "aba(fext)", None,
                                      by_cond=True)
     return out, PQ, lambda s: float(np.linalg.cond(_sym(P.crba(pm, pd, PQ[s]))))
@@ -185,10 +187,10 @@ def latency(sts, quick=False):
 
 
 def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
-    """b. Every public call on a batch (N, nv), time per state, against Pinocchio's C++ batch
+    """b. Every public call on a batch (N, nv), time per state on one thread, against Pinocchio's C++ batch
     (pin.*InParallel, 1 thread) where it exists, else its cheapest Python loop over the same states
     (conversions outside the timing); at ``sizes``, and at ``big`` for the calls with an InParallel route.
-    The error is the worst over ``sample`` states spread through the batch."""
+    The error is the worst over ``sample`` states spread through the batch. (Every core: ``throughput``.)"""
     P, rows = pin(), []
     timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
         (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # short runs, many rounds: a burst of
@@ -199,7 +201,7 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
         QA, VA, AA = random_states(model, max(*sizes, big), np.random.default_rng(2))
         for N in sorted({*sizes, big}):
             Q, V, A = QA[:N], VA[:N], AA[:N]
-            table, PQ, cond = cases(P, st, Q, V, A, f_ext=N in sizes)
+            table, PQ, cond = cases(P, st, Q, V, A, f_ext=N in sizes, threads=1)
             picks = np.unique(np.linspace(0, N - 1, min(sample, N)).astype(int))
             conds = {s: cond(s) for s in picks}
             QT, VT, AT = (np.asfortranarray(np.array(x).T) for x in (PQ, V, A))
@@ -246,10 +248,11 @@ def closed_latency(spm_path, quick=False):
 
 
 def throughput(paths, sizes, quick=False):
-    """b. Time per state of batched calls: ours vs a Pinocchio loop and pin.*InParallel (1 and all cores)."""
+    """b. Time per state of batched calls on one thread and on every core (``threads``), against a Pinocchio
+    loop and pin.*InParallel on 1 thread and on every core: ours_us / ours_all_us, all_over_one = ours_all_us ÷
+    ours_us (the time a batch takes on every core as a share of one core's), ratio_par1 and ratio_par_all."""
     P, rows = pin(), []
-    import os
-    cores = os.cpu_count() or 1
+    from ..dynamics.route import CORES as cores
     for path in paths:
         model = _load(path)
         ref = Reference(model, path)
@@ -263,22 +266,25 @@ def throughput(paths, sizes, quick=False):
             reps = 1 if (quick or N >= 10000) else 3
             loop_n = min(N, 2000)           # the Python loop is timed on at most 2000 states
             for call, ours, loop, par in (
-                ("rnea", lambda: rnea(model, Q, V, A),
+                ("rnea", lambda th: rnea(model, Q, V, A, threads=th),
                  lambda: [P.rnea(pm, pd, PQ[:, s], PV[:, s], PA[:, s]) for s in range(loop_n)],
                  lambda th: P.rneaInParallel(th, pool, PQ, PV, PA, out)),
-                ("aba", lambda: aba(model, Q, V, A),
+                ("aba", lambda th: aba(model, Q, V, A, threads=th),
                  lambda: [P.aba(pm, pd, PQ[:, s], PV[:, s], PA[:, s]) for s in range(loop_n)],
                  lambda th: P.abaInParallel(th, pool, PQ, PV, PA, out)),
-                ("mass_matrix", lambda: mass_matrix(model, Q),
+                ("mass_matrix", lambda th: mass_matrix(model, Q, threads=th),
                  lambda: [P.crba(pm, pd, PQ[:, s]) for s in range(loop_n)], None)):
-                ours()
-                row = dict(robot=model.name, call=call, N=N,
-                           ours_us=per_call(ours, repeat=reps, min_time=0.02) / N * 1e6,
+                ours(1), ours(cores)
+                one = per_call(lambda: ours(1), repeat=reps, min_time=0.02) / N * 1e6
+                every = per_call(lambda: ours(cores), repeat=reps, min_time=0.02) / N * 1e6
+                row = dict(robot=model.name, call=call, N=N, cores=cores, big=N >= 10_000, ours_us=one,
+                           ours_all_us=every, all_over_one=every / one,
                            pin_loop_us=per_call(loop, repeat=reps, min_time=0.02) / loop_n * 1e6)
                 if par is not None:
                     row["pin_par1_us"] = per_call(lambda: par(1), repeat=reps, min_time=0.02) / N * 1e6
                     row["pin_par_all_us"] = per_call(lambda: par(cores), repeat=reps, min_time=0.02) / N * 1e6
                     row["ratio_par1"] = row["ours_us"] / row["pin_par1_us"]
+                    row["ratio_par_all"] = row["ours_all_us"] / row["pin_par_all_us"]
                 row["ratio_loop"] = row["ours_us"] / row["pin_loop_us"]
                 rows.append(row)
     return rows

@@ -54,6 +54,8 @@ TARGETS = (
            LAGRANGE),
     Target("batched rnea, per state ≤ 0.5× rneaInParallel(1)", "batched", "ratio", 0.5, ("rnea",),
            dict(pin_route="InParallel(1)")),
+    Target("every core: a batch of N ≥ 1e4 in ≤ 1/1.8 of one core's time (rnea, aba, mass_matrix)", "throughput",
+           "all_over_one", 1 / 1.8, ("rnea", "aba", "mass_matrix"), dict(big=True)),
     Target("hard cases: median q̈ error ≤ 1.5× Pinocchio's same route", "hard_cases", "ratio_median", 1.5, HARD_ROUTES,
            call_key="route", robot_key="case"),
     Target("hard cases: p95 q̈ error ≤ 1.5× Pinocchio's same route", "hard_cases", "ratio_p95", 1.5, HARD_ROUTES,

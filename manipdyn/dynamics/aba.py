@@ -350,7 +350,7 @@ _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLA
 
 @route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_kernel, *_FD), wrenches=True,
        wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
-def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
 
     Parameters
@@ -359,6 +359,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
         flyer's: [linear; angular] in the body frame, as Pinocchio's).
     f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, the wrench the environment applies
         on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or the world's.
+    threads : a batch's threads (``rnea``'s).
     Returns
     -------
     qdd : (nv,) or (N, nv).
@@ -371,15 +372,17 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
 @route("forward_dynamics", _QVT, "q̈", "v", entry(cholesky_one, *_ONE), entry(cholesky_kernel, *_FD), wrenches=True,
        wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
        mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
-def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
-    """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``."""
+def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
+    """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``.
+    threads: a batch's threads (``rnea``'s)."""
 
 
-def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba"):
+def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba", threads=None):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
-    matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext)."""
+    matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext). threads: a batch's threads
+    (``rnea``'s)."""
     if isinstance(method, str) and method == "aba":
-        return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+        return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads)
     if not (isinstance(method, str) and method == "cholesky"):          # (an array compares elementwise)
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
-    return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame)
+    return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads)

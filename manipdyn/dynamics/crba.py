@@ -29,7 +29,7 @@ from ..spatial import first_nonfinite, first_nonfinite_entry, force_up, inertia_
 from . import mimic
 from .core import unpack
 from .lagrange import lagrange_mass_matrix
-from .route import route
+from .route import route, thread_count
 
 
 @njit(cache=True, inline="always")
@@ -127,24 +127,26 @@ def crba_one(I, F, q, M):
     return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
 
 
-def mass_matrix(model, q, method="crba"):
+def mass_matrix(model, q, method="crba", *, threads=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
     T = ½ q̇ᵀ M q̇ (Eq. 23).
 
     method="crba" (default, O(n²)): the composite-rigid-body algorithm (this module, compiled).
     method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
-    (O(n³), compiled: ``lagrange.lagrange_mass_matrix``).
+    (O(n³), compiled: ``lagrange.lagrange_mass_matrix``; a batch of it runs on one thread).
+    threads: a batch's threads (``rnea``'s).
     """
     if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
         return mimic.mass_matrix(model, mass_matrix, q, method=method)
     if isinstance(method, str) and method == "crba":
-        return crba(model, q)
+        return crba(model, q) if threads is None else crba(model, q, threads=threads)
     if not (isinstance(method, str) and method == "lagrange"):          # (an array compares elementwise)
         raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
+    thread_count(threads, "mass_matrix")
     return lagrange_mass_matrix(model, q)
 
 
 @route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_kernel, *MODEL, A2, A3))
-def crba(model, q):
+def crba(model, q, *, threads=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
-    route: dynamics/route.py)."""
+    route: dynamics/route.py). threads: a batch's threads (``rnea``'s)."""

@@ -285,7 +285,7 @@ def store_terms(mdl, work, T):
 @route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,), wrenches=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
-def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
+def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
     """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) − Σ J_kᵀ f_ext,k, by the chapter's Eqs. 3–18 (32a–i).
 
     Parameters
@@ -293,6 +293,8 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations (model.v_names order).
     f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, wrench the environment applies
         on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or world axes.
+    threads : a batch is cut into chunks run on this many threads at once (default None: every core; batches
+        of fewer than 256 states run on one; dynamics/route.py); the numbers are those of one thread.
     Returns
     -------
     tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
@@ -301,12 +303,13 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
 
 @route("nonlinear_effects", ("q", "v"), "h", "v", entry(bias_one, *MODEL, A1, A1, A1),
        entry(bias_kernel, *MODEL, A2, A2, A2), mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
-def nonlinear_effects(model, q, v):
+def nonlinear_effects(model, q, v, *, threads=None):
     """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
-    nonLinearEffects), τ = M q̈ + h."""
+    nonLinearEffects), τ = M q̈ + h. threads: a batch's threads (``rnea``'s)."""
 
 
 @route("gravity_torques", ("q",), "g", "v", entry(gravity_one, *MODEL, A1, A1), entry(gravity_kernel, *MODEL, A2, A2),
        mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
-def gravity_torques(model, q):
-    """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0."""
+def gravity_torques(model, q, *, threads=None):
+    """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0.
+    threads: a batch's threads (``rnea``'s)."""

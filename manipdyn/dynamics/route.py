@@ -18,21 +18,77 @@ every such call (docs/design.md §2):
   6. a kernel code other than −1: ``state.raise_kernel_error``, the typed error naming the input, the joint or
      the result entry at fault.
 
+A batch of N ≥ 2 · MIN_CHUNK states is cut into contiguous chunks, one per thread (``threads``, default: every
+core this process may run on, ``CORES``), each run by the same batch entry on its rows — the kernels release
+Python's lock (``_jit.njit``: nogil) — so every state gets the numbers a one-thread call gives, bit for bit.
+A chunk's kernel code is mapped back to the whole batch (a state index or a result's flat index shifted by the
+chunk's first row); the first failing chunk's code is the one reported, as one thread would stop at it.
+
 The kernels' convention: ``one(I, F, *state, out)`` and ``batch(I, F, *states, [X, body, point, world,] out,
 *tail)`` return −1, or a code; (I, F) = ``Model.kernel.arrays``; every array of any strides (``_jit.A1``…).
 """
 from __future__ import annotations
 
 import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
+from numbers import Integral
 
 import numpy as np
 
+from ..errors import InputError
 from ..model import MimicModel
 from .state import as_batch, check_f_ext, fast, fast_shape, fast_wrenches, raise_kernel_error, unbatch, wrench_rows
 
 
 _MISSING = NotImplemented      # a state argument the call was not given (state.fast's sentinel too)
 SHAPES = ("v", "vv", "regressor")   # one state's result: (nv,), (nv, nv), (nv, 10 nb) — Model.kernel.result_shapes
+CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+MIN_CHUNK = 128     # states per thread at least: a thread's start and join cost ~20 µs, 128 ABA states ~80 µs
+_POOL = []          # the worker threads, started on the first batch that is split (no import side effect)
+
+
+def thread_count(threads, call):
+    """The threads a batch may use: ``threads`` (a positive integer) or, for None, CORES."""
+    if threads is None:
+        return CORES
+    if isinstance(threads, Integral) and not isinstance(threads, bool) and threads >= 1:
+        return int(threads)
+    raise InputError(f"{call}: threads must be a positive integer or None (every core), not {threads!r}")
+
+
+def chunks(N, threads):
+    """Row bounds [(a, b)] of the chunks a batch of N states is run in: min(threads, N // MIN_CHUNK) chunks, at
+    least one, of near-equal size."""
+    n = max(1, min(threads, N // MIN_CHUNK))
+    edges = [N * k // n for k in range(n + 1)]
+    return list(zip(edges[:-1], edges[1:]))
+
+
+def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
+    """``batch.call(*arrays, *states, *ext, out, *tail)`` over the rows of the states in chunks, on up to
+    ``threads`` threads at once: −1, or the first failing chunk's code in terms of the whole batch (a state
+    index ≥ 0 or a result's flat index −2 − nb − k shifted to the chunk's rows; a joint's code −2 − i as it is).
+    ext = (X, body, point, world): X has one row per state (or none), the rest is shared."""
+    parts = chunks(out.shape[0], threads)
+    if len(parts) == 1:
+        return batch.call(*arrays, *states, *ext, out, *tail)
+    if not _POOL or _POOL[0][0] < len(parts):
+        _POOL[:] = [(max(len(parts), CORES), ThreadPoolExecutor(max(len(parts), CORES), "manipdyn"))]
+    N, size = out.shape[0], out[0].size
+
+    def part(bounds):
+        a, b = bounds
+        x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:]) if ext else ()
+        return batch.call(*arrays, *(y[a:b] for y in states), *x, out[a:b], *tail)
+    for (a, _), code in zip(parts, list(_POOL[0][1].map(part, parts))):
+        if code >= 0:
+            return code + a
+        if code <= -2 - nb:
+            return code - a * size
+        if code != -1:
+            return code
+    return -1
 
 
 def route(call, names, result, shape, one, batch, **options):
@@ -44,11 +100,14 @@ def route(call, names, result, shape, one, batch, **options):
     no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
 
     def bind(public):
-        def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local"):
+        def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local",
+                 threads=None):
             # (no keyword-only parameters: their defaults cost a dict lookup each per call; the public signature,
             # which inspect and the docs show, is the decorated function's)
             if tau is not _MISSING:                             # the third state by its name in aba's calls
                 a = r.by_name(a, tau)
+            if threads is not None:
+                thread_count(threads, r.call)                   # (checked for one state too)
             if f_ext is None and f_ext_frame == "local" and (v is _MISSING) is no_v and (a is _MISSING) is no_a:
                 k = fast(model, q, v, a)
                 if k is not None:                               # 1. one float64 state: straight in
@@ -58,7 +117,7 @@ def route(call, names, result, shape, one, batch, **options):
                     if code == -1:
                         return out
                     r.fail(model, code, r.given(q, v, a), out)
-            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame)
+            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame, threads)
         path = functools.wraps(public)(path)
         path.route = r
         return path
@@ -98,8 +157,9 @@ class Route:
         """The state arguments a call was given, in order (those not given left out)."""
         return tuple(y for y in x if y is not _MISSING)
 
-    def checked(self, model, x, f_ext=None, f_ext_frame="local"):
+    def checked(self, model, x, f_ext=None, f_ext_frame="local", threads=None):
         """Steps 2–6 of the path: one state with one wrench, batches, a MimicModel, checked and converted input."""
+        threads = thread_count(threads, self.call)
         if len(x) != len(self.names):
             n = len(self.names)
             raise TypeError(f"{self.call}() takes the model and {n} state array{'s' * (n > 1)} "
@@ -117,7 +177,7 @@ class Route:
             states, single = x, False                           # 3. float64 batches
         elif type(model) is MimicModel and self.mimic is not None:
             kw = dict(f_ext=f_ext, f_ext_frame=f_ext_frame) if self.wrenches else {}
-            return self.mimic(model, *x, **kw)                  # 4. a MimicModel
+            return self.mimic(model, *x, **kw)                  # 4. a MimicModel (its inner calls: every core)
         else:                                                   # 5. checked and converted
             states, single = as_batch(model, **dict(zip(self.names, x)))
         N, shape = states[0].shape[0], model.kernel.result_shapes[SHAPES.index(self.shape)]
@@ -129,7 +189,7 @@ class Route:
         else:
             ext = ()
         out = np.empty((N,) + shape)
-        code = self.batch.call(*model.kernel.arrays, *states, *ext, out, *self.tail)
+        code = run_batch(self.batch, model.kernel.arrays, states, ext, out, self.tail, threads, model.njoints)
         if code != -1:
             self.fail(model, code, states, out, f_ext, f_ext_frame)
         return unbatch(out, single)

@@ -25,9 +25,11 @@ def report(at_limit=True):
     hard = [dict(case=case, route=r, ratio_median=f(1.5), ratio_p95=f(1.5)) for case in ("uniform", "heavy root")
             for r in HARD_ROUTES]
     hard += [dict(case=case, route="Pinocchio aba", median=1e-15, p95=1e-14) for case in ("uniform", "heavy root")]
+    throughput = [dict(robot="ur5", call=c, N=N, big=N >= 10_000, all_over_one=f(1 / 1.8) if N >= 10_000 else 1.0)
+                  for c in ("rnea", "aba", "mass_matrix") for N in (100, 10_000)]     # (N = 100: not a target row)
     return dict(machine={}, latency=latency, closed_latency=[dict(robot="spm", call="constrained_forward_dynamics",
                                                                   ratio=f(1.0))],
-                batched=batched, hard_cases=hard, cold_start=dict(measured=True, total_s=f(10.0)))
+                batched=batched, throughput=throughput, hard_cases=hard, cold_start=dict(measured=True, total_s=f(10.0)))
 
 
 def rows_of(rep, t):
