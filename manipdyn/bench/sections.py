@@ -275,14 +275,16 @@ def throughput(paths, sizes, quick=False):
                 ("mass_matrix", lambda th: mass_matrix(model, Q, threads=th),
                  lambda: [P.crba(pm, pd, PQ[:, s]) for s in range(loop_n)], None)):
                 ours(1), ours(cores)
-                one = per_call(lambda: ours(1), repeat=reps, min_time=0.02) / N * 1e6
-                every = per_call(lambda: ours(cores), repeat=reps, min_time=0.02) / N * 1e6
+                time.sleep(0.3)        # let the threads other libraries keep spinning after their last job
+                pair = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
+                    (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # one core and every core in
+                one, every = (t / N * 1e6 for t in pair(lambda: ours(1), lambda: ours(cores)))   # alternation
                 row = dict(robot=model.name, call=call, N=N, cores=cores, big=N >= 10_000, ours_us=one,
                            ours_all_us=every, all_over_one=every / one,
                            pin_loop_us=per_call(loop, repeat=reps, min_time=0.02) / loop_n * 1e6)
                 if par is not None:
-                    row["pin_par1_us"] = per_call(lambda: par(1), repeat=reps, min_time=0.02) / N * 1e6
-                    row["pin_par_all_us"] = per_call(lambda: par(cores), repeat=reps, min_time=0.02) / N * 1e6
+                    row["pin_par1_us"], row["pin_par_all_us"] = (t / N * 1e6 for t in pair(lambda: par(1),
+                                                                                          lambda: par(cores)))
                     row["ratio_par1"] = row["ours_us"] / row["pin_par1_us"]
                     row["ratio_par_all"] = row["ours_all_us"] / row["pin_par_all_us"]
                 row["ratio_loop"] = row["ours_us"] / row["pin_loop_us"]

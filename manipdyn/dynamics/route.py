@@ -73,15 +73,18 @@ def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     parts = chunks(out.shape[0], threads)
     if len(parts) == 1:
         return batch.call(*arrays, *states, *ext, out, *tail)
-    if not _POOL or _POOL[0][0] < len(parts):
-        _POOL[:] = [(max(len(parts), CORES), ThreadPoolExecutor(max(len(parts), CORES), "manipdyn"))]
+    if not _POOL or _POOL[0][0] < len(parts) - 1:
+        n = max(len(parts), CORES) - 1
+        _POOL[:] = [(n, ThreadPoolExecutor(n, "manipdyn"))]
     N, size = out.shape[0], out[0].size
 
     def part(bounds):
         a, b = bounds
         x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:]) if ext else ()
         return batch.call(*arrays, *(y[a:b] for y in states), *x, out[a:b], *tail)
-    for (a, _), code in zip(parts, list(_POOL[0][1].map(part, parts))):
+    rest = [_POOL[0][1].submit(part, bounds) for bounds in parts[1:]]
+    codes = [part(parts[0])] + [f.result() for f in rest]     # the calling thread runs the first chunk
+    for (a, _), code in zip(parts, codes):
         if code >= 0:
             return code + a
         if code <= -2 - nb:
