@@ -230,6 +230,10 @@ FAULTS = (
           "            return code - a * size\n", "            return code\n",
           ("tests/batch/test_threads.py",), "a batch split over threads names an overflowed result by its row in "
           "the chunk, not in the batch"),
+    Fault("route-c-entry-for-any-layout", "rnea", "manipdyn/dynamics/route.py",
+          "self.batch_c is not None and all(y.flags.c_contiguous for y in states)", "self.batch_c is not None",
+          ("tests/batch/test_fast_paths.py",), "a Fortran-ordered or strided batch handed to rnea's kernel compiled "
+          "for C-ordered arrays (its rows read with the wrong strides)"),
     Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",
           "*(y[a:b] for y in states)", "*(y[:b - a] for y in states)",
           ("tests/batch/test_threads.py",), "every chunk of a threaded batch reads the batch's first rows"),
