@@ -1,6 +1,7 @@
 """The bench report's sections: each returns rows of plain dicts (time and error side by side)."""
 from __future__ import annotations
 
+import functools
 import time
 import warnings
 from typing import Callable, NamedTuple
@@ -89,7 +90,10 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
     calls that spread a batch over threads (dynamics/route.py; None: their default, every core).
     Returns ({call: Case}, Pinocchio's q per state, cond(s) = cond(M) of state s)."""
     model, pm = st.model, st.pm
-    th = {} if threads is None else dict(threads=threads)
+    rnea_, aba_, mass_matrix_, coriolis_matrix_, gravity_torques_, nonlinear_effects_, forward_dynamics_, \
+        joint_torque_regressor_ = (f if threads is None else functools.partial(f, threads=threads) for f in (
+            rnea, aba, mass_matrix, coriolis_matrix, gravity_torques, nonlinear_effects, forward_dynamics,
+            joint_torque_regressor))          # (threads=None: the functions themselves, no keyword to pass)
     pd = pm.createData()
     frame = model.body_names[-1]
     fid = pm.getFrameId(frame)
@@ -106,17 +110,17 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
 
     out = {
-        "rnea": Case(lambda q, v, a: rnea(model, q, v, a, **th), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
-        "aba": Case(lambda q, v, a: aba(model, q, v, a, **th), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
-        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix(model, q, **th), lambda s: P.crba(pm, pd, PQ[s]), "crba",
+        "rnea": Case(lambda q, v, a: rnea_(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
+        "aba": Case(lambda q, v, a: aba_(model, q, v, a), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
+        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix_(model, q), lambda s: P.crba(pm, pd, PQ[s]), "crba",
                                    None, as_pin=_sym),
         "mass_matrix (lagrange)": Case(lambda q, v, a: mass_matrix(model, q, method="lagrange"),
                                        lambda s: P.crba(pm, pd, PQ[s]), "crba", None, as_pin=_sym),
-        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix(model, q, v, **th),
+        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix_(model, q, v),
                                 lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), "computeCoriolisMatrix", None),
-        "gravity_torques": Case(lambda q, v, a: gravity_torques(model, q, **th),
+        "gravity_torques": Case(lambda q, v, a: gravity_torques_(model, q),
                                 lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity", None),
-        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects(model, q, v, **th),
+        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects_(model, q, v),
                                   lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), "nonLinearEffects", None),
         "frame_placement": Case(lambda q, v, a: frame_placement(model, q, frame), placement,
                                 "forwardKinematics + updateFramePlacement", None,
@@ -132,7 +136,7 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "potential_energy": Case(lambda q, v, a: potential_energy(model, q),
                                  lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), "computePotentialEnergy", None,
                                  as_ours=np.atleast_1d, as_pin=np.atleast_1d),
-        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics(model, q, v, a, method="cholesky", **th),
+        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics_(model, q, v, a, method="cholesky"),
                                             lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
         "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives(model, q, v, a),
                                  lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),
@@ -140,16 +144,16 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "aba_derivatives": Case(lambda q, v, a: aba_derivatives(model, q, v, a),
                                 lambda s: P.computeABADerivatives(pm, pd, PQ[s], V[s], A[s]),
                                 "computeABADerivatives", None),
-        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor(model, q, v, a, **th),
+        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor_(model, q, v, a),
                                        lambda s: P.computeJointTorqueRegressor(pm, pd, PQ[s], V[s], A[s]),
                                        "computeJointTorqueRegressor", None,
                                        as_pin=lambda Y: np.reshape(Y, (nv, 10 * nb))),   # eigenpy: 1 × n is (n,)
     }
     if f_ext:
         PF = [_pin_fext(P, pm, pd, pq, fx) for pq in PQ]
-        out["rnea with f_ext"] = Case(lambda q, v, a: rnea(model, q, v, a, f_ext=fx, **th),
+        out["rnea with f_ext"] = Case(lambda q, v, a: rnea_(model, q, v, a, f_ext=fx),
                                       lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), "rnea(fext)", None)
-        out["aba with f_ext"] = Case(lambda q, v, a: aba(model, q, v, a, f_ext=fx, **th),
+        out["aba with f_ext"] = Case(lambda q, v, a: aba_(model, q, v, a, f_ext=fx),
                                      lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), "aba(fext)", None,
                                      by_cond=True)
     return out, PQ, lambda s: float(np.linalg.cond(_sym(P.crba(pm, pd, PQ[s]))))
