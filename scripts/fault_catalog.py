@@ -234,6 +234,10 @@ FAULTS = (
           "self.batch_c is not None and all(y.flags.c_contiguous for y in states)", "self.batch_c is not None",
           ("tests/batch/test_fast_paths.py",), "a Fortran-ordered or strided batch handed to rnea's kernel compiled "
           "for C-ordered arrays (its rows read with the wrong strides)"),
+    Fault("route-dask-chunks-not-aligned", "rnea", "manipdyn/dynamics/route.py",
+          "        states = [y.rechunk((rows, -1)) for y in states]\n", "",
+          ("tests/batch/test_dask.py",), "Dask arrays of states with other chunks than the first's (rows or "
+          "columns) handed to the kernels unaligned"),
     Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",
           "*(y[a:b] for y in states)", "*(y[:b - a] for y in states)",
           ("tests/batch/test_threads.py",), "every chunk of a threaded batch reads the batch's first rows"),

@@ -110,7 +110,8 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
 
     out = {
-        "rnea": Case(lambda q, v, a: rnea_(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea", "rnea"),
+        "rnea": Case(lambda q, v, a: rnea_(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea",
+                     "rnea"),
         "aba": Case(lambda q, v, a: aba_(model, q, v, a), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
         "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix_(model, q), lambda s: P.crba(pm, pd, PQ[s]), "crba",
                                    None, as_pin=_sym),
@@ -119,7 +120,8 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix_(model, q, v),
                                 lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), "computeCoriolisMatrix", None),
         "gravity_torques": Case(lambda q, v, a: gravity_torques_(model, q),
-                                lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity", None),
+                                lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity",
+                                None),
         "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects_(model, q, v),
                                   lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), "nonLinearEffects", None),
         "frame_placement": Case(lambda q, v, a: frame_placement(model, q, frame), placement,

@@ -286,7 +286,8 @@ def store_terms(mdl, work, T):
 
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
 
-@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, batch_c=RNEA_C, tail=(_NO_T,), wrenches=True,
+@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, batch_c=RNEA_C, tail=(_NO_T,),
+       wrenches=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):

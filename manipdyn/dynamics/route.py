@@ -14,7 +14,9 @@ every such call (docs/design.md §2):
   4. a MimicModel: the route's map onto the full model (``dynamics/mimic.py``; the calls that have one are
      ``mimic.TAKES_MIMIC``, every other refuses it by name);
   5. anything else: ``state.as_batch``'s checks and conversions (an error names the argument), the wrenches
-     checked and laid out (``state.wrench_rows``), then the batch entry;
+     checked and laid out (``state.wrench_rows``), then the batch entry — except Dask arrays of states
+     (N, n): a Dask array of the results comes back, each chunk of rows a batch of this call computed when
+     asked, on the scheduler's workers (``Route.lazy``; the Dask extra);
   6. a kernel code other than −1: ``state.raise_kernel_error``, the typed error naming the input, the joint or
      the result entry at fault.
 
@@ -36,9 +38,11 @@ from numbers import Integral
 
 import numpy as np
 
-from ..errors import InputError
-from ..model import MimicModel
-from .state import as_batch, check_f_ext, fast, fast_shape, fast_wrenches, raise_kernel_error, unbatch, wrench_rows
+from ..errors import InputError, ManipdynError
+from ..extras import require
+from ..model import MimicModel, Model
+from .state import (as_batch, check_f_ext, fast, fast_shape, fast_wrenches, is_config, raise_kernel_error, unbatch,
+                    wrench_rows)
 
 
 _MISSING = NotImplemented      # a state argument the call was not given (state.fast's sentinel too)
@@ -46,6 +50,11 @@ SHAPES = ("v", "vv", "regressor")   # one state's result: (nv,), (nv, nv), (nv, 
 CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 MIN_CHUNK = 128     # states per thread at least: a thread's start and join cost ~20 µs, 128 ABA states ~80 µs
 _POOL = []          # the worker threads, started on the first batch that is split (no import side effect)
+
+
+def is_dask(x):
+    """True for a Dask array (recognised without importing dask)."""
+    return type(x).__module__.partition(".")[0] == "dask" and hasattr(x, "map_blocks")
 
 
 def thread_count(threads, call):
@@ -68,7 +77,8 @@ def chunks(N, threads):
 def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     """``batch.call(*arrays, *states, *ext, out, *tail)`` over the rows of the states in chunks, on up to
     ``threads`` threads at once: −1, or the first failing chunk's code in terms of the whole batch (a state
-    index ≥ 0 or a result's flat index −2 − nb − k shifted to the chunk's rows; a joint's code −2 − i as it is).
+    index ≥ 0 or a result's flat index −2 − nb − k shifted to the chunk's rows; a joint's code −2 − i as it
+    is).
     ext = (X, body, point, world): X has one row per state (or none), the rest is shared."""
     parts = chunks(out.shape[0], threads)
     if len(parts) == 1:
@@ -131,7 +141,7 @@ def route(call, names, result, shape, one, batch, **options):
                         return out                              # else the checked path says what is wrong
             return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame, threads)
         path = functools.wraps(public)(path)
-        path.route = r
+        path.route, r.public = r, path
         return path
     return bind
 
@@ -154,7 +164,7 @@ class Route:
     mimic     mimic(model, *states, **wrench keywords) for a MimicModel, or None (refused, by name)
     """
     __slots__ = ("call", "names", "result", "shape", "one", "batch", "batch_c", "tail", "wrenches", "wrench_one",
-                 "mimic")
+                 "mimic", "public")
 
     def __init__(self, call, names, result, shape, one, batch, *, batch_c=None, tail=(), wrenches=False,
                  wrench_one=None, mimic=None):
@@ -180,6 +190,8 @@ class Route:
                             f"({', '.join(self.names)}); {len(x)} given")
         if not self.wrenches and (f_ext is not None or f_ext_frame != "local"):
             raise TypeError(f"{self.call}() takes no external wrenches (f_ext, f_ext_frame)")
+        if any(is_dask(y) for y in x):
+            return self.lazy(model, x, f_ext)
         if f_ext is None and f_ext_frame == "local" and fast_shape(model, *x) == 2:
             states, single = x, False                           # 3. float64 batches
         elif type(model) is MimicModel and self.mimic is not None:
@@ -202,6 +214,40 @@ class Route:
         if code != -1:
             self.fail(model, code, states, out, f_ext, f_ext_frame)
         return unbatch(out, single)
+
+    def lazy(self, model, x, f_ext):
+        """Dask arrays of states (N, n) (numpy arrays among them are wrapped): a Dask array of the results
+        (N, *one state's shape), rows chunked as the first state's, each chunk computed when asked as a batch of
+        this call on one thread (the scheduler runs chunks in parallel; a Model pickles as its description)."""
+        da = require("dask.array", "dask", f"{self.call} on a Dask array")
+        if f_ext is not None:
+            raise InputError(f"{self.call}: f_ext with Dask arrays of states is not supported; pass numpy arrays "
+                             f"(or call {self.call} per chunk with dask's map_blocks)")
+        if type(model) is not Model:
+            raise InputError(f"{self.call}: Dask arrays of states need a Model, not a {type(model).__name__}")
+        states = [da.asarray(y) for y in x]
+        N = states[0].shape[0] if states[0].ndim else None
+        for name, y in zip(self.names, states):
+            n = model.nq if is_config(name) else model.nv
+            if y.ndim != 2 or y.shape[1] != n or y.shape[0] != N:
+                raise InputError(f"{self.call}: a Dask array of states is (N, n), the same N for every state: {name} "
+                                 f"must be (N, {n}), it is {tuple(y.shape)}")
+        rows = states[0].chunks[0]
+        states = [y.rechunk((rows, -1)) for y in states]
+        shape = model.kernel.result_shapes[SHAPES.index(self.shape)]
+        public = self.public
+
+        def block(*b, block_info=None):
+            try:
+                return public(model, *b, threads=1)
+            except ManipdynError as exc:                        # name the chunk: its row indices start at 0
+                if not block_info:
+                    raise
+                a, z = block_info[0]["array-location"][0]
+                raise type(exc)(f"in the chunk of rows {a}–{z - 1} of the Dask batch (row indices below count from "
+                                f"{a}): {exc}") from None
+        return da.map_blocks(block, *states, dtype=np.float64, chunks=(rows,) + tuple((n,) for n in shape),
+                             new_axis=list(range(2, 1 + len(shape))) or None, meta=np.empty((0,) * (1 + len(shape))))
 
     def fail(self, model, code, states, out, f_ext=None, f_ext_frame="local"):
         """6. Raise the error a kernel code stands for (a non-finite wrench first: it is the cause)."""

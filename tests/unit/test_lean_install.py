@@ -21,9 +21,9 @@ from packaging.utils import canonicalize_name
 ROOT = Path(__file__).resolve().parents[2]
 CORE = ("numpy", "scipy", "numba", "yourdfpy")          # pyproject.toml's dependencies, nothing else
 OPTIONAL_MODULES = ("pinocchio", "meshcat", "matplotlib", "mujoco", "pybullet", "pydrake", "example_robot_data",
-                    "mpmath", "tqdm")
-OPTIONAL_DISTS = ("pin", "meshcat", "matplotlib", "mujoco", "pybullet", "drake", "example-robot-data", "mpmath",
-                  "tqdm")
+                    "dask", "distributed", "mpmath", "tqdm")
+OPTIONAL_DISTS = ("pin", "meshcat", "matplotlib", "mujoco", "pybullet", "drake", "example-robot-data", "dask",
+                  "distributed", "mpmath", "tqdm")
 TIMEOUT = 120
 
 
@@ -131,6 +131,10 @@ t = np.linspace(0.0, 1.0, 3)
 Q = np.tile(q, (3, 1))
 from manipdyn.validation.reference import Reference
 from manipdyn.validation.engines import _import, load_engine
+class FakeDask:                   # what a Dask array looks like to the route (dask itself is not installed)
+    __module__ = "dask.array.core"
+    def map_blocks(self):
+        pass
 entries = {
     "validate: Reference": lambda: Reference(model, __AAU__),
     "validate: validation.robots_dir": lambda: manipdyn.validation.robots_dir(),
@@ -144,6 +148,7 @@ entries = {
     "engines: mujoco": lambda: _import("mujoco"),
     "engines: pybullet": lambda: _import("pybullet"),
     "engines: pydrake": lambda: _import("pydrake"),
+    "dask: rnea on a Dask array": lambda: manipdyn.rnea(model, FakeDask(), FakeDask(), FakeDask()),
 }
 out["entries"] = {}
 for name, call in entries.items():
