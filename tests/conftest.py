@@ -4,6 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -56,6 +58,17 @@ def zoo_paths():
 
 
 AAU = ROOT / "urdf" / "aau_arm.urdf"
+
+
+def aau_states(n, seed):
+    """(model, Q, V, A): the AAU arm (its load warnings silenced) and n random states of it (validation's
+    random_states), for the batch tests."""
+    import manipdyn as md
+    from manipdyn.validation import random_states
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_urdf(AAU)
+    return (model, *random_states(model, n, np.random.default_rng(seed)))
 
 
 def free_flyer_model(text, **kw):

@@ -3,15 +3,13 @@ and computes it chunk of rows by chunk of rows when asked — on Dask's local th
 worker — with the numbers of the same call on numpy arrays, bit for bit (which tests/crosscheck holds to
 Pinocchio), and with the rows of every chunk checked against Pinocchio here; what it cannot take is refused
 by name."""
-import warnings
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import AAU
+from conftest import AAU, aau_states
 
 import manipdyn as md
-from manipdyn.validation import random_states
 from manipdyn.validation.reference import Reference
 
 da = pytest.importorskip("dask.array")
@@ -20,11 +18,7 @@ N = 700
 
 @pytest.fixture(scope="module")
 def arm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = md.load_urdf(AAU)
-    Q, V, A = random_states(model, N, np.random.default_rng(11))
-    return model, Q, V, A
+    return aau_states(N, 11)
 
 
 CALLS = {

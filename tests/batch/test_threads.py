@@ -2,16 +2,14 @@
 (each state is computed by the same compiled code, whatever chunk it falls in), checked against Pinocchio
 row by row on a few rows of every chunk; the errors of a chunk name the row of the whole batch; bad thread
 counts are refused by name. (Speed on every core: the bench's throughput rows and their target.)"""
-import warnings
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import AAU, inertial_xml, urdf
+from conftest import AAU, aau_states, inertial_xml, urdf
 
 import manipdyn as md
 from manipdyn.dynamics import route
-from manipdyn.validation import random_states
 from manipdyn.validation.reference import Reference
 
 N = 1000           # 4 threads: 4 chunks of 250 rows (route.MIN_CHUNK = 128)
@@ -19,11 +17,7 @@ N = 1000           # 4 threads: 4 chunks of 250 rows (route.MIN_CHUNK = 128)
 
 @pytest.fixture(scope="module")
 def arm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = md.load_urdf(AAU)
-    Q, V, A = random_states(model, N, np.random.default_rng(7))
-    return model, Q, V, A
+    return aau_states(N, 7)
 
 
 def _calls(model):
