@@ -35,8 +35,9 @@ exit codes:
      ("manipdyn <command>: error: ..."), no traceback unless --debug
 
 limits (checked before any work starts): validate --states 1..{MAX_STATES}, --tol finite and > 0,
---seed 0..{MAX_SEED}, --jobs 1..{MAX_JOBS}, at most {MAX_SWEEP_FILES} URDF files under the folders of a
-sweep (--against with a folder or --jobs: --json is then a folder, created if missing); example --samples
+--seed 0..{MAX_SEED}, --jobs 1..{MAX_JOBS} (or --scheduler ADDRESS), at most {MAX_SWEEP_FILES} URDF files under
+the folders of a sweep (--against with a folder, --jobs or --scheduler: --json is then a folder, created if
+missing); example --samples
 2..{MAX_SAMPLES}; --json / --html / --mjcf must be a writable file in
 an existing folder, --out a folder (created if missing), not a file; trajectory files (play --traj)
 are .csv or .npz of at most {MAX_TRAJECTORY_BYTES // 2**20} MiB.
@@ -145,7 +146,7 @@ def _referee(args) -> int:
 def _sweep_mode(args) -> bool:
     """validate --against over folders or with --jobs: the sweep (one summary table, --json a folder)."""
     return bool(getattr(args, "against", None) and not args.zoo and
-                (args.jobs is not None or any(Path(p).is_dir() for p in args.urdf)))
+                (args.jobs is not None or args.scheduler is not None or any(Path(p).is_dir() for p in args.urdf)))
 
 
 def _referee_zoo(args, engines, states, given=False) -> int:
@@ -166,9 +167,11 @@ def _referee_zoo(args, engines, states, given=False) -> int:
         paths = urdf_files(args.urdf, MAX_SWEEP_FILES)
         dirs = [Path(p) for p in args.urdf if Path(p).is_dir()]
         kw = dict(paths=paths, root=dirs[0] if len(dirs) == 1 else Path.cwd())
+        where = f"the Dask scheduler at {args.scheduler}" if args.scheduler else f"{args.jobs or 1} job(s)"
         print(f"manipdyn validate --against {','.join(engines)}: {len(paths)} URDF file(s), "
-              f"{args.jobs or 1} job(s), {states} states each, seed {args.seed}", flush=True)
-    rows = sweep(engines, n_states=states, seed=args.seed, progress=show, jobs=args.jobs or 1, **kw)
+              f"{where}, {states} states each, seed {args.seed}", flush=True)
+    rows = sweep(engines, n_states=states, seed=args.seed, progress=show, jobs=args.jobs or 1,
+                 scheduler=args.scheduler, **kw)
     md = markdown(rows, engines, states, args.seed, **(dict(
         title=", ".join(map(str, args.urdf))[:200], command="manipdyn " + " ".join(sys.argv[1:])[:400])
         if given else {}))
@@ -480,6 +483,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"with --against: run the files in 1..{MAX_JOBS} worker processes, one summary table; "
                         "URDF arguments may then be folders (their *.urdf files, at most "
                         f"{MAX_SWEEP_FILES}) and --json is a folder (one JSON file per URDF and summary.json)")
+    v.add_argument("--scheduler", metavar="ADDRESS", type=_address, default=None,
+                   help="with --against: send the files to the Dask scheduler at ADDRESS (e.g. tcp://host:8786) "
+                        "instead of --jobs processes, the same summary and per-file JSON (pip install "
+                        "manipdyn[dask]; the workers need manipdyn and the engines installed)")
     v.add_argument("--quiet", action="store_true", help="no progress bar")
     add_mimic_option(v)
     add_root_joint_option(v)
@@ -546,6 +553,13 @@ def _subparser_class(common, epilog):
             super().__init__(parents=[common], epilog=epilog,
                              formatter_class=argparse.RawDescriptionHelpFormatter, **kw)
     return Sub
+
+
+def _address(text):
+    """An argparse type: a Dask scheduler address (1..200 printable characters, no spaces)."""
+    if not 0 < len(text) <= 200 or not text.isprintable() or any(c.isspace() for c in text):
+        raise argparse.ArgumentTypeError(f"expected a scheduler address such as tcp://host:8786, got {text[:60]!r}")
+    return text
 
 
 def _int_in(lo, hi):
@@ -626,6 +640,8 @@ def _preflight(args):
     """Check input files and output paths before a subcommand starts any long work."""
     if args.command == "validate" and args.jobs is not None and not args.against:
         raise InputError("--jobs needs --against (the engines referee over many files)")
+    if args.command == "validate" and args.scheduler is not None and (not args.against or args.jobs is not None):
+        raise InputError("--scheduler needs --against and no --jobs (the cluster's workers run the files)")
     urdf = getattr(args, "urdf", None)
     sweep = args.command == "validate" and _sweep_mode(args)
     for path in urdf if isinstance(urdf, list) else [urdf] if urdf else []:

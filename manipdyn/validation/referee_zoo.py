@@ -16,6 +16,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from ..errors import InputError, ManipdynError
+from ..extras import require
 from .engines import (ADAPTERS, EngineMissing, EngineRefused, _import, _one_line, _quiet, available, referee,
                       stripped_urdf)
 from .zoo import robots_dir
@@ -110,15 +111,22 @@ def _load_only(name, path):
         plant.Finalize()
 
 
-def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None, jobs=1, root=None) -> list[dict]:
+def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None, jobs=1, root=None, scheduler=None) -> list[dict]:
     """One row per file, in the order given: {"file", "nv", "manipdyn": "loaded" | why, "engines": {name: result
-    dict}}; ``jobs`` > 1 runs the files in that many worker processes (spawned: each compiles its kernels).
+    dict}}; ``jobs`` > 1 runs the files in that many worker processes (spawned: each compiles its kernels);
+    ``scheduler`` (an address) sends them to a Dask cluster's workers instead (the Dask extra), the same rows.
     File names in rows and messages are shown relative to ``root`` (default: example-robot-data's robots/)."""
     root = Path(root) if root is not None else robots_dir()
     paths = list(paths if paths is not None else zoo_urdfs())
     jobs = max(1, min(int(jobs), MAX_JOBS, len(paths) or 1))
     work = [(p, tuple(engines), n_states, seed, root) for p in paths]
     rows = []
+    if scheduler is not None:
+        for row in _on_cluster(scheduler, work):
+            rows.append(row)
+            if progress is not None:
+                progress(row)
+        return rows
     if jobs == 1:
         results = map(_row_of, work)
         for row in results:
@@ -132,6 +140,23 @@ def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None, jobs=1, ro
             if progress is not None:
                 progress(row)
     return rows
+
+
+SCHEDULER_TIMEOUT = 10    # seconds to reach a Dask scheduler
+
+
+def _on_cluster(address, work):
+    """The rows of ``work`` computed by the workers of the Dask scheduler at ``address``, in order."""
+    distributed = require("distributed", "dask", "manipdyn validate --scheduler")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            client = distributed.Client(address, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        raise InputError(f"--scheduler {address}: no Dask scheduler answered there ({_one_line(exc)})") from None
+    with client:
+        for future in client.map(_row_of, work, pure=False):
+            yield future.result()
 
 
 def _row_of(item) -> dict:
