@@ -238,6 +238,10 @@ FAULTS = (
           "        states = [y.rechunk((rows, -1)) for y in states]\n", "",
           ("tests/batch/test_dask.py",), "Dask arrays of states with other chunks than the first's (rows or "
           "columns) handed to the kernels unaligned"),
+    Fault("route-run-chunks-keeps-the-first-code", "rnea", "manipdyn/dynamics/route.py",
+          "    return -1 if all(c == -1 for c in codes) else run(0, N)\n", "    return codes[0]\n",
+          ("tests/batch/test_threads.py",), "threaded derivatives report only their first chunk's code: a bad row "
+          "in a later chunk comes back as numbers"),
     Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",
           "*(y[a:b] for y in states)", "*(y[:b - a] for y in states)",
           ("tests/batch/test_threads.py",), "every chunk of a threaded batch reads the batch's first rows"),

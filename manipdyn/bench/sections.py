@@ -91,9 +91,11 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
     Returns ({call: Case}, Pinocchio's q per state, cond(s) = cond(M) of state s)."""
     model, pm = st.model, st.pm
     rnea_, aba_, mass_matrix_, coriolis_matrix_, gravity_torques_, nonlinear_effects_, forward_dynamics_, \
-        joint_torque_regressor_ = (f if threads is None else functools.partial(f, threads=threads) for f in (
-            rnea, aba, mass_matrix, coriolis_matrix, gravity_torques, nonlinear_effects, forward_dynamics,
-            joint_torque_regressor))          # (threads=None: the functions themselves, no keyword to pass)
+        joint_torque_regressor_, rnea_derivatives_, aba_derivatives_ = (
+            f if threads is None else functools.partial(f, threads=threads) for f in (
+                rnea, aba, mass_matrix, coriolis_matrix, gravity_torques, nonlinear_effects, forward_dynamics,
+                joint_torque_regressor, rnea_derivatives, aba_derivatives))   # (threads=None: the functions
+    #                                                                            themselves, no keyword to pass)
     pd = pm.createData()
     frame = model.body_names[-1]
     fid = pm.getFrameId(frame)
@@ -140,10 +142,10 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
                                  as_ours=np.atleast_1d, as_pin=np.atleast_1d),
         "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics_(model, q, v, a, method="cholesky"),
                                             lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
-        "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives(model, q, v, a),
+        "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives_(model, q, v, a),
                                  lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),
                                  "computeRNEADerivatives", None),
-        "aba_derivatives": Case(lambda q, v, a: aba_derivatives(model, q, v, a),
+        "aba_derivatives": Case(lambda q, v, a: aba_derivatives_(model, q, v, a),
                                 lambda s: P.computeABADerivatives(pm, pd, PQ[s], V[s], A[s]),
                                 "computeABADerivatives", None),
         "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor_(model, q, v, a),

@@ -48,6 +48,7 @@ from ..joints import joint_placement
 from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
                        spd_inverse, world_inertia, world_motion)
 from .aba import aba_kernel
+from .route import run_chunks, thread_count
 from .core import finite_state, kernel_arrays, no_wrenches, unpack
 from .state import (
     as_batch,
@@ -349,7 +350,7 @@ ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, A1, A1, A1, A1, C2, C2,
 
 # -- Python entry points ----------------------------------------------------------------------------------
 
-def rnea_derivatives(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
+def rnea_derivatives(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
     """(∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈) of τ = rnea(q, q̇, q̈, f_ext), as Pinocchio's computeRNEADerivatives.
 
     Parameters
@@ -358,26 +359,29 @@ def rnea_derivatives(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     f_ext : as ``rnea``: {link or frame name: (force, moment)} in the frame's axes (f_ext_frame="local", the
         wrench turns with the body, as Pinocchio's fext) or in world axes ("world": its direction is fixed
         while its point moves with the body).
+    threads : a batch's threads (``rnea``'s).
     Returns
     -------
     dtau_dq, dtau_dv, dtau_da : (nv, nv) or (N, nv, nv); dtau_da = M(q). The q-derivative is in the tangent
         space: column j is d τ(q ⊕ ε e_j)/dε (``integrate``; a free flyer's columns are body-frame twists).
     """
-    return _call(model, q, v, a, f_ext, f_ext_frame, False)
+    return _call(model, q, v, a, f_ext, f_ext_frame, False, threads)
 
 
-def aba_derivatives(model, q, v, tau, *, f_ext=None, f_ext_frame="local"):
+def aba_derivatives(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """(∂q̈/∂q, ∂q̈/∂q̇, ∂q̈/∂τ) of q̈ = aba(q, q̇, τ, f_ext), as Pinocchio's computeABADerivatives:
     ∂q̈/∂τ = M⁻¹, ∂q̈/∂q = −M⁻¹ ∂τ/∂q and ∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇ at q̈ (RNEA derivatives; M⁻¹ by Cholesky).
 
     Parameters and shapes as ``rnea_derivatives`` (tau in place of a). Raises SingularError as ``aba``.
     """
-    return _call(model, q, v, tau, f_ext, f_ext_frame, True)
+    return _call(model, q, v, tau, f_ext, f_ext_frame, True, threads)
 
 
-def _call(model, q, v, x, f_ext, f_ext_frame, fd):
+def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
     """Both entry points: the one-state kernel for plain float64 input, else checked batches."""
     names, call, outs = (_QVT, "aba_derivatives", OUT_ABA) if fd else (_QVA, "rnea_derivatives", OUT_RNEA)
+    if threads is not None:
+        thread_count(threads, call)
     nd = fast_shape(model, q, v, x) if f_ext is None and f_ext_frame == "local" else 0
     if nd == 1:
         nv = model.nv
@@ -399,11 +403,14 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd):
         D = tuple(np.empty((3, N, nv, nv)))   # one block, three views; every entry written (fresh zeros cost
         # 2.6 µs per state on chain32's 24 MB). One block, not three: malloc then keeps it in its heap between
         # calls (three 8 MB blocks went back to the OS each call: ~950 page faults, 3 µs per state)
-        if fd:
-            qdd = np.empty((N, nv))
-            code = ABA_DERIVATIVES.call(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", qdd, *D)
-        else:
-            code = RNEA_DERIVATIVES.call(*kernel_arrays(model), Q, V, Xs, *ext, f_ext_frame == "world", *D)
+        qdd = np.empty((N, nv)) if fd else None
+        kernel, results = (ABA_DERIVATIVES, (qdd, *D)) if fd else (RNEA_DERIVATIVES, D)
+        world = f_ext_frame == "world"
+
+        def run(a, b):                          # rows a … b − 1 (route.run_chunks: on several threads)
+            x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:])
+            return kernel.call(*kernel_arrays(model), Q[a:b], V[a:b], Xs[a:b], *x, world, *(r[a:b] for r in results))
+        code = run_chunks(run, N, thread_count(threads, call))
         if code == -1:
             return tuple(unbatch(d, single) for d in D)
     _raise(model, code, names, (Q, V, Xs), call, outs, D, qdd if fd else None)

@@ -66,12 +66,34 @@ def thread_count(threads, call):
     raise InputError(f"{call}: threads must be a positive integer or None (every core), not {threads!r}")
 
 
+def _pool(workers):
+    """The worker threads (besides the calling one), at least ``workers`` of them, started on first use."""
+    if not _POOL or _POOL[0][0] < workers:
+        n = max(workers, CORES - 1, 1)
+        _POOL[:] = [(n, ThreadPoolExecutor(n, "manipdyn"))]
+    return _POOL[0][1]
+
+
 def chunks(N, threads):
     """Row bounds [(a, b)] of the chunks a batch of N states is run in: min(threads, N // MIN_CHUNK) chunks, at
     least one, of near-equal size."""
     n = max(1, min(threads, N // MIN_CHUNK))
     edges = [N * k // n for k in range(n + 1)]
     return list(zip(edges[:-1], edges[1:]))
+
+
+def run_chunks(run, N, threads):
+    """``run(a, b)`` (a kernel call on rows a … b − 1 returning its code) over a batch of N states in chunks on up
+    to ``threads`` threads at once, for kernels whose codes are not mapped chunk by chunk (the derivatives): −1
+    when every chunk succeeds, else the code of ``run(0, N)`` on the calling thread — a rare second pass that
+    gives exactly the code one thread gives."""
+    parts = chunks(N, threads)
+    if len(parts) == 1:
+        return run(0, N)
+    pool = _pool(len(parts) - 1)
+    rest = [pool.submit(run, a, b) for a, b in parts[1:]]
+    codes = [run(*parts[0])] + [f.result() for f in rest]      # the calling thread runs the first chunk
+    return -1 if all(c == -1 for c in codes) else run(0, N)
 
 
 def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
@@ -83,16 +105,14 @@ def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     parts = chunks(out.shape[0], threads)
     if len(parts) == 1:
         return batch.call(*arrays, *states, *ext, out, *tail)
-    if not _POOL or _POOL[0][0] < len(parts) - 1:
-        n = max(len(parts), CORES) - 1
-        _POOL[:] = [(n, ThreadPoolExecutor(n, "manipdyn"))]
+    pool = _pool(len(parts) - 1)
     N, size = out.shape[0], out[0].size
 
     def part(bounds):
         a, b = bounds
         x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:]) if ext else ()
         return batch.call(*arrays, *(y[a:b] for y in states), *x, out[a:b], *tail)
-    rest = [_POOL[0][1].submit(part, bounds) for bounds in parts[1:]]
+    rest = [pool.submit(part, bounds) for bounds in parts[1:]]
     codes = [part(parts[0])] + [f.result() for f in rest]     # the calling thread runs the first chunk
     for (a, _), code in zip(parts, codes):
         if code >= 0:

@@ -35,6 +35,8 @@ def _calls(model):
         "mass_matrix": lambda Q, V, A, **k: md.mass_matrix(model, Q, **k),
         "coriolis_matrix": lambda Q, V, A, **k: md.coriolis_matrix(model, Q, V, **k),
         "joint_torque_regressor": lambda Q, V, A, **k: md.joint_torque_regressor(model, Q, V, A, **k),
+        "rnea_derivatives": lambda Q, V, A, **k: md.rnea_derivatives(model, Q, V, A, f_ext=W, **k),
+        "aba_derivatives": lambda Q, V, A, **k: md.aba_derivatives(model, Q, V, A, **k),
     }
 
 
@@ -48,13 +50,14 @@ def test_chunks_cover_the_batch_in_order():
 
 @pytest.mark.parametrize("name", ["rnea", "rnea f_ext local", "rnea f_ext world", "nonlinear_effects",
                                   "gravity_torques", "aba", "aba f_ext", "forward_dynamics cholesky", "mass_matrix",
-                                  "coriolis_matrix", "joint_torque_regressor"])
+                                  "coriolis_matrix", "joint_torque_regressor", "rnea_derivatives",
+                                  "aba_derivatives"])
 def test_threads_give_one_threads_numbers(arm, name):
     model, Q, V, A = arm
     f = _calls(model)[name]
     one = f(Q, V, A, threads=1)
     for threads in (2, 4, 7, None):
-        assert np.array_equal(f(Q, V, A, threads=threads), one), (name, threads)
+        assert np.array_equal(f(Q, V, A, threads=threads), one), (name, threads)   # (the derivatives: 3 arrays)
 
 
 def test_threaded_rows_match_pinocchio(arm):
@@ -84,6 +87,11 @@ def test_errors_name_the_row_of_the_whole_batch(arm):
     big[700, 1] = 1e308                                    # overflows in the 3rd chunk: the result's row is named
     with pytest.raises(md.NumericalError, match=r"tau\[700, 0\] \(row 700"):
         md.rnea(model, Q, V, big, threads=4)
+    for f in (md.rnea_derivatives, md.aba_derivatives):   # their codes: a failing chunk is run again on one thread
+        with pytest.raises(md.InputError, match=r"q\[900, 2\]"):
+            f(model, bad, V, A, threads=4)
+        with pytest.raises(md.NumericalError, match=r"row 700"):
+            f(model, Q, V, big, threads=4)
     two = Q.copy()
     two[300, 0], two[800, 0] = np.inf, np.nan              # two chunks fail: the first row is the one reported
     with pytest.raises(md.InputError, match=r"q\[300, 0\]"):
