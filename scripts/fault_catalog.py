@@ -239,7 +239,8 @@ FAULTS = (
           ("tests/batch/test_dask.py",), "Dask arrays of states with other chunks than the first's (rows or "
           "columns) handed to the kernels unaligned"),
     Fault("route-run-chunks-keeps-the-first-code", "rnea", "manipdyn/dynamics/route.py",
-          "    return -1 if all(c == -1 for c in codes) else run(0, N)\n", "    return codes[0]\n",
+          "    return -1 if all(c == -1 for c in _codes(run, parts)) else run(0, N)\n",
+          "    return _codes(run, parts)[0]\n",
           ("tests/batch/test_threads.py",), "threaded derivatives report only their first chunk's code: a bad row "
           "in a later chunk comes back as numbers"),
     Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",

@@ -49,6 +49,7 @@ _MISSING = NotImplemented      # a state argument the call was not given (state.
 SHAPES = ("v", "vv", "regressor")   # one state's result: (nv,), (nv, nv), (nv, 10 nb) — Model.kernel.result_shapes
 CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 MIN_CHUNK = 128     # states per thread at least: a thread's start and join cost ~20 µs, 128 ABA states ~80 µs
+MAX_THREADS = 1024  # the most threads= takes; at most max(4 · CORES, 8) run at once (the pool's size)
 _POOL = []          # the worker threads, started on the first batch that is split (no import side effect)
 
 
@@ -61,17 +62,21 @@ def thread_count(threads, call):
     """The threads a batch may use: ``threads`` (a positive integer) or, for None, CORES."""
     if threads is None:
         return CORES
-    if isinstance(threads, Integral) and not isinstance(threads, bool) and threads >= 1:
+    if isinstance(threads, Integral) and not isinstance(threads, bool) and 1 <= threads <= MAX_THREADS:
         return int(threads)
-    raise InputError(f"{call}: threads must be a positive integer or None (every core), not {threads!r}")
+    raise InputError(f"{call}: threads must be a positive integer (at most {MAX_THREADS}) or None (every core), "
+                     f"not {threads!r}")
 
 
-def _pool(workers):
-    """The worker threads (besides the calling one), at least ``workers`` of them, started on first use."""
+def _codes(run, parts):
+    """``run(a, b)`` for every chunk (a, b) of ``parts``, at once: the calling thread runs the first, the pool's
+    worker threads (started on first use; at most max(4 · CORES, 8), more chunks wait their turn) the rest.
+    Returns their codes in chunk order."""
+    workers = min(max(len(parts) - 1, CORES - 1, 1), max(4 * CORES, 8))
     if not _POOL or _POOL[0][0] < workers:
-        n = max(workers, CORES - 1, 1)
-        _POOL[:] = [(n, ThreadPoolExecutor(n, "manipdyn"))]
-    return _POOL[0][1]
+        _POOL[:] = [(workers, ThreadPoolExecutor(workers, "manipdyn"))]
+    rest = [_POOL[0][1].submit(run, a, b) for a, b in parts[1:]]
+    return [run(*parts[0])] + [f.result() for f in rest]
 
 
 def chunks(N, threads):
@@ -90,10 +95,7 @@ def run_chunks(run, N, threads):
     parts = chunks(N, threads)
     if len(parts) == 1:
         return run(0, N)
-    pool = _pool(len(parts) - 1)
-    rest = [pool.submit(run, a, b) for a, b in parts[1:]]
-    codes = [run(*parts[0])] + [f.result() for f in rest]      # the calling thread runs the first chunk
-    return -1 if all(c == -1 for c in codes) else run(0, N)
+    return -1 if all(c == -1 for c in _codes(run, parts)) else run(0, N)
 
 
 def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
@@ -105,16 +107,12 @@ def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     parts = chunks(out.shape[0], threads)
     if len(parts) == 1:
         return batch.call(*arrays, *states, *ext, out, *tail)
-    pool = _pool(len(parts) - 1)
     N, size = out.shape[0], out[0].size
 
-    def part(bounds):
-        a, b = bounds
+    def part(a, b):
         x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:]) if ext else ()
         return batch.call(*arrays, *(y[a:b] for y in states), *x, out[a:b], *tail)
-    rest = [pool.submit(part, bounds) for bounds in parts[1:]]
-    codes = [part(parts[0])] + [f.result() for f in rest]     # the calling thread runs the first chunk
-    for (a, _), code in zip(parts, codes):
+    for (a, _), code in zip(parts, _codes(part, parts)):
         if code >= 0:
             return code + a
         if code <= -2 - nb:

@@ -108,14 +108,14 @@ def test_a_singular_joint_is_named_through_the_chunks():
         md.aba(model, Z, Z, Z, threads=4)
 
 
-@pytest.mark.parametrize("threads", [0, -2, 1.5, True, "2", np.float64(2.0)])
+@pytest.mark.parametrize("threads", [0, -2, 1.5, True, "2", np.float64(2.0), route.MAX_THREADS + 1, 10**9])
 def test_bad_thread_counts_are_refused(arm, threads):
     model, Q, V, A = arm
     for call in (lambda: md.rnea(model, Q, V, A, threads=threads),
                  lambda: md.rnea(model, Q[0], V[0], A[0], threads=threads),
                  lambda: md.mass_matrix(model, Q, method="lagrange", threads=threads),
                  lambda: md.forward_dynamics(model, Q, V, A, method="cholesky", threads=threads)):
-        with pytest.raises(md.InputError, match="threads must be a positive integer or None"):
+        with pytest.raises(md.InputError, match=r"threads must be a positive integer \(at most 1024\) or None"):
             call()
 
 
