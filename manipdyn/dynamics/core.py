@@ -171,6 +171,48 @@ def finite_state(Q, V, A, s):
     return max(first_nonfinite(Q, s), first_nonfinite(V, s), first_nonfinite(A, s)) < 0   # no early exit
 
 
+# -- lane blocks: a batch as blocks of LANES states, the state index last (the lane kernels, docs/design.md §4c)
+LANES = 64     # states per block: the lane kernels' innermost loops run over them (measured on ur5: 32 → 64 → 128
+#                lanes 118 → 116 → 115 ns per state; 8 lanes 385: too short a loop to vectorise)
+
+
+@njit(cache=True, inline="always")
+def gather_lanes(X, s0, n, Z, row):
+    """Z[(row + k)·LANES + l] = X[s0 + l, k] for the block's n states (l < n; lanes n … LANES − 1 repeat its last
+    state, so that every lane computes finite numbers). Returns False if an entry is not finite."""
+    bad = 0.0
+    for k in range(X.shape[1]):
+        for l in range(LANES):
+            x = X[s0 + min(l, n - 1), k]
+            Z[(row + k) * LANES + l] = x
+            bad += x - x                   # 0 for finite x, NaN for ±inf and NaN
+    return bad == 0.0
+
+
+@njit(cache=True, inline="always")
+def scatter_lanes(Z, n, Y, s0):
+    """Y[s0 + l, k] = Z[k·LANES + l] for the block's n states (``gather_lanes`` undone). Returns False if an entry
+    is not finite."""
+    bad = 0.0
+    for l in range(n):
+        for k in range(Y.shape[1]):
+            y = Z[k * LANES + l]
+            Y[s0 + l, k] = y
+            bad += y - y
+    return bad == 0.0
+
+
+@njit(cache=True, inline="always")
+def shift_code(code, s0, nb, size):
+    """A kernel's code for the rows s0 … of a batch, as the code of the whole batch: a state index (≥ 0) + s0, a
+    result's flat index (code −2 − nb − k) + s0 · size (the entries per state of the result); −1 as it is."""
+    if code >= 0:
+        return code + s0
+    if code <= -2 - nb:
+        return code - s0 * size
+    return code
+
+
 @njit(cache=True)
 def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).

@@ -32,10 +32,12 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import A1, A2, A3, C2, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import joint_force, joint_placement, joint_velocity
+from ..joints import REVOLUTE, joint_force, joint_placement, joint_velocity
 from . import mimic
-from ..spatial import add, cross, first_nonfinite, put, rot, rot_t, scale, sub, vec
-from .core import finite_state, kernel_arrays, no_wrenches, unpack, wrench_rows_of
+from ..spatial import (SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sincos, sub,
+                       vec)
+from .core import (LANES, finite_state, gather_lanes, kernel_arrays, no_wrenches, scatter_lanes, shift_code, unpack,
+                   wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
@@ -177,12 +179,164 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     return -1
 
 
-# The compiled code every call reaches (``_jit.entry``; arrays of any strides), and the same kernel compiled for
-# a batch of C-ordered states and result: the one kernel with a second signature (docs/design.md §2). Measured
-# on the aau arm at N = 1e4: 352 → 338 ns per state, which keeps the batched-rnea target (0.5× Pinocchio's
-# rneaInParallel(1)) met with a margin — with the first signature alone it sat at 0.49–0.51 run to run.
-RNEA = entry(rnea_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
-RNEA_C = entry(rnea_kernel, *MODEL, C2, C2, C2, A3, I1, A2, FLAG, C2, A3)
+# -- the lane kernel: the same recursion across a block of states ------------------------------------------------
+# A batch runs as blocks of LANES states (core.gather_lanes: the state index last). For each body, one loop over
+# the block's lanes does what ``outward`` does for one state, and the compiler turns it into vector instructions
+# (4 states per instruction with AVX2); ``sincos`` replaces libm's sin and cos, which would keep it scalar.
+# A body's record (RECORD rows of LANES numbers): R^{i−1}_i (9, row-major), p^{i−1}_i (3), ω'_i, ω̇'_i, v̇'_i,
+# f'_i, n'_i (3 each). Records live in two arrays by the parity of the body's depth in the tree: body i writes its
+# own and reads its parent's, in the other array — two arrays the compiler can check for overlap once per loop,
+# where rows of one array at run-time offsets made it give up vectorising (docs/design.md §4c).
+_R, _P, _W, _DW, _DV, _F, _N = 0, 9, 12, 15, 18, 21, 24
+RECORD = 27
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
+    """``rnea_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of rnea.
+
+    Runs ``rnea_kernel`` itself for what the lanes do not cover — external wrenches, per-link terms, a joint
+    with more than one velocity (free flyer) — and for a block with a non-finite input or result or a revolute
+    angle beyond ``spatial.SINCOS_MAX`` (its code then names the state or entry, as the one-state form's does).
+    Every lane is computed alone, so a state's τ does not depend on the batch around it; it agrees with the
+    one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
+    """
+    N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
+    if xb.shape[0] > 0 or T.shape[0] > 0 or nq != nb or nv != nb:      # a multi-dof joint, wrenches, terms
+        return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
+    mdl = unpack(I, F)
+    parent, kind = mdl.parent, mdl.kind
+    even, odd = np.empty(nb * RECORD * LANES), np.empty(nb * RECORD * LANES)   # records by depth parity
+    base = np.zeros(9 * LANES)                  # the fixed base as a parent: ω' = ω̇' = 0, v̇' = −g (docs §6)
+    for l in range(LANES):
+        base[6 * LANES + l], base[7 * LANES + l], base[8 * LANES + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
+    spare = np.empty(6 * LANES)                 # where a root's f', n' go (the base takes them)
+    Z, TB = np.empty(3 * nb * LANES), np.empty(nb * LANES)      # q, q̇, q̈ and τ of the block, state index last
+    depth = np.zeros(nb, np.int64)
+    for i in range(nb):
+        depth[i] = 0 if parent[i] < 0 else depth[parent[i]] + 1
+    for s0 in range(0, N, LANES):
+        n = min(LANES, N - s0)
+        ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(A, s0, n, Z, 2 * nb)
+        for i in range(nb):
+            if kind[i] == REVOLUTE:
+                for l in range(LANES):
+                    ok &= abs(Z[mdl.iq[i] * LANES + l]) <= SINCOS_MAX
+        if ok:
+            for i in range(nb):                                          # outward, Eqs. 3–14
+                own, other = (even, odd) if depth[i] % 2 == 0 else (odd, even)
+                j = parent[i]
+                par = base if j < 0 else other[(j * RECORD + _W) * LANES:(j * RECORD + _W + 9) * LANES]
+                outward_lanes(i, mdl, own[i * RECORD * LANES:(i + 1) * RECORD * LANES], par, Z)
+            for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
+                own, other = (even, odd) if depth[i] % 2 == 0 else (odd, even)
+                j = parent[i]
+                to = spare if j < 0 else other[(j * RECORD + _F) * LANES:(j * RECORD + _F + 6) * LANES]
+                inward_lanes(i, mdl, own[i * RECORD * LANES:(i + 1) * RECORD * LANES], to, TB)
+            ok = scatter_lanes(TB, n, tau, s0)
+        if not ok:                                  # the block's states one by one: the code names the culprit
+            code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X, xb, xp, world,
+                               tau[s0:s0 + n], T)
+            if code != -1:
+                return shift_code(code, s0, nb, nv)
+    return -1
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def outward_lanes(i, mdl, B, par, Z):
+    """Body i's record B for every lane of the block (Eqs. 3–14, as ``outward`` and ``inertial`` for one state):
+    its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'), then f'_i = m v̇'_C and
+    n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes). Three loops, not one: the
+    model's numbers that each needs fit in the vector registers (one loop spilled them: 13.7 → 11.5 ns per lane)."""
+    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
+    # R^{i−1}_i = R0 R_J(q), R_J = c 1 + s [k]× + (1 − c) k kᵀ (Rodrigues) = c R0 + s R0[k]× + (1 − c) R0 k kᵀ;
+    # p = p0 + d R0 k for a prismatic joint (its R_J = 1: s = 0, c = 1 from an angle of 0)
+    R0, x, y, z = mdl.R0, mdl.axis[i, 0], mdl.axis[i, 1], mdl.axis[i, 2]
+    a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
+        (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
+    k0, k1, k2 = cross(a0, (x, y, z)), cross(a1, (x, y, z)), cross(a2, (x, y, z))   # rows of R0 [k]×: a × k
+    u0, u1, u2 = a0[0] * x + a0[1] * y + a0[2] * z, a1[0] * x + a1[1] * y + a1[2] * z, a2[0] * x + a2[1] * y + a2[2] * z
+    o0, o1, o2 = mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]
+    turn = 1.0 if mdl.kind[i] == REVOLUTE else 0.0
+    zq = Z[mdl.iq[i] * L:(mdl.iq[i] + 1) * L]
+    for l in range(L):
+        qi = zq[l]
+        s, c = sincos(turn * qi)
+        t, d = 1.0 - c, (1.0 - turn) * qi
+        B[0 * L + l] = c * a0[0] + s * k0[0] + t * u0 * x
+        B[1 * L + l] = c * a0[1] + s * k0[1] + t * u0 * y
+        B[2 * L + l] = c * a0[2] + s * k0[2] + t * u0 * z
+        B[3 * L + l] = c * a1[0] + s * k1[0] + t * u1 * x
+        B[4 * L + l] = c * a1[1] + s * k1[1] + t * u1 * y
+        B[5 * L + l] = c * a1[2] + s * k1[2] + t * u1 * z
+        B[6 * L + l] = c * a2[0] + s * k2[0] + t * u2 * x
+        B[7 * L + l] = c * a2[1] + s * k2[1] + t * u2 * y
+        B[8 * L + l] = c * a2[2] + s * k2[2] + t * u2 * z
+        B[9 * L + l], B[10 * L + l], B[11 * L + l] = o0 + d * u0, o1 + d * u1, o2 + d * u2
+    # the motion: Eqs. 3, 5, 6 (prismatic 9, 10, 12), as ``outward``
+    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
+    zv, za = Z[(nb + r) * L:(nb + r + 1) * L], Z[(2 * nb + r) * L:(2 * nb + r + 1) * L]
+    for l in range(L):
+        R = ((B[0 * L + l], B[1 * L + l], B[2 * L + l]), (B[3 * L + l], B[4 * L + l], B[5 * L + l]),
+             (B[6 * L + l], B[7 * L + l], B[8 * L + l]))
+        p = (B[9 * L + l], B[10 * L + l], B[11 * L + l])
+        w0, dw0, dv0 = (par[l], par[L + l], par[2 * L + l]), (par[3 * L + l], par[4 * L + l], par[5 * L + l]), \
+            (par[6 * L + l], par[7 * L + l], par[8 * L + l])
+        w_in = mul3t(R, w0)                                    # R^i_{i−1} ω'_{i−1}
+        dw_in = mul3t(R, dw0)
+        dv_in = mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))    # Eq. 6 (32c)
+        qd, qdd = zv[l], za[l]
+        VL, VA, AL, AA = scale(qd, sl), scale(qd, sa), scale(qdd, sl), scale(qdd, sa)
+        w = add(w_in, VA)                                           # Eq. 3
+        dw = add(add(dw_in, AA), cross(w_in, VA))                   # Eq. 5
+        dv = add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL)))     # Eqs. 6, 12
+        B[12 * L + l], B[13 * L + l], B[14 * L + l] = w
+        B[15 * L + l], B[16 * L + l], B[17 * L + l] = dw
+        B[18 * L + l], B[19 * L + l], B[20 * L + l] = dv
+    # the inertial wrench: Eqs. 7, 13, 14 and Eq. 16's CoM term, as ``inertial``
+    m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), mdl.inertia
+    j0, j1, j2 = (J[i, 0, 0], J[i, 0, 1], J[i, 0, 2]), (J[i, 1, 0], J[i, 1, 1], J[i, 1, 2]), \
+        (J[i, 2, 0], J[i, 2, 1], J[i, 2, 2])
+    for l in range(L):
+        w, dw = (B[12 * L + l], B[13 * L + l], B[14 * L + l]), (B[15 * L + l], B[16 * L + l], B[17 * L + l])
+        dv = (B[18 * L + l], B[19 * L + l], B[20 * L + l])
+        fc = scale(m, add(dv, add(cross(dw, cm), cross(w, cross(w, cm)))))          # Eqs. 7, 13
+        Iw = (j0[0] * w[0] + j0[1] * w[1] + j0[2] * w[2], j1[0] * w[0] + j1[1] * w[1] + j1[2] * w[2],
+              j2[0] * w[0] + j2[1] * w[1] + j2[2] * w[2])
+        Idw = (j0[0] * dw[0] + j0[1] * dw[1] + j0[2] * dw[2], j1[0] * dw[0] + j1[1] * dw[1] + j1[2] * dw[2],
+               j2[0] * dw[0] + j2[1] * dw[1] + j2[2] * dw[2])
+        nc = add(Idw, cross(w, Iw))                                                  # Eq. 14
+        B[21 * L + l], B[22 * L + l], B[23 * L + l] = fc
+        B[24 * L + l], B[25 * L + l], B[26 * L + l] = add(nc, cross(cm, fc))
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def inward_lanes(i, mdl, B, to, TB):
+    """τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18) into row iv_i of TB, and the parent's f', n' (``to``: 6 rows) += R f'_i,
+    R n'_i + p × R f'_i (Eqs. 15, 16), for every lane of the block, as ``inward`` for one state."""
+    L, r = LANES, mdl.iv[i]
+    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
+    tb = TB[r * L:(r + 1) * L]
+    for l in range(L):
+        f, n = (B[21 * L + l], B[22 * L + l], B[23 * L + l]), (B[24 * L + l], B[25 * L + l], B[26 * L + l])
+        tb[l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2]
+        R = ((B[0 * L + l], B[1 * L + l], B[2 * L + l]), (B[3 * L + l], B[4 * L + l], B[5 * L + l]),
+             (B[6 * L + l], B[7 * L + l], B[8 * L + l]))
+        Rf, Rn = mul3(R, f), mul3(R, n)
+        n_up = add(Rn, cross((B[9 * L + l], B[10 * L + l], B[11 * L + l]), Rf))
+        to[l] += Rf[0]
+        to[L + l] += Rf[1]
+        to[2 * L + l] += Rf[2]
+        to[3 * L + l] += n_up[0]
+        to[4 * L + l] += n_up[1]
+        to[5 * L + l] += n_up[2]
+
+
+# The compiled code every batch reaches (``_jit.entry``; arrays of any strides), and the same kernel compiled for
+# a batch of C-ordered states and result: the one batch kernel with a second signature (docs/design.md §2),
+# kept from the scalar batch kernel, where it measured 352 → 338 ns per state on the aau arm.
+RNEA = entry(rnea_lanes, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
+RNEA_C = entry(rnea_lanes, *MODEL, C2, C2, C2, A3, I1, A2, FLAG, C2, A3)
 
 
 

@@ -1,0 +1,95 @@
+"""The lane kernel (rnea.rnea_lanes: the batch entry of rnea, nonlinear_effects and gravity_torques) against
+Pinocchio and against the one-state kernel: blocks of LANES states, a partial last block, a block that falls back
+to the one-state form (an angle beyond spatial.SINCOS_MAX, a non-finite input), prismatic joints and a branching
+tree; the batch-vs-single bound of docs/design.md §3 (1e-14)."""
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import AAU, assert_close, inertial_xml, urdf
+
+import manipdyn as md
+from manipdyn.dynamics.core import LANES
+from manipdyn.errors import InputError, NumericalError
+from manipdyn.joints import PRISMATIC
+from manipdyn.spatial import SINCOS_MAX
+from manipdyn.validation import random_states
+
+
+def _tree(seed=7, n=9):
+    """A branching tree of revolute and prismatic joints with unaligned axes and rotated inertias (no continuous
+    joint: Pinocchio gives those two q entries)."""
+    rng = np.random.default_rng(seed)
+    links, joints = {"base": ""}, []
+    for k in range(n):
+        parent = "base" if k == 0 or rng.random() < 0.25 else f"L{rng.integers(0, k)}"
+        d, m = rng.uniform(0.05, 1.0, 3), rng.uniform(0.1, 3.0)
+        inertia = np.array([d[1] + d[2], d[0] + d[2], d[0] + d[1]]) * m / 10
+        links[f"L{k}"] = inertial_xml(m, rng.uniform(-0.3, 0.3, 3), (*inertia, 0, 0, 0), rng.uniform(-3, 3, 3))
+        axis = rng.normal(size=3)
+        joints.append((f"j{k}", ("revolute", "prismatic")[k % 2], parent, f"L{k}",
+                       rng.uniform(-0.5, 0.5, 3), rng.uniform(-3, 3, 3), axis / np.linalg.norm(axis)))
+    return urdf(links, joints, name="lanes_tree")
+
+
+@pytest.fixture(scope="module")
+def models():
+    return {"aau_arm": (md.load_urdf(AAU), pin.buildModelFromUrdf(str(AAU))),
+            "tree": (md.load_urdf_string(_tree()), pin.buildModelFromXML(_tree()))}
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "tree"])
+@pytest.mark.parametrize("N", [1, LANES - 1, LANES, 2 * LANES + 5])
+def test_lane_batches_match_pinocchio_and_the_one_state_kernel(models, name, N):
+    model, pm = models[name]
+    assert np.sum(model.kind == PRISMATIC) == (4 if name == "tree" else 0)
+    Q, V, A = random_states(model, N, np.random.default_rng(N))
+    tau = md.rnea(model, Q, V, A)
+    data = pm.createData()
+    ref = np.stack([pin.rnea(pm, data, q, v, a) for q, v, a in zip(Q, V, A)])   # same q order (revolute, prismatic)
+    assert_close(tau, ref, 1e-14, f"{name} N={N} vs Pinocchio")                  # measured ≤ 1.7e-15
+    one = np.stack([md.rnea(model, q, v, a) for q, v, a in zip(Q, V, A)])
+    assert_close(tau, one, 1e-14, f"{name} N={N} vs one state")                  # measured ≤ 7.4e-16
+    h, g = md.nonlinear_effects(model, Q, V), md.gravity_torques(model, Q)
+    ref_h = np.stack([pin.nonLinearEffects(pm, data, q, v) for q, v in zip(Q, V)])
+    assert_close(h, ref_h, 1e-14, "h")                                             # measured ≤ 1.9e-15
+    assert_close(g, np.stack([pin.computeGeneralizedGravity(pm, data, q) for q in Q]), 1e-14, "g")
+    assert_close(h, np.stack([md.nonlinear_effects(model, q, v) for q, v in zip(Q, V)]), 1e-14, "h one")
+
+
+def test_a_state_does_not_depend_on_its_block(models):
+    model, _ = models["tree"]
+    Q, V, A = random_states(model, 3 * LANES, np.random.default_rng(5))
+    whole = md.rnea(model, Q, V, A)
+    for a, b in ((0, 1), (7, 70), (LANES - 3, 2 * LANES + 1), (100, 3 * LANES)):
+        assert np.array_equal(md.rnea(model, Q[a:b], V[a:b], A[a:b]), whole[a:b]), (a, b)
+
+
+def test_a_block_with_a_huge_angle_runs_the_one_state_form(models):
+    model, pm = models["aau_arm"]
+    Q, V, A = random_states(model, 2 * LANES, np.random.default_rng(1))
+    Q[LANES + 3, 0] = 4 * SINCOS_MAX                  # past sincos's range: that block goes through libm
+    tau = md.rnea(model, Q, V, A)
+    one = np.stack([md.rnea(model, q, v, a) for q, v, a in zip(Q, V, A)])
+    assert np.array_equal(tau[LANES:], one[LANES:])   # the one-state kernel itself, bit for bit
+    data = pm.createData()
+    assert_close(tau[LANES + 3], pin.rnea(pm, data, Q[LANES + 3], V[LANES + 3], A[LANES + 3]), 1e-14, "huge angle")
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_a_non_finite_input_is_named_by_its_row(models, bad):
+    model, _ = models["tree"]
+    Q, V, A = random_states(model, 2 * LANES + 9, np.random.default_rng(2))
+    A[LANES + 7, 4] = bad
+    with pytest.raises(InputError, match=rf"a\[{LANES + 7}, 4\] \(joint 'j7'\) is {bad}"):
+        md.rnea(model, Q, V, A)
+    V[2 * LANES + 8, 0] = bad
+    with pytest.raises(InputError, match=rf"v\[{2 * LANES + 8}, 0\] \(joint 'j0'\) is {bad}"):
+        md.nonlinear_effects(model, Q, V)
+
+
+def test_an_overflow_in_a_later_block_is_named_by_its_row(models):
+    model, _ = models["aau_arm"]
+    Q, V, A = random_states(model, 2 * LANES + 9, np.random.default_rng(3))
+    V[LANES + 5] = 1e200                                  # finite input, τ ~ v² overflows to inf
+    with pytest.raises(NumericalError, match=rf"row {LANES + 5}\b"):
+        md.rnea(model, Q, V, A)
