@@ -112,29 +112,33 @@ def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
 
 @njit(cache=True)
 def bias_kernel(I, F, Q, V, tau):
-    """τ = rnea(q, v, 0) for every state of Q (N, nq), V (N, nv) — rnea(q, 0, 0) when V has no columns — into
-    tau (N, nv): ``rnea_kernel`` with zero accelerations."""
+    """τ = rnea(q, v, 0) for every state of a batch Q (N, nq), V (N, nv) — rnea(q, 0, 0) when V has no columns —
+    into tau (N, nv): the batch kernel ``rnea_lanes`` with zero accelerations."""
     Z = np.zeros(tau.shape)[:, :]
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_kernel(I, F, Q, Z if V.shape[1] == 0 else V, Z, X, xb, xp, world, tau, F[:0, :, :])
+    return rnea_lanes(I, F, Q, Z if V.shape[1] == 0 else V, Z, X, xb, xp, world, tau, F[:0, :, :])
 
 
 @njit(cache=True)
 def gravity_kernel(I, F, Q, tau):
-    """τ = rnea(q, 0, 0) for every state of Q (N, nq): ``bias_kernel`` without velocities."""
+    """τ = rnea(q, 0, 0) for every state of a batch Q (N, nq): ``bias_kernel`` without velocities."""
     return bias_kernel(I, F, Q, Q[:, :0], tau)
 
 
 @njit(cache=True)
 def bias_one(I, F, q, v, tau):
-    """One state q (nq,), v (nv,), tau (nv,): ``bias_kernel`` on row views."""
-    return bias_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :])
+    """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_kernel`` on row views
+    with zero accelerations (the lane kernel would compute a block of 64 states for it)."""
+    Z = np.zeros((1, tau.shape[0]))[:, :]
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_kernel(I, F, q[np.newaxis, :], Z if v.shape[0] == 0 else v[np.newaxis, :], Z, X, xb, xp, world,
+                       tau[np.newaxis, :], F[:0, :, :])
 
 
 @njit(cache=True)
 def gravity_one(I, F, q, tau):
-    """One state q (nq,), tau (nv,): ``gravity_kernel`` on row views."""
-    return gravity_kernel(I, F, q[np.newaxis, :], tau[np.newaxis, :])
+    """One state q (nq,), tau (nv,): ``bias_one`` without velocities."""
+    return bias_one(I, F, q, q[:0], tau)
 
 
 Work = namedtuple("Work", "Rl Rw pl w dw vel dv dvc fc nc f n sv")
