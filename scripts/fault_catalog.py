@@ -230,10 +230,6 @@ FAULTS = (
           "            return code - a * size\n", "            return code\n",
           ("tests/batch/test_threads.py",), "a batch split over threads names an overflowed result by its row in "
           "the chunk, not in the batch"),
-    Fault("route-c-entry-for-any-layout", "rnea", "manipdyn/dynamics/route.py",
-          "self.batch_c is not None and all(y.flags.c_contiguous for y in states)", "self.batch_c is not None",
-          ("tests/batch/test_fast_paths.py",), "a Fortran-ordered or strided batch handed to rnea's kernel compiled "
-          "for C-ordered arrays (its rows read with the wrong strides)"),
     Fault("route-dask-chunks-not-aligned", "rnea", "manipdyn/dynamics/route.py",
           "        states = [y.rechunk((rows, -1)) for y in states]\n", "",
           ("tests/batch/test_dask.py",), "Dask arrays of states with other chunks than the first's (rows or "

@@ -31,7 +31,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .._jit import A1, A2, A3, C2, CONTRACT, FLAG, I1, MODEL, entry, njit
+from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import REVOLUTE, joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import (SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sincos, sub,
@@ -191,8 +191,8 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
 # f'_i, n'_i (3 each). Records live in two arrays by the parity of the body's depth in the tree: body i writes its
 # own and reads its parent's, in the other array — two arrays the compiler can check for overlap once per loop,
 # where rows of one array at run-time offsets made it give up vectorising (docs/design.md §4c).
-_R, _P, _W, _DW, _DV, _F, _N = 0, 9, 12, 15, 18, 21, 24
-RECORD = 27
+RECORD = 27                 # rows of a body's record: R 0–8, p 9–11, ω' 12–14, ω̇' 15–17, v̇' 18–20, f' 21–23, n' 24–26
+_W, _F = 12, 21             # the first rows of ω' (the motion a child reads) and of f' (the wrench a child adds to)
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -336,11 +336,10 @@ def inward_lanes(i, mdl, B, to, TB):
         to[5 * L + l] += n_up[2]
 
 
-# The compiled code every batch reaches (``_jit.entry``; arrays of any strides), and the same kernel compiled for
-# a batch of C-ordered states and result: the one batch kernel with a second signature (docs/design.md §2),
-# kept from the scalar batch kernel, where it measured 352 → 338 ns per state on the aau arm.
+# The compiled code every batch reaches (``_jit.entry``; arrays of any strides). The scalar batch kernel had a
+# second entry compiled for C-ordered arrays (4 % faster); the lane kernel reads its inputs once per block, and
+# its C-ordered twin measured 4–6 % slower (ur5 109 vs 113 ns a state), so it has one entry like every kernel.
 RNEA = entry(rnea_lanes, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
-RNEA_C = entry(rnea_lanes, *MODEL, C2, C2, C2, A3, I1, A2, FLAG, C2, A3)
 
 
 
@@ -444,7 +443,7 @@ def store_terms(mdl, work, T):
 
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
 
-@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, batch_c=RNEA_C, tail=(_NO_T,),
+@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,),
        wrenches=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))

@@ -174,20 +174,18 @@ class Route:
     shape     one state's result shape, one of SHAPES: "v" (nv,), "vv" (nv, nv), "regressor" (nv, 10 nb)
     one       entry of the one-state kernel: one(I, F, *state, out)
     batch     entry of the batch kernel: batch(I, F, *states, [X, body, point, world,] out, *tail)
-    batch_c   or None: the batch kernel compiled for C-ordered states and result, used when every state is
-              C-ordered (rnea's: 4 % faster per state)
     tail      constant arguments after out (rnea's empty per-link terms)
     wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``state.wrench_rows``
     wrench_one  entry for one state with one wrench: (I, F, *state, force, moment, row, world, out)
     mimic     mimic(model, *states, **wrench keywords) for a MimicModel, or None (refused, by name)
     """
-    __slots__ = ("call", "names", "result", "shape", "one", "batch", "batch_c", "tail", "wrenches", "wrench_one",
+    __slots__ = ("call", "names", "result", "shape", "one", "batch", "tail", "wrenches", "wrench_one",
                  "mimic", "public")
 
-    def __init__(self, call, names, result, shape, one, batch, *, batch_c=None, tail=(), wrenches=False,
+    def __init__(self, call, names, result, shape, one, batch, *, tail=(), wrenches=False,
                  wrench_one=None, mimic=None):
         self.call, self.names, self.result, self.shape = call, tuple(names), result, shape
-        self.one, self.batch, self.batch_c, self.tail = one, batch, batch_c, tuple(tail)
+        self.one, self.batch, self.tail = one, batch, tuple(tail)
         self.wrenches, self.wrench_one, self.mimic = wrenches, wrench_one, mimic
 
     def by_name(self, a, tau):
@@ -226,8 +224,7 @@ class Route:
         else:
             ext = ()
         out = np.empty((N,) + shape)
-        batch = self.batch_c if self.batch_c is not None and all(y.flags.c_contiguous for y in states) else self.batch
-        code = run_batch(batch, model.kernel.arrays, states, ext, out, self.tail, thread_count(threads, self.call),
+        code = run_batch(self.batch, model.kernel.arrays, states, ext, out, self.tail, thread_count(threads, self.call),
                          model.njoints)
         if code != -1:
             self.fail(model, code, states, out, f_ext, f_ext_frame)

@@ -1,8 +1,6 @@
 """Every kernel is compiled once: one list of argument types per kernel, whichever public call reaches it
 (docs/design.md §2: one compiled body per kernel). A second signature would be a second compile of the same
-code — the first compile's cost paid twice, in ``manipdyn warmup`` and in a user's first calls. The one
-declared exception: the Newton–Euler batch kernel's C-ordered entry (rnea.RNEA_C: the lane kernel, and the
-one-state form it runs for what the lanes do not cover)."""
+code — the first compile's cost paid twice, in ``manipdyn warmup`` and in a user's first calls."""
 import json
 import subprocess
 import sys
@@ -30,8 +28,5 @@ def test_every_public_call_reaches_kernels_compiled_for_one_signature():
     sigs = json.loads(r.stdout.strip().splitlines()[-1])
     assert len(sigs) >= 30                                   # the probe saw the kernels
     assert sum(bool(v) for v in sigs.values()) >= 20         # and the calls compiled (or loaded) them
-    allowed = {"rnea_kernel": 2, "rnea_lanes": 2}          # rnea.RNEA and rnea.RNEA_C, and the one-state form
-    #                                                        they run for what the lanes do not cover
-    twice = {k: v for k, v in sigs.items() if len(v) > allowed.get(k, 1)}
+    twice = {k: v for k, v in sigs.items() if len(v) > 1}
     assert twice == {}, f"kernels compiled for more than one list of argument types: {twice}"
-    assert len(sigs["rnea_lanes"]) == 2 and sum("Array(float64, 2, 'C'" in s for s in sigs["rnea_lanes"]) == 1
