@@ -11,7 +11,8 @@ algebra of its own). Two parts:
      ``motion_cross`` (v ×), ``force_cross`` (v ×*), their array forms ``cross_motion`` / ``cross_force``,
      the transforms ``motion_to_child`` (ⁱX_λ), ``force_up`` / ``force_to_parent`` (^λX*_i), ``world_motion``
      (⁰X_i), ``rotate6`` (R on both halves);
-   - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_to_parent``,
+   - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up`` (tuples) and
+     ``inertia_to_parent`` (arrays), ``block3``, ``congruence3``,
      ``mat6``, ``rigid6``, ``inertia_variation``, ``add_force_cross``, and the (m, c, I_C) form of the CRBA:
      ``merge_inertia``, ``inertia_motion``;
    - small dense solves: ``cholesky``, ``cholesky_solve``, ``spd_inverse``;
@@ -172,6 +173,30 @@ def mul3t(R, x):
             R[0][2] * x[0] + R[1][2] * x[1] + R[2][2] * x[2])
 
 
+@njit(cache=True, inline="always")
+def congruence3(R, X):
+    """R X Rᵀ for 3×3 R and X as tuples of their rows (``mul3``): row a is R (Xᵀ R_a)."""
+    return mul3(R, mul3t(X, R[0])), mul3(R, mul3t(X, R[1])), mul3(R, mul3t(X, R[2]))
+
+
+@njit(cache=True, inline="always")
+def inertia_up(R, p, C, B, A):
+    """^λX*_i Iᵃ ⁱX_λ for a symmetric Iᵃ = [[C, Bᵀ], [B, A]] (C linear, A angular; 3×3 tuples of rows): its three
+    blocks in the parent (RBDA Table 7.1, pass 2). Rotated C' = R C Rᵀ, B' = R B Rᵀ, A' = R A Rᵀ, then shifted by
+    P = [p]× (G = P C'): C' stays, B' + G, A' + P B'ᵀ − B' P − G P (P B'ᵀ − B' P = H + Hᵀ, H's columns p × B'_b;
+    −G P's rows p × G_a)."""
+    C1, B1, A1 = congruence3(R, C), congruence3(R, B), congruence3(R, A)
+    px, py, pz = p[0], p[1], p[2]
+    G = (sub(scale(py, C1[2]), scale(pz, C1[1])), sub(scale(pz, C1[0]), scale(px, C1[2])),
+         sub(scale(px, C1[1]), scale(py, C1[0])))                      # rows of [p]× C'
+    h0, h1, h2 = cross(p, B1[0]), cross(p, B1[1]), cross(p, B1[2])       # H's columns
+    g0, g1, g2 = cross(p, G[0]), cross(p, G[1]), cross(p, G[2])          # rows of −G [p]×
+    A2 = ((A1[0][0] + 2.0 * h0[0] + g0[0], A1[0][1] + h1[0] + h0[1] + g0[1], A1[0][2] + h2[0] + h0[2] + g0[2]),
+          (A1[1][0] + h0[1] + h1[0] + g1[0], A1[1][1] + 2.0 * h1[1] + g1[1], A1[1][2] + h2[1] + h1[2] + g1[2]),
+          (A1[2][0] + h0[2] + h2[0] + g2[0], A1[2][1] + h1[2] + h2[1] + g2[1], A1[2][2] + 2.0 * h2[2] + g2[2]))
+    return C1, (add(B1[0], G[0]), add(B1[1], G[1]), add(B1[2], G[2])), A2
+
+
 # -- 3-vectors and 3×3 matrices in arrays (out-parameters) ------------------------------------------------------
 
 @njit(cache=True, inline="always")
@@ -270,20 +295,20 @@ def motion_to_child(R, p, m, out):
 @njit(cache=True, inline="always")
 def force_up(R, p, fx, fy, fz, nx, ny, nz):
     """^λX*_i [f; n] = [R f; R n + p × R f] as six scalars: a wrench about body i's origin, in its axes, moved
-    to its parent's origin and axes (RBDA Table 2.2; the chapter's Eqs. 15, 16)."""
-    gx = R[0, 0] * fx + R[0, 1] * fy + R[0, 2] * fz
-    gy = R[1, 0] * fx + R[1, 1] * fy + R[1, 2] * fz
-    gz = R[2, 0] * fx + R[2, 1] * fy + R[2, 2] * fz
-    mx = R[0, 0] * nx + R[0, 1] * ny + R[0, 2] * nz + p[1] * gz - p[2] * gy
-    my = R[1, 0] * nx + R[1, 1] * ny + R[1, 2] * nz + p[2] * gx - p[0] * gz
-    mz = R[2, 0] * nx + R[2, 1] * ny + R[2, 2] * nz + p[0] * gy - p[1] * gx
+    to its parent's origin and axes (RBDA Table 2.2; the chapter's Eqs. 15, 16); R as a tuple of rows (``block3``)."""
+    gx = R[0][0] * fx + R[0][1] * fy + R[0][2] * fz
+    gy = R[1][0] * fx + R[1][1] * fy + R[1][2] * fz
+    gz = R[2][0] * fx + R[2][1] * fy + R[2][2] * fz
+    mx = R[0][0] * nx + R[0][1] * ny + R[0][2] * nz + p[1] * gz - p[2] * gy
+    my = R[1][0] * nx + R[1][1] * ny + R[1][2] * nz + p[2] * gx - p[0] * gz
+    mz = R[2][0] * nx + R[2][1] * ny + R[2][2] * nz + p[0] * gy - p[1] * gx
     return gx, gy, gz, mx, my, mz
 
 
 @njit(cache=True, inline="always")
 def force_to_parent(R, p, f, out):
     """out += ^λX*_i f (``force_up`` of the array f (6,))."""
-    gx, gy, gz, mx, my, mz = force_up(R, p, f[0], f[1], f[2], f[3], f[4], f[5])
+    gx, gy, gz, mx, my, mz = force_up(block3(R, 0, 0), p, f[0], f[1], f[2], f[3], f[4], f[5])
     out[0] += gx
     out[1] += gy
     out[2] += gz
@@ -346,48 +371,23 @@ def world_inertia(m, c, Ic, R, p, T, out):
 
 
 @njit(cache=True, inline="always")
-def rotate_block(R, X, r0, c0, T):
-    """T[r0:r0+3, c0:c0+3] = R X[r0:r0+3, c0:c0+3] Rᵀ; T[0:3, 3:6] is scratch (X Rᵀ)."""
-    for a in range(3):
-        for b in range(3):
-            T[a, 3 + b] = X[r0 + a, c0] * R[b, 0] + X[r0 + a, c0 + 1] * R[b, 1] + X[r0 + a, c0 + 2] * R[b, 2]
-    for a in range(3):
-        for b in range(3):
-            T[r0 + a, c0 + b] = R[a, 0] * T[0, 3 + b] + R[a, 1] * T[1, 3 + b] + R[a, 2] * T[2, 3 + b]
+def block3(X, r0, c0):
+    """X[r0:r0+3, c0:c0+3] as a tuple of its rows (values: the lane kernels' form, ``mul3``)."""
+    return ((X[r0, c0], X[r0, c0 + 1], X[r0, c0 + 2]), (X[r0 + 1, c0], X[r0 + 1, c0 + 1], X[r0 + 1, c0 + 2]),
+            (X[r0 + 2, c0], X[r0 + 2, c0 + 1], X[r0 + 2, c0 + 2]))
 
 
 @njit(cache=True, inline="always")
-def inertia_to_parent(R, p, Ia, T, out):
-    """out += ^λX*_i Iᵃ ⁱX_λ (RBDA Table 7.1, pass 2). For symmetric Iᵃ = [[C, Bᵀ], [B, A]] (C linear, A
-    angular): rotated blocks C' = R C Rᵀ, B', A' (into T), then shifted by P = [p]× (G = P C'):
-      C += C',   B += B' + G,   A += A' + P B'ᵀ − B' P − G P   (P B'ᵀ − B' P = H + Hᵀ, H = P B'ᵀ)."""
-    rotate_block(R, Ia, 0, 0, T)                          # C'
-    rotate_block(R, Ia, 3, 0, T)                          # B'
-    rotate_block(R, Ia, 3, 3, T)                          # A'
-    px, py, pz = p[0], p[1], p[2]
-    for b in range(3):
-        x, y, z = T[0, b], T[1, b], T[2, b]               # G[:, b] = p × C'[:, b], into T[0:3, 3:6]
-        T[0, 3 + b], T[1, 3 + b], T[2, 3 + b] = py * z - pz * y, pz * x - px * z, px * y - py * x
-        x, y, z = T[3 + b, 0], T[3 + b, 1], T[3 + b, 2]   # H[:, b] = p × B'[b, :];  A' += H + Hᵀ
-        hx, hy, hz = py * z - pz * y, pz * x - px * z, px * y - py * x
-        T[3, 3 + b] += hx
-        T[4, 3 + b] += hy
-        T[5, 3 + b] += hz
-        T[3 + b, 3] += hx
-        T[3 + b, 4] += hy
-        T[3 + b, 5] += hz
-    for a in range(3):                                    # − (G P)[a, :] = p × G[a, :]
-        x, y, z = T[a, 3], T[a, 4], T[a, 5]
-        T[3 + a, 3] += py * z - pz * y
-        T[3 + a, 4] += pz * x - px * z
-        T[3 + a, 5] += px * y - py * x
+def inertia_to_parent(R, p, Ia, out):
+    """out += ^λX*_i Iᵃ ⁱX_λ (RBDA Table 7.1, pass 2) for a symmetric Iᵃ (6, 6) = [[C, Bᵀ], [B, A]]: ``inertia_up``
+    of its blocks, added into out's."""
+    C, B, A = inertia_up(block3(R, 0, 0), (p[0], p[1], p[2]), block3(Ia, 0, 0), block3(Ia, 3, 0), block3(Ia, 3, 3))
     for a in range(3):
         for b in range(3):
-            out[a, b] += T[a, b]
-            x = T[3 + a, b] + T[a, 3 + b]
-            out[3 + a, b] += x
-            out[b, 3 + a] += x
-            out[3 + a, 3 + b] += T[3 + a, 3 + b]
+            out[a, b] += C[a][b]
+            out[3 + a, b] += B[a][b]
+            out[b, 3 + a] += B[a][b]
+            out[3 + a, 3 + b] += A[a][b]
 
 
 @njit(cache=True, inline="always")
@@ -476,16 +476,17 @@ def merge_inertia(w, c1, c2, I2):
 
 
 @njit(cache=True, inline="always")
-def inertia_motion(S, r, m, c, Ic):
-    """I s_r = (f, n) as six scalars, for a body (m, c, I_C) and the motion s_r = [s_l; s_a] (row r of S),
-    about the body's origin: f = m (s_l + s_a × c), its CoM's momentum; n = I_c s_a + c × f."""
-    lx, ly, lz, ax, ay, az = S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]
+def inertia_motion(m, c, J, sl, sa):
+    """I s = (f, n) as six scalars, for a body (m, c, I_C; J: I_C as a tuple of rows, ``block3``) and the motion
+    s = [s_l; s_a] (3-tuples), about the body's origin: f = m (s_l + s_a × c), its CoM's momentum;
+    n = I_c s_a + c × f."""
+    lx, ly, lz, ax, ay, az = sl[0], sl[1], sl[2], sa[0], sa[1], sa[2]
     fx = m * (lx + ay * c[2] - az * c[1])
     fy = m * (ly + az * c[0] - ax * c[2])
     fz = m * (lz + ax * c[1] - ay * c[0])
-    nx = Ic[0, 0] * ax + Ic[0, 1] * ay + Ic[0, 2] * az + c[1] * fz - c[2] * fy
-    ny = Ic[1, 0] * ax + Ic[1, 1] * ay + Ic[1, 2] * az + c[2] * fx - c[0] * fz
-    nz = Ic[2, 0] * ax + Ic[2, 1] * ay + Ic[2, 2] * az + c[0] * fy - c[1] * fx
+    nx = J[0][0] * ax + J[0][1] * ay + J[0][2] * az + c[1] * fz - c[2] * fy
+    ny = J[1][0] * ax + J[1][1] * ay + J[1][2] * az + c[2] * fx - c[0] * fz
+    nz = J[2][0] * ax + J[2][1] * ay + J[2][2] * az + c[0] * fy - c[1] * fx
     return fx, fy, fz, nx, ny, nz
 
 

@@ -47,6 +47,8 @@ def run(out_dir, quick=False, progress=print) -> dict:
         ("latency", lambda: sections.latency(sts("arms", "chain", "spm"), quick)),
         ("closed_latency", lambda: sections.closed_latency(spm, quick)),
         ("batched", lambda: sections.batched(sts("arms", "chain"), quick)),
+        ("floors", lambda: sections.floors(data["batched"], {"ur5": ur5, "aau_arm": ROOT / "urdf" / "aau_arm.urdf",
+                                                             "chain32": "chain:32"})),
         ("throughput", lambda: sections.throughput(arms, (1, 100, 10_000) if quick else (1, 100, 10_000, 100_000), quick)),
         ("scaling", lambda: sections.scaling((2, 4, 8, 16, 32) if quick else (2, 4, 8, 16, 32, 64), quick)),
         ("work_precision", lambda: sections.work_precision(ROOT / "urdf" / "aau_arm.urdf", quick)),
@@ -153,6 +155,12 @@ def markdown(d) -> str:
          _table(d["batched"], ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"]
                 + (["refused"] if any("refused" in r for r in d["batched"]) else []),
                 dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
+         "\n### The lane kernels against their arithmetic floor\n\nflops: floating-point operations per state, "
+         "counted by running the lane kernels on Flop numbers (manipdyn/bench/flops.py); floor_ns = flops ÷ (16 "
+         "a cycle × the clock, ghz): every flop a fused multiply-add on two 256-bit units; ours_ns: the batched "
+         "row at N = 10 000 above; over_floor = ours_ns ÷ floor_ns.\n\n",
+         _table(d.get("floors", []), ["robot", "call", "flops", "ghz", "floor_ns", "ours_ns", "over_floor"],
+                dict(flops="{:.0f}", ghz="{:.2f}", floor_ns="{:.1f}", ours_ns="{:.1f}", over_floor="{:.1f}×")),
          "\n### Throughput against N (rnea, aba, mass_matrix), one thread and every core\n\n"
          "ours_us on one thread (`threads=1`), ours_all_us on every core (`threads=None`, the default: "
          f"{d['throughput'][0].get('cores', '?') if d['throughput'] else '?'} here); all_over_one = ours_all_us ÷ "

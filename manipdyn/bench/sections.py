@@ -194,10 +194,13 @@ def latency(sts, quick=False):
     return rows
 
 
+LANE_CALLS = ("rnea", "aba", "mass_matrix (crba)")      # the lane kernels' calls: timed at N = big too
+
+
 def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
     """b. Every public call on a batch (N, nv), time per state on one thread, against Pinocchio's C++ batch
     (pin.*InParallel, 1 thread) where it exists, else its cheapest Python loop over the same states
-    (conversions outside the timing); at ``sizes``, and at ``big`` for the calls with an InParallel route.
+    (conversions outside the timing); at ``sizes``, and at ``big`` for the lane kernels' calls (LANE_CALLS).
     The error is the worst over ``sample`` states spread through the batch. (Every core: ``throughput``.)"""
     P, rows = pin(), []
     timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
@@ -214,7 +217,7 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
             conds = {s: cond(s) for s in picks}
             QT, VT, AT = (np.asfortranarray(np.array(x).T) for x in (PQ, V, A))
             for name, c in table.items():
-                if N not in sizes and not c.parallel:
+                if N not in sizes and name not in LANE_CALLS:
                     continue
                 try:
                     mine = c.ours(Q, V, A)
@@ -423,4 +426,24 @@ def spm_drift(spm_path, quick=False):
         phi = np.abs(closure_terms(model, r.q)[0]).max(axis=1)
         rows.append(dict(stabilization=stab, horizon_s=horizon, us_per_step=r.wall_time / r.n_steps * 1e6,
                          max_phi=float(phi.max()), final_phi=float(phi[-1])))
+    return rows
+
+
+def floors(batched_rows, robots, big=10_000):
+    """The lane kernels against their arithmetic floor: flops per state counted by running them
+    (bench/flops.py), the floor flops ÷ (16 × the clock), and ours at N = big (the batched rows) ÷ the floor.
+    robots: {label: URDF path or "chain:N"}, the labels of the batched rows."""
+    from .flops import PEAK_PER_CYCLE, clock_ghz, counts
+    ghz, flops = clock_ghz(), counts(robots)
+    ours = {(r["robot"], r["call"]): r["ours_us"] for r in batched_rows if r.get("N") == big and "ours_us" in r}
+    rows = []
+    for label, per in flops.items():
+        for call, key in (("rnea", "rnea"), ("aba", "aba"), ("mass_matrix (crba)", "mass_matrix")):
+            row = dict(robot=label, call=call, flops=per[key], ghz=ghz)
+            if ghz:
+                row["floor_ns"] = per[key] / (PEAK_PER_CYCLE * ghz)
+                if (label, call) in ours:
+                    row["ours_ns"] = ours[label, call] * 1e3
+                    row["over_floor"] = row["ours_ns"] / row["floor_ns"]
+            rows.append(row)
     return rows

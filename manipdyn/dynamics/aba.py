@@ -35,9 +35,11 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
 from ..joints import joint_placement
 from . import mimic
-from ..spatial import (cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_to_parent,
-                       inertia_to_parent, motion_to_child, rigid_inertia)
-from .core import no_wrenches, unpack, wrench_rows_of
+from ..spatial import (add, block3, cholesky, cholesky_solve, cross, cross_force, cross_motion, first_nonfinite,
+                       force_cross, force_to_parent, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
+                       motion_to_child, mul3, mul3t, rigid_inertia, scale)
+from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, lane_record,
+                   no_wrenches, placement_lanes, scatter_lanes, shift_code, tree_depth, unpack, wrench_rows_of)
 from .crba import crba, crba_kernel
 from .rnea import rnea, rnea_kernel
 from .route import route
@@ -54,12 +56,12 @@ def workspace(nb, nv):
     """Scratch of one kernel call (five allocations, cut into row blocks): per body Rl (3, 3), pl (3,)
     (placement in the parent), Rw (3, 3) (in the world), v, c, p^A, a (6,), I^A, I0 (6, 6) (articulated
     and rigid inertia); per joint velocity U (6,) (a row of U_iᵀ), L (6,) (a row of D_i's Cholesky
-    factor), u; temporaries T, Y (6, 6), t, vJ, a0 (6,) (a0: the base acceleration)."""
+    factor), u; temporaries Y (6, 6), t, vJ, a0 (6,) (a0: the base acceleration)."""
     R33, pl, u = np.empty((2 * nb, 3, 3)), np.empty((nb, 3)), np.empty(nv)
-    B6, B66 = np.empty((4 * nb + 2 * nv + 3, 6)), np.empty((2 * nb + 2, 6, 6))
+    B6, B66 = np.empty((4 * nb + 2 * nv + 3, 6)), np.empty((2 * nb + 1, 6, 6))
     e = 4 * nb + 2 * nv                                   # B6 rows: vel, c, pA, acc, U, L, then t, vJ, a0
     return (R33[:nb], pl, R33[nb:], B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb], B6[3 * nb:4 * nb],
-            B66[:nb], B66[nb:2 * nb], B6[4 * nb:4 * nb + nv], B6[4 * nb + nv:e], u, B66[2 * nb], B66[2 * nb + 1],
+            B66[:nb], B66[nb:2 * nb], B6[4 * nb:4 * nb + nv], B6[4 * nb + nv:e], u, B66[2 * nb],
             B6[e], B6[e + 1], B6[e + 2])
 
 
@@ -86,7 +88,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
     mg = mdl.mg
     N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
-    Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, T, Y, t, vJ, a0 = workspace(nb, nv)
+    Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, Y, t, vJ, a0 = workspace(nb, nv)
     for i in range(nb):
         rigid_inertia(mass[i], com[i], inertia[i], I0[i])     # I_i, constant
     for a in range(3):
@@ -187,7 +189,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
                     for k2 in range(6):
                         x += IA[i, k1, k2] * c[i, k2]
                     pA[i, k1] += x
-                inertia_to_parent(Rl[i], pl[i], IA[i], T, IA[j])
+                inertia_to_parent(Rl[i], pl[i], IA[i], IA[j])
                 force_to_parent(Rl[i], pl[i], pA[i], pA[j])
                 continue
             for r in range(n):                                  # [Y | t] = L⁻¹ [U_iᵀ | u_i]  (n × 7)
@@ -215,7 +217,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
                 for r in range(n):
                     x += Y[r, k1] * t[r]
                 pA[i, k1] += x
-            inertia_to_parent(Rl[i], pl[i], IA[i], T, IA[j])
+            inertia_to_parent(Rl[i], pl[i], IA[i], IA[j])
             force_to_parent(Rl[i], pl[i], pA[i], pA[j])
         return -1
 
@@ -261,6 +263,205 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
         if k >= 0:                                                  # an intermediate overflowed
             return -2 - nb - (s * nv + k)
     return -1
+
+
+# -- the lane kernel: the three passes across a block of states ------------------------------------------------
+# As rnea's lane kernel (docs/design.md §4c): a batch runs as blocks of LANES states, the state index last, and every
+# innermost loop runs over a block's lanes. A body's record (ARTICULATED rows of LANES numbers): R^λ_i (9) and p (3)
+# (core.placement_lanes), v_i, c_i (6 each), I^A_i (21: the blocks of [[C, Bᵀ], [B, A]] as spatial.inertia_up names
+# them — C and A as core.get_sym3 stores a symmetric 3×3, B row-major), p^A_i (6), U_i (6), D_i, u_i, a_i (6); two
+# arrays by depth parity (core.lane_record). Joints with one velocity only: a free flyer runs aba_kernel.
+_V, _C, _IA, _IB, _IAA, _PA, _U, _D, _A = 12, 18, 24, 30, 39, 45, 51, 57, 59      # first rows: v, c, I^A (C, B, A),
+ARTICULATED = 65                                                              # p^A, U, D (then u), a
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
+    """``aba_kernel``'s q̈ (and code) for a batch, block by block across lanes: the batch entry of aba.
+
+    Runs ``aba_kernel`` itself for external wrenches and for a model with a multi-dof joint (free flyer), and
+    for a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` (its code
+    then names the joint or the entry; a bad input's code is ≥ 0, and ``state.raise_kernel_error`` names it from
+    the inputs). Agrees with the one-state kernel to rounding (tests/batch/test_lanes.py)."""
+    N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
+    if body.shape[0] > 0 or nq != nb or nv != nb:
+        return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
+    mdl = unpack(I, F)
+    parent, L = mdl.parent, LANES
+    even, odd = np.empty(nb * ARTICULATED * L), np.empty(nb * ARTICULATED * L)     # records by depth parity
+    base = np.zeros(12 * L)                  # the base as a parent: v_0 = 0 (rows 0–5), a_0 = [−g; 0] (rows 6–11)
+    for l in range(L):
+        base[6 * L + l], base[7 * L + l], base[8 * L + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
+    Z, QDD = np.empty(3 * nb * L), np.empty(nb * L)          # q, q̇, τ and q̈ of the block, state index last
+    depth, dmin = tree_depth(parent), singular_threshold(mdl.inertia, mdl.mass)
+    I0 = np.empty((nb, 21))                                  # each I_i in the record's rows, constant
+    for i in range(nb):
+        rigid_record(mdl, i, I0[i])
+    for s0 in range(0, N, L):
+        n = min(L, N - s0)
+        ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(Tau, s0, n, Z, 2 * nb)
+        ok &= angles_in_range(mdl, Z)
+        if ok:
+            for i in range(nb):                                          # pass 1 (outward)
+                j = parent[i]
+                par = base[:6 * L] if j < 0 else lane_record(even, odd, depth, j, ARTICULATED)[_V * L:(_V + 6) * L]
+                velocity_lanes(i, mdl, I0[i], lane_record(even, odd, depth, i, ARTICULATED), par, Z)
+            singular = 0
+            for i in range(nb - 1, -1, -1):                              # pass 2 (inward)
+                j = parent[i]
+                B = lane_record(even, odd, depth, i, ARTICULATED)
+                singular += articulated_lanes(i, mdl, dmin, B, Z, j >= 0)
+                if j >= 0:
+                    inertia_up_lanes(B, lane_record(even, odd, depth, j, ARTICULATED))
+            ok = singular == 0
+        if ok:
+            for i in range(nb):                                          # pass 3 (outward)
+                j = parent[i]
+                par = base[6 * L:] if j < 0 else lane_record(even, odd, depth, j, ARTICULATED)[_A * L:(_A + 6) * L]
+                acceleration_lanes(i, mdl, lane_record(even, odd, depth, i, ARTICULATED), par, QDD)
+            ok = scatter_lanes(QDD, n, out, s0)
+        if not ok:                                  # the block's states one by one: the code names the culprit
+            code = aba_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], Tau[s0:s0 + n], X, body, point, world,
+                              out[s0:s0 + n])
+            if code != -1:
+                return shift_code(code, s0, nb, nq, nv)
+    return -1
+
+
+@njit(cache=True, inline="always")
+def rigid_record(mdl, i, out):
+    """out (21,) = I_i = [[m 1, −m [c]×], [m [c]×, I_C − m [c]×²]] (``spatial.rigid_inertia``) in the lane record's
+    rows: C, B = m [c]× (row-major), A."""
+    m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), mdl.inertia
+    mc, cc = scale(m, cm), cm[0] * cm[0] + cm[1] * cm[1] + cm[2] * cm[2]
+    out[0], out[1], out[2], out[3], out[4], out[5] = m, m, m, 0.0, 0.0, 0.0
+    out[6], out[7], out[8], out[9], out[10], out[11], out[12], out[13], out[14] = \
+        0.0, -mc[2], mc[1], mc[2], 0.0, -mc[0], -mc[1], mc[0], 0.0
+    out[15], out[16], out[17] = J[i, 0, 0] + m * (cc - cm[0] * cm[0]), J[i, 1, 1] + m * (cc - cm[1] * cm[1]), \
+        J[i, 2, 2] + m * (cc - cm[2] * cm[2])
+    out[18], out[19], out[20] = J[i, 0, 1] - m * cm[0] * cm[1], J[i, 0, 2] - m * cm[0] * cm[2], \
+        J[i, 1, 2] - m * cm[1] * cm[2]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def velocity_lanes(i, mdl, rigid, B, par, Z):
+    """Pass 1 for body i, every lane (``aba_kernel``'s velocities_and_biases): placement, v_i = ⁱX_λ v_λ + v_J
+    (v_J = s q̇; par: v_λ), c_i = v_i × v_J, I^A_i = I_i (rigid: ``rigid_record``), p^A_i = v_i ×* I_i v_i."""
+    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
+    placement_lanes(i, mdl, B, Z)
+    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
+    zv = Z[(nb + r) * L:(nb + r + 1) * L]
+    for l in range(L):
+        R, p, w = get_rotation(B, l), get3(B, 9, l), get3(par, 3, l)
+        vl, va = mul3t(R, add(get3(par, 0, l), cross(w, p))), mul3t(R, w)            # ⁱX_λ v_λ
+        jl, ja = scale(zv[l], sl), scale(zv[l], sa)                                   # v_J = s q̇
+        v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
+        c = motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]))
+        for k in range(6):
+            B[(_V + k) * L + l] = v[k]
+            B[(_C + k) * L + l] = c[k]
+    m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), block3(mdl.inertia[i], 0, 0)
+    for k in range(21):                                                               # I^A_i = I_i
+        x = rigid[k]
+        for l in range(L):
+            B[(_IA + k) * L + l] = x
+    for l in range(L):
+        v = get6(B, _V, l)
+        pa = force_cross(v, inertia_motion(m, cm, J, (v[0], v[1], v[2]), (v[3], v[4], v[5])))    # v ×* I_i v
+        for k in range(6):
+            B[(_PA + k) * L + l] = pa[k]
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")      # (x / 0 is ±inf, not a raise: a branch less)
+def articulated_lanes(i, mdl, dmin, B, Z, child):
+    """Pass 2 for body i, every lane (``aba_kernel``'s articulated_inertias, one velocity): U_i = I^A_i s,
+    D_i = sᵀ U_i, u_i = τ_i − sᵀ p^A_i; for a child of a body (``child``) also, in place, Iᵃ = I^A_i − U (Uᵀ/D) and
+    pᵃ = p^A_i + Iᵃ c_i + U u/D. Returns the number of lanes whose D_i is not > dmin (singular, or NaN)."""
+    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
+    s = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2], mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
+    zt = Z[(2 * nb + r) * L:(2 * nb + r + 1) * L]
+    singular = 0
+    for l in range(L):
+        C, Bm, A = get_sym3(B, _IA, l), (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), \
+            get_sym3(B, _IAA, l)
+        sl, sa = (s[0], s[1], s[2]), (s[3], s[4], s[5])
+        Ul, Ua = add(mul3(C, sl), mul3t(Bm, sa)), add(mul3(Bm, sl), mul3(A, sa))     # U = I^A s
+        U = (Ul[0], Ul[1], Ul[2], Ua[0], Ua[1], Ua[2])
+        pA = get6(B, _PA, l)
+        D = s[0] * U[0] + s[1] * U[1] + s[2] * U[2] + s[3] * U[3] + s[4] * U[4] + s[5] * U[5]
+        u = zt[l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4] + s[5] * pA[5])
+        singular += not D > dmin
+        for k in range(6):
+            B[(_U + k) * L + l] = U[k]
+        B[_D * L + l], B[(_D + 1) * L + l] = D, u
+    if not child:
+        return singular
+    for l in range(L):
+        U, D, u = get6(B, _U, l), B[_D * L + l], B[(_D + 1) * L + l]
+        W, ud = (U[0] / D, U[1] / D, U[2] / D, U[3] / D, U[4] / D, U[5] / D), u / D
+        for k in range(3):                                      # C −= U_l W_lᵀ, A −= U_a W_aᵀ (xx, yy, zz, xy, xz, yz)
+            B[(_IA + k) * L + l] -= U[k] * W[k]
+            B[(_IAA + k) * L + l] -= U[3 + k] * W[3 + k]
+        B[(_IA + 3) * L + l] -= U[1] * W[0]
+        B[(_IA + 4) * L + l] -= U[2] * W[0]
+        B[(_IA + 5) * L + l] -= U[2] * W[1]
+        B[(_IAA + 3) * L + l] -= U[4] * W[3]
+        B[(_IAA + 4) * L + l] -= U[5] * W[3]
+        B[(_IAA + 5) * L + l] -= U[5] * W[4]
+        for a in range(3):
+            for b in range(3):                                                        # B −= U_a W_lᵀ
+                B[(_IB + 3 * a + b) * L + l] -= U[3 + a] * W[b]
+        C, Bm, A = get_sym3(B, _IA, l), (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), \
+            get_sym3(B, _IAA, l)
+        c = get6(B, _C, l)
+        cl, ca = (c[0], c[1], c[2]), (c[3], c[4], c[5])
+        fl, fa = add(mul3(C, cl), mul3t(Bm, ca)), add(mul3(Bm, cl), mul3(A, ca))      # Iᵃ c
+        for k in range(3):
+            B[(_PA + k) * L + l] += fl[k] + U[k] * ud
+            B[(_PA + 3 + k) * L + l] += fa[k] + U[3 + k] * ud
+    return singular
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def inertia_up_lanes(B, P):
+    """The parent's I^A += ^λX*_i Iᵃ ⁱX_λ (``spatial.inertia_up``) and p^A += ^λX*_i pᵃ (``spatial.force_up``), every
+    lane; B: body i's record, P: its parent's."""
+    L = LANES
+    for l in range(L):
+        R, p = get_rotation(B, l), get3(B, 9, l)
+        C, Bm, A = inertia_up(R, p, get_sym3(B, _IA, l),
+                              (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), get_sym3(B, _IAA, l))
+        add_sym3(P, _IA, l, C)
+        add_sym3(P, _IAA, l, A)
+        for a in range(3):
+            for b in range(3):
+                P[(_IB + 3 * a + b) * L + l] += Bm[a][b]
+    for l in range(L):
+        R, p = get_rotation(B, l), get3(B, 9, l)
+        f = mul3(R, get3(B, _PA, l))
+        n = add(mul3(R, get3(B, _PA + 3, l)), cross(p, f))
+        for k in range(3):
+            P[(_PA + k) * L + l] += f[k]
+            P[(_PA + 3 + k) * L + l] += n[k]
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
+def acceleration_lanes(i, mdl, B, par, QDD):
+    """Pass 3 for body i, every lane (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ),
+    q̈_i = (u_i − U_iᵀ a'_i) / D_i into row iv_i of QDD, a_i = a'_i + s q̈_i."""
+    L, r = LANES, mdl.iv[i]
+    s = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2], mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
+    qb = QDD[r * L:(r + 1) * L]
+    for l in range(L):
+        R, p, w = get_rotation(B, l), get3(B, 9, l), get3(par, 3, l)
+        al, aa = mul3t(R, add(get3(par, 0, l), cross(w, p))), mul3t(R, w)           # ⁱX_λ a_λ
+        c, U = get6(B, _C, l), get6(B, _U, l)
+        a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
+        qdd = (B[(_D + 1) * L + l] - (U[0] * a[0] + U[1] * a[1] + U[2] * a[2] + U[3] * a[3] + U[4] * a[4]
+                                      + U[5] * a[5])) / B[_D * L + l]
+        qb[l] = qdd
+        for k in range(6):
+            B[(_A + k) * L + l] = a[k] + s[k] * qdd
 
 
 @njit(cache=True)
@@ -348,7 +549,7 @@ _QVT, _FD = ("q", "v", "tau"), (*MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2)      #
 _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1)
 
 
-@route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_kernel, *_FD), wrenches=True,
+@route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_lanes, *_FD), wrenches=True,
        wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).

@@ -22,8 +22,8 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import njit
-from ..joints import joint_placement, joint_velocity
-from ..spatial import first_nonfinite
+from ..joints import REVOLUTE, joint_placement, joint_velocity
+from ..spatial import SINCOS_MAX, cross, first_nonfinite, sincos
 
 
 def kernel_arrays(model):
@@ -203,14 +203,120 @@ def scatter_lanes(Z, n, Y, s0):
 
 
 @njit(cache=True, inline="always")
-def shift_code(code, s0, nb, size):
-    """A kernel's code for the rows s0 … of a batch, as the code of the whole batch: a state index (≥ 0) + s0, a
-    result's flat index (code −2 − nb − k) + s0 · size (the entries per state of the result); −1 as it is."""
+def shift_code(code, s0, nb, step, size):
+    """A kernel's code for the rows s0 … of a batch, as the code of the whole batch: an input's index (≥ 0) +
+    s0 · step (1 where the code is a state index, nq where it is a flat index of q), a result's flat index (code
+    −2 − nb − k) + s0 · size (the entries per state of the result); −1 as it is."""
     if code >= 0:
-        return code + s0
+        return code + s0 * step
     if code <= -2 - nb:
         return code - s0 * size
     return code
+
+
+@njit(cache=True, inline="always")
+def get3(B, r, l):
+    """Rows r … r + 2 of a lane record at lane l, a 3-tuple."""
+    return B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l]
+
+
+@njit(cache=True, inline="always")
+def get6(B, r, l):
+    """Rows r … r + 5 of a lane record at lane l, a 6-tuple."""
+    return (B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l], B[(r + 3) * LANES + l],
+            B[(r + 4) * LANES + l], B[(r + 5) * LANES + l])
+
+
+@njit(cache=True, inline="always")
+def set3(B, r, l, x):
+    """Rows r … r + 2 of a lane record at lane l ← the 3-tuple x."""
+    B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l] = x[0], x[1], x[2]
+
+
+@njit(cache=True, inline="always")
+def get_sym3(B, r, l):
+    """A symmetric 3×3 stored in rows r … r + 5 of a lane record (xx, yy, zz, xy, xz, yz) at lane l, as a tuple
+    of its rows."""
+    xx, yy, zz, xy, xz, yz = get6(B, r, l)
+    return (xx, xy, xz), (xy, yy, yz), (xz, yz, zz)
+
+
+@njit(cache=True, inline="always")
+def add_sym3(B, r, l, X):
+    """Rows r … r + 5 of a lane record (``get_sym3``) at lane l += the upper triangle of X (a tuple of rows)."""
+    B[r * LANES + l] += X[0][0]
+    B[(r + 1) * LANES + l] += X[1][1]
+    B[(r + 2) * LANES + l] += X[2][2]
+    B[(r + 3) * LANES + l] += X[0][1]
+    B[(r + 4) * LANES + l] += X[0][2]
+    B[(r + 5) * LANES + l] += X[1][2]
+
+
+@njit(cache=True, inline="always")
+def get_rotation(B, l):
+    """R, rows 0–8 of a lane record (core.placement_lanes) at lane l, as a tuple of its rows."""
+    return get3(B, 0, l), get3(B, 3, l), get3(B, 6, l)
+
+
+@njit(cache=True, inline="always")
+def tree_depth(parent):
+    """depth (nb,) int: 0 for a child of the base, λ(i)'s + 1 else (the lane records' parity, ``lane_record``)."""
+    depth = np.zeros(parent.shape[0], np.int64)
+    for i in range(parent.shape[0]):
+        depth[i] = 0 if parent[i] < 0 else depth[parent[i]] + 1
+    return depth
+
+
+@njit(cache=True, inline="always")
+def lane_record(even, odd, depth, i, rows):
+    """Body i's record (rows × LANES numbers) in the array of its depth's parity: a body's loop reads its parent's
+    record and writes its own, in two arrays the compiler checks for overlap once, where rows of one array at
+    run-time offsets made it give up vectorising (docs/design.md §4c)."""
+    X = even if depth[i] % 2 == 0 else odd
+    return X[i * rows * LANES:(i + 1) * rows * LANES]
+
+
+@njit(cache=True, inline="always")
+def angles_in_range(mdl, Z):
+    """True if every revolute angle of the block Z (q in its first rows, ``gather_lanes``) is within
+    ``spatial.SINCOS_MAX``, the range where ``sincos`` keeps libm's accuracy."""
+    ok = True
+    for i in range(mdl.parent.shape[0]):
+        if mdl.kind[i] == REVOLUTE:
+            for l in range(LANES):
+                ok &= abs(Z[mdl.iq[i] * LANES + l]) <= SINCOS_MAX
+    return ok
+
+
+@njit(cache=True, inline="always")
+def placement_lanes(i, mdl, B, Z):
+    """Rows 0–11 of body i's lane record B: R^{i−1}_i (9, row-major) and p^{i−1}_i (3) for every lane of the block
+    (``joints.joint_placement`` for a revolute or prismatic joint, the lane kernels' form; Z: q in its first rows)."""
+    L = LANES
+    # R^{i−1}_i = R0 R_J(q), R_J = c 1 + s [k]× + (1 − c) k kᵀ (Rodrigues) = c R0 + s R0[k]× + (1 − c) R0 k kᵀ;
+    # p = p0 + d R0 k for a prismatic joint (its R_J = 1: s = 0, c = 1 from an angle of 0)
+    R0, x, y, z = mdl.R0, mdl.axis[i, 0], mdl.axis[i, 1], mdl.axis[i, 2]
+    a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
+        (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
+    k0, k1, k2 = cross(a0, (x, y, z)), cross(a1, (x, y, z)), cross(a2, (x, y, z))   # rows of R0 [k]×: a × k
+    u0, u1, u2 = a0[0] * x + a0[1] * y + a0[2] * z, a1[0] * x + a1[1] * y + a1[2] * z, a2[0] * x + a2[1] * y + a2[2] * z
+    o0, o1, o2 = mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]
+    turn = 1.0 if mdl.kind[i] == REVOLUTE else 0.0
+    zq = Z[mdl.iq[i] * L:(mdl.iq[i] + 1) * L]
+    for l in range(L):
+        qi = zq[l]
+        s, c = sincos(turn * qi)
+        t, d = 1.0 - c, (1.0 - turn) * qi
+        B[0 * L + l] = c * a0[0] + s * k0[0] + t * u0 * x
+        B[1 * L + l] = c * a0[1] + s * k0[1] + t * u0 * y
+        B[2 * L + l] = c * a0[2] + s * k0[2] + t * u0 * z
+        B[3 * L + l] = c * a1[0] + s * k1[0] + t * u1 * x
+        B[4 * L + l] = c * a1[1] + s * k1[1] + t * u1 * y
+        B[5 * L + l] = c * a1[2] + s * k1[2] + t * u1 * z
+        B[6 * L + l] = c * a2[0] + s * k2[0] + t * u2 * x
+        B[7 * L + l] = c * a2[1] + s * k2[1] + t * u2 * y
+        B[8 * L + l] = c * a2[2] + s * k2[2] + t * u2 * z
+        B[9 * L + l], B[10 * L + l], B[11 * L + l] = o0 + d * u0, o1 + d * u1, o2 + d * u2
 
 
 @njit(cache=True)

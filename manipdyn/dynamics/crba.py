@@ -21,13 +21,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import A1, A2, A3, MODEL, entry, njit
+from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..joints import joint_placement
 from ..errors import InputError
 from ..model import MimicModel
-from ..spatial import first_nonfinite, first_nonfinite_entry, force_up, inertia_motion, merge_inertia, rot3, sandwich3
+from ..spatial import (add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
+                       inertia_motion, merge_inertia, mul3, rot3, sandwich3)
 from . import mimic
-from .core import unpack
+from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get_rotation, get_sym3, lane_record,
+                   placement_lanes, shift_code, tree_depth, unpack)
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
 
@@ -85,7 +87,8 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
     M[:, :] = 0.0                              # bodies on different branches do not couple
     for i in range(parent.shape[0]):
         for r in range(iv[i], iv[i] + nvj[i]):
-            fx, fy, fz, nx, ny, nz = inertia_motion(S, r, mC[i], cC[i], IC[i])
+            fx, fy, fz, nx, ny, nz = inertia_motion(mC[i], cC[i], block3(IC[i], 0, 0), (S[r, 0], S[r, 1], S[r, 2]),
+                                                    (S[r, 3], S[r, 4], S[r, 5]))
             k = i
             while True:
                 for x in range(iv[k], iv[k] + nvj[k]):     # M[r, rows of k] = S_kᵀ F
@@ -93,7 +96,7 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
                                + S[x, 3] * nx + S[x, 4] * ny + S[x, 5] * nz)
                 if parent[k] < 0:
                     break
-                fx, fy, fz, nx, ny, nz = force_up(R[k], p[k], fx, fy, fz, nx, ny, nz)
+                fx, fy, fz, nx, ny, nz = force_up(block3(R[k], 0, 0), p[k], fx, fy, fz, nx, ny, nz)
                 k = parent[k]
     for r in range(M.shape[0]):
         for a in range(r):
@@ -127,6 +130,122 @@ def crba_one(I, F, q, M):
     return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
 
 
+# -- the lane kernel: the same two passes across a block of states ----------------------------------------------
+# As rnea's lane kernel (docs/design.md §4c): a batch runs as blocks of LANES states, the state index last, and every
+# innermost loop runs over a block's lanes. A body's record (COMPOSITE rows of LANES numbers): R^{λ}_i (9, row-major)
+# and p (3) from core.placement_lanes, then the composite's centre of mass c (3) and its inertia about it I_c
+# (6: xx, yy, zz, xy, xz, yz). Records live in two arrays by the parity of the body's depth (core.lane_record):
+# a merge reads a child's record and writes its parent's, in the other array.
+COMPOSITE = 21
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def crba_lanes(I, F, Q, M):
+    """``crba_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of
+    mass_matrix. A model with a multi-dof joint (free flyer) runs ``crba_kernel``; so does a block with a
+    non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
+    N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
+    if nq != nb or nv != nb:
+        return crba_kernel(I, F, Q, M)
+    mdl = unpack(I, F)
+    parent, L = mdl.parent, LANES
+    mC, W = np.empty(nb), np.empty((nb, 3))
+    merge_weights(parent, mdl.mass, mC, W)
+    even, odd = np.empty(nb * COMPOSITE * L), np.empty(nb * COMPOSITE * L)     # records by depth parity
+    Z, Fw, Mb = np.empty(nb * L), np.empty(6 * L), np.empty(nv * nv * L)     # q; the carried wrench; M's block
+    depth = tree_depth(parent)
+    for s0 in range(0, N, L):
+        n = min(L, N - s0)
+        ok = gather_lanes(Q, s0, n, Z, 0)
+        ok &= angles_in_range(mdl, Z)
+        if ok:
+            for i in range(nb):                                        # pass 1: placements, own inertias
+                B = lane_record(even, odd, depth, i, COMPOSITE)
+                placement_lanes(i, mdl, B, Z)
+                own_inertia_lanes(i, mdl, B)
+            for i in range(nb - 1, -1, -1):                            # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
+                if parent[i] >= 0:
+                    merge_lanes(W[i], lane_record(even, odd, depth, i, COMPOSITE),
+                                lane_record(even, odd, depth, parent[i], COMPOSITE))
+            Mb[:] = 0.0                                                # bodies on different branches do not couple
+            for i in range(nb):                                        # pass 2: column iv_i of M
+                column_lanes(i, mdl, mC[i], even, odd, depth, Fw, Mb)
+            ok = scatter_symmetric(Mb, n, M, s0)
+        if not ok:                                  # the block's states one by one: the code names the culprit
+            code = crba_kernel(I, F, Q[s0:s0 + n], M[s0:s0 + n])
+            if code != -1:
+                return shift_code(code, s0, nb, nq, nv * nv)
+    return -1
+
+
+@njit(cache=True, inline="always")
+def own_inertia_lanes(i, mdl, B):
+    """Rows 12–20 of body i's record: its own centre of mass and inertia about it, in every lane (pass 1's start)."""
+    L, c, J = LANES, mdl.com, mdl.inertia
+    for l in range(L):
+        B[12 * L + l], B[13 * L + l], B[14 * L + l] = c[i, 0], c[i, 1], c[i, 2]
+        B[15 * L + l], B[16 * L + l], B[17 * L + l] = J[i, 0, 0], J[i, 1, 1], J[i, 2, 2]
+        B[18 * L + l], B[19 * L + l], B[20 * L + l] = J[i, 0, 1], J[i, 0, 2], J[i, 1, 2]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def merge_lanes(w, B, P):
+    """The composite of B's body carried into its parent's frame and merged into the parent's (P), every lane:
+    d = R c + p, I_c,λ += R I_c Rᵀ, then ``spatial.merge_inertia`` (w = its weights, ``merge_weights``)."""
+    L, w0, w1, k = LANES, w[0], w[1], w[2]
+    for l in range(L):
+        R = get_rotation(B, l)
+        d = add(mul3(R, get3(B, 12, l)), get3(B, 9, l))                       # c_i in λ's frame: R c + p
+        c2 = get3(P, 12, l)
+        dx, dy, dz = d[0] - c2[0], d[1] - c2[1], d[2] - c2[2]
+        add_sym3(P, 15, l, congruence3(R, get_sym3(B, 15, l)))                # R I_c Rᵀ, then the shift:
+        add_sym3(P, 15, l, ((k * (dy * dy + dz * dz), -k * dx * dy, -k * dx * dz),
+                            (0.0, k * (dx * dx + dz * dz), -k * dy * dz), (0.0, 0.0, k * (dx * dx + dy * dy))))
+        P[12 * L + l], P[13 * L + l], P[14 * L + l] = w0 * d[0] + w1 * c2[0], w0 * d[1] + w1 * c2[1], \
+            w0 * d[2] + w1 * c2[2]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
+    """Column iv_i of M for every lane: F = I^c_i s (``spatial.inertia_motion``; m: the composite's mass), M_ii =
+    sᵀ F, then F carried up the ancestors k (``spatial.force_up``), M_ki = S_kᵀ F; lower triangle of Mb
+    (row-major nv × nv blocks of LANES)."""
+    L, parent, iv, S = LANES, mdl.parent, mdl.iv, mdl.S
+    nv, r = S.shape[0], iv[i]
+    sl, sa = (S[r, 0], S[r, 1], S[r, 2]), (S[r, 3], S[r, 4], S[r, 5])
+    B = lane_record(even, odd, depth, i, COMPOSITE)
+    for l in range(L):
+        F = inertia_motion(m, get3(B, 12, l), get_sym3(B, 15, l), sl, sa)
+        Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
+        Mb[(r * nv + r) * L + l] = (sl[0] * F[0] + sl[1] * F[1] + sl[2] * F[2]
+                                    + sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5])
+    k = i
+    while parent[k] >= 0:
+        B, x = lane_record(even, odd, depth, k, COMPOSITE), iv[parent[k]]
+        tl, ta = (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5])
+        for l in range(L):
+            F = force_up(get_rotation(B, l), get3(B, 9, l), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l],
+                         Fw[4 * L + l], Fw[5 * L + l])
+            Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
+            Mb[(r * nv + x) * L + l] = (tl[0] * F[0] + tl[1] * F[1] + tl[2] * F[2]
+                                        + ta[0] * F[3] + ta[1] * F[4] + ta[2] * F[5])
+        k = parent[k]
+
+
+@njit(cache=True, inline="always")
+def scatter_symmetric(Mb, n, M, s0):
+    """M[s0 + l] = the block's lower triangle, mirrored, for its n states. Returns False if an entry is not finite."""
+    nv, bad = M.shape[1], 0.0
+    for l in range(n):
+        for a in range(nv):
+            for b in range(a + 1):
+                y = Mb[(a * nv + b) * LANES + l]
+                M[s0 + l, a, b] = y
+                M[s0 + l, b, a] = y
+                bad += y - y
+    return bad == 0.0
+
+
 _CRBA = "crba"
 
 
@@ -151,7 +270,7 @@ def mass_matrix(model, q, method=_CRBA, *, threads=None):
     return lagrange_mass_matrix(model, q)
 
 
-@route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_kernel, *MODEL, A2, A3))
+@route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_lanes, *MODEL, A2, A3))
 def crba(model, q, *, threads=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
     route: dynamics/route.py). threads: a batch's threads (``rnea``'s)."""

@@ -32,12 +32,11 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import REVOLUTE, joint_force, joint_placement, joint_velocity
+from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
-from ..spatial import (SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sincos, sub,
-                       vec)
-from .core import (LANES, finite_state, gather_lanes, kernel_arrays, no_wrenches, scatter_lanes, shift_code, unpack,
-                   wrench_rows_of)
+from ..spatial import add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
+from .core import (LANES, angles_in_range, finite_state, gather_lanes, kernel_arrays, lane_record, no_wrenches,
+                   placement_lanes, scatter_lanes, shift_code, tree_depth, unpack, wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
@@ -209,40 +208,33 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     if xb.shape[0] > 0 or T.shape[0] > 0 or nq != nb or nv != nb:      # a multi-dof joint, wrenches, terms
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     mdl = unpack(I, F)
-    parent, kind = mdl.parent, mdl.kind
+    parent = mdl.parent
     even, odd = np.empty(nb * RECORD * LANES), np.empty(nb * RECORD * LANES)   # records by depth parity
     base = np.zeros(9 * LANES)                  # the fixed base as a parent: ω' = ω̇' = 0, v̇' = −g (docs §6)
     for l in range(LANES):
         base[6 * LANES + l], base[7 * LANES + l], base[8 * LANES + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
     spare = np.empty(6 * LANES)                 # where a root's f', n' go (the base takes them)
     Z, TB = np.empty(3 * nb * LANES), np.empty(nb * LANES)      # q, q̇, q̈ and τ of the block, state index last
-    depth = np.zeros(nb, np.int64)
-    for i in range(nb):
-        depth[i] = 0 if parent[i] < 0 else depth[parent[i]] + 1
+    depth = tree_depth(parent)
     for s0 in range(0, N, LANES):
         n = min(LANES, N - s0)
         ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(A, s0, n, Z, 2 * nb)
-        for i in range(nb):
-            if kind[i] == REVOLUTE:
-                for l in range(LANES):
-                    ok &= abs(Z[mdl.iq[i] * LANES + l]) <= SINCOS_MAX
+        ok &= angles_in_range(mdl, Z)
         if ok:
             for i in range(nb):                                          # outward, Eqs. 3–14
-                own, other = (even, odd) if depth[i] % 2 == 0 else (odd, even)
                 j = parent[i]
-                par = base if j < 0 else other[(j * RECORD + _W) * LANES:(j * RECORD + _W + 9) * LANES]
-                outward_lanes(i, mdl, own[i * RECORD * LANES:(i + 1) * RECORD * LANES], par, Z)
+                par = base if j < 0 else lane_record(even, odd, depth, j, RECORD)[_W * LANES:(_W + 9) * LANES]
+                outward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), par, Z)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
-                own, other = (even, odd) if depth[i] % 2 == 0 else (odd, even)
                 j = parent[i]
-                to = spare if j < 0 else other[(j * RECORD + _F) * LANES:(j * RECORD + _F + 6) * LANES]
-                inward_lanes(i, mdl, own[i * RECORD * LANES:(i + 1) * RECORD * LANES], to, TB)
+                to = spare if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
+                inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB)
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X, xb, xp, world,
                                tau[s0:s0 + n], T)
             if code != -1:
-                return shift_code(code, s0, nb, nv)
+                return shift_code(code, s0, nb, 1, nv)
     return -1
 
 
@@ -253,30 +245,7 @@ def outward_lanes(i, mdl, B, par, Z):
     n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes). Three loops, not one: the
     model's numbers that each needs fit in the vector registers (one loop spilled them: 13.7 → 11.5 ns per lane)."""
     L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
-    # R^{i−1}_i = R0 R_J(q), R_J = c 1 + s [k]× + (1 − c) k kᵀ (Rodrigues) = c R0 + s R0[k]× + (1 − c) R0 k kᵀ;
-    # p = p0 + d R0 k for a prismatic joint (its R_J = 1: s = 0, c = 1 from an angle of 0)
-    R0, x, y, z = mdl.R0, mdl.axis[i, 0], mdl.axis[i, 1], mdl.axis[i, 2]
-    a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
-        (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
-    k0, k1, k2 = cross(a0, (x, y, z)), cross(a1, (x, y, z)), cross(a2, (x, y, z))   # rows of R0 [k]×: a × k
-    u0, u1, u2 = a0[0] * x + a0[1] * y + a0[2] * z, a1[0] * x + a1[1] * y + a1[2] * z, a2[0] * x + a2[1] * y + a2[2] * z
-    o0, o1, o2 = mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]
-    turn = 1.0 if mdl.kind[i] == REVOLUTE else 0.0
-    zq = Z[mdl.iq[i] * L:(mdl.iq[i] + 1) * L]
-    for l in range(L):
-        qi = zq[l]
-        s, c = sincos(turn * qi)
-        t, d = 1.0 - c, (1.0 - turn) * qi
-        B[0 * L + l] = c * a0[0] + s * k0[0] + t * u0 * x
-        B[1 * L + l] = c * a0[1] + s * k0[1] + t * u0 * y
-        B[2 * L + l] = c * a0[2] + s * k0[2] + t * u0 * z
-        B[3 * L + l] = c * a1[0] + s * k1[0] + t * u1 * x
-        B[4 * L + l] = c * a1[1] + s * k1[1] + t * u1 * y
-        B[5 * L + l] = c * a1[2] + s * k1[2] + t * u1 * z
-        B[6 * L + l] = c * a2[0] + s * k2[0] + t * u2 * x
-        B[7 * L + l] = c * a2[1] + s * k2[1] + t * u2 * y
-        B[8 * L + l] = c * a2[2] + s * k2[2] + t * u2 * z
-        B[9 * L + l], B[10 * L + l], B[11 * L + l] = o0 + d * u0, o1 + d * u1, o2 + d * u2
+    placement_lanes(i, mdl, B, Z)
     # the motion: Eqs. 3, 5, 6 (prismatic 9, 10, 12), as ``outward``
     sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
     zv, za = Z[(nb + r) * L:(nb + r + 1) * L], Z[(2 * nb + r) * L:(2 * nb + r + 1) * L]

@@ -14,7 +14,8 @@ every such call (docs/design.md §2):
   4. a MimicModel: the route's map onto the full model (``dynamics/mimic.py``; the calls that have one are
      ``mimic.TAKES_MIMIC``, every other refuses it by name);
   5. anything else: ``state.as_batch``'s checks and conversions (an error names the argument), the wrenches
-     checked and laid out (``state.wrench_rows``), then the batch entry — except Dask arrays of states
+     checked and laid out (``state.wrench_rows``), then the batch entry (one state without wrenches: the
+     one-state entry, so that a state's numbers do not depend on its dtype) — except Dask arrays of states
      (N, n): a Dask array of the results comes back, each chunk of rows a batch of this call computed when
      asked, on the scheduler's workers (``Route.lazy``; the Dask extra);
   6. a kernel code other than −1: ``state.raise_kernel_error``, the typed error naming the input, the joint or
@@ -218,6 +219,12 @@ class Route:
         N, shape = states[0].shape[0], model.kernel.result_shapes[SHAPES.index(self.shape)]
         if not model.nv:                                        # no moving joint: nothing to compute
             return unbatch(np.zeros((N,) + shape), single)
+        if single and f_ext is None and f_ext_frame == "local":  # one state (converted): the one-state kernel, so
+            out = np.empty(shape)                               # that its numbers do not depend on its dtype (the
+            code = self.one.call(*model.kernel.arrays, *(y[0] for y in states), out)   # batch kernels run lanes)
+            if code != -1:
+                self.fail(model, code, states, out[np.newaxis])
+            return out
         if self.wrenches:
             with np.errstate(over="ignore", invalid="ignore"):  # (an overflow comes back as a kernel code)
                 ext = (*wrench_rows(model, f_ext, f_ext_frame, N), f_ext_frame == "world")

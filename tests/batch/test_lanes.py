@@ -1,7 +1,8 @@
-"""The lane kernel (rnea.rnea_lanes: the batch entry of rnea, nonlinear_effects and gravity_torques) against
-Pinocchio and against the one-state kernel: blocks of LANES states, a partial last block, a block that falls back
-to the one-state form (an angle beyond spatial.SINCOS_MAX, a non-finite input), prismatic joints and a branching
-tree; the batch-vs-single bound of docs/design.md §3 (1e-14)."""
+"""The lane kernels (rnea.rnea_lanes: the batch entry of rnea, nonlinear_effects and gravity_torques;
+crba.crba_lanes: of mass_matrix; aba.aba_lanes: of aba) against Pinocchio and against the one-state kernels: blocks
+of LANES states, a partial last block, a block that falls back to the one-state form (an angle beyond
+spatial.SINCOS_MAX, a non-finite input, a singular articulated inertia), prismatic joints and a branching tree; the
+batch-vs-single bound of docs/design.md §3 (1e-14; q̈ scaled by cond(M))."""
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -93,3 +94,73 @@ def test_an_overflow_in_a_later_block_is_named_by_its_row(models):
     V[LANES + 5] = 1e200                                  # finite input, τ ~ v² overflows to inf
     with pytest.raises(NumericalError, match=rf"row {LANES + 5}\b"):
         md.rnea(model, Q, V, A)
+
+
+def _pin_mass_matrix(pm, data, q):
+    M = pin.crba(pm, data, q)
+    return np.triu(M) + np.triu(M, 1).T                    # Pinocchio fills the upper triangle
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "tree"])
+@pytest.mark.parametrize("N", [1, LANES - 1, 2 * LANES + 5])
+def test_lane_mass_matrix_and_aba_match_pinocchio_and_the_one_state_kernels(models, name, N):
+    model, pm = models[name]
+    Q, V, T = random_states(model, N, np.random.default_rng(N + 1))
+    data = pm.createData()
+    M = md.mass_matrix(model, Q)
+    assert_close(M, np.stack([_pin_mass_matrix(pm, data, q) for q in Q]), 1e-14, f"{name} N={N} M")  # ≤ 1.0e-15
+    assert_close(M, np.stack([md.mass_matrix(model, q) for q in Q]), 1e-14, "M one")                # ≤ 5.9e-16
+    assert np.array_equal(M, np.swapaxes(M, 1, 2))
+    qdd = md.aba(model, Q, V, T)
+    cond = np.linalg.cond(M).max()
+    ref = np.stack([pin.aba(pm, data, q, v, t) for q, v, t in zip(Q, V, T)])
+    assert_close(qdd, ref, 1e-14 * cond, f"{name} N={N} q̈")                      # measured ≤ 2.3e-18 × cond
+    assert_close(qdd, np.stack([md.aba(model, q, v, t) for q, v, t in zip(Q, V, T)]), 1e-14 * cond,
+                 "q̈ one")                                                       # measured ≤ 3.1e-18 × cond
+
+
+def test_lane_aba_inverts_lane_rnea_on_a_long_batch(models):
+    model, _ = models["tree"]
+    Q, V, A = random_states(model, 5 * LANES + 3, np.random.default_rng(8))
+    tau = md.rnea(model, Q, V, A)
+    cond = np.linalg.cond(md.mass_matrix(model, Q)).max()
+    assert_close(md.aba(model, Q, V, tau), A, 1e-14 * cond, "aba ∘ rnea")          # measured 7.4e-18 × cond
+
+
+def test_lane_blocks_fall_back_and_name_the_culprit(models):
+    model, pm = models["aau_arm"]
+    Q, V, T = random_states(model, 2 * LANES + 9, np.random.default_rng(4))
+    Q[LANES + 2, 1] = 4 * SINCOS_MAX                     # past sincos's range: that block runs the one-state kernels
+    M, qdd = md.mass_matrix(model, Q), md.aba(model, Q, V, T)
+    assert np.array_equal(M[LANES:2 * LANES], np.stack([md.mass_matrix(model, q) for q in Q[LANES:2 * LANES]]))
+    data = pm.createData()
+    assert_close(M[LANES + 2], _pin_mass_matrix(pm, data, Q[LANES + 2]), 1e-14, "huge angle M")
+    assert_close(qdd[LANES + 2], pin.aba(pm, data, Q[LANES + 2], V[LANES + 2], T[LANES + 2]), 1e-12, "huge q̈")
+    Q[2 * LANES + 4, 3] = np.nan
+    with pytest.raises(InputError, match=rf"q\[{2 * LANES + 4}, 3\] \(joint '\w+'\) is nan"):
+        md.mass_matrix(model, Q)
+    with pytest.raises(InputError, match=rf"q\[{2 * LANES + 4}, 3\]"):
+        md.aba(model, Q, V, T)
+    Q[2 * LANES + 4, 3] = 0.0
+    T[LANES + 6, 2] = np.inf
+    with pytest.raises(InputError, match=rf"tau\[{LANES + 6}, 2\]"):
+        md.aba(model, Q, V, T)
+
+
+def test_a_lane_aba_overflow_in_a_later_block_is_named_by_its_row(models):
+    model, _ = models["aau_arm"]
+    Q, V, T = random_states(model, 2 * LANES + 9, np.random.default_rng(3))
+    V[LANES + 5] = 1e200                                  # finite input, p^A ~ v² overflows
+    with pytest.raises(NumericalError, match=rf"row {LANES + 5}\b"):
+        md.aba(model, Q, V, T)
+
+
+def test_lane_aba_names_a_singular_joint_in_a_later_block():
+    links = {"base": "", "a": inertial_xml(1.0, (0.1, 0, 0), (0.01, 0.01, 0.01, 0, 0, 0)), "b": ""}
+    joints = [("j0", "revolute", "base", "a", (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+              ("j1", "revolute", "a", "b", (0.3, 0, 0), (0, 0, 0), (0, 0, 1))]   # a massless tip link
+    with pytest.warns(md.QuirkWarning, match="link 'b': no <inertial>"):
+        model = md.load_urdf_string(urdf(links, joints, name="massless_tip"))
+    Q, V, T = random_states(model, LANES + 3, np.random.default_rng(0))
+    with pytest.raises(md.SingularError, match="joint 'j1'"):
+        md.aba(model, Q, V, T)

@@ -11,7 +11,7 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     monkeypatch.setattr(sections, "per_call_pair", lambda f, g, repeat=1, min_time=0: (f(), g(), 1e-6, 1e-6)[2:])
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "report.json").read_text())
-    for key in ("machine", "latency", "closed_latency", "batched", "throughput", "scaling", "slopes", "reduced",
+    for key in ("machine", "latency", "closed_latency", "batched", "floors", "throughput", "scaling", "slopes", "reduced",
                 "work_precision", "spm_drift", "hard_cases", "cold_start", "targets"):
         assert data[key], key
     assert all(r["err"] <= 1e-12 for r in data["latency"])      # errors are measured, not assumed
@@ -20,6 +20,9 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
         (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in targets.SINGLE_CALLS + targets.LAGRANGE}
     assert all("refused" not in r and r["err"] <= 1e-12 for r in data["batched"])
     assert {r["robot"] for r in data["latency"]} == {"ur5", "aau_arm", "chain32", "spm (open tree)"}
+    # the lane kernels' flop counts, beside their batched rows at N = 10 000 (the timings here are stand-ins)
+    assert {(r["robot"], r["call"]) for r in data["floors"] if "over_floor" in r} == {
+        (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in ("rnea", "aba", "mass_matrix (crba)")}
     # the targets find their rows and figures in a real report: each counted target reads rows, none is
     # "not measured"; the hard cases are distributions over 12 states (quick)
     results = targets.evaluate(data)

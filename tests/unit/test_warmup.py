@@ -12,8 +12,9 @@ from manipdyn.cli import main
 NOT_PUBLIC = {"com_jacobians_kernel", "fk_kernel", "joint_placements_kernel"}
 # kernels only other kernels call: their machine code is part of their callers', loaded from the cache with them
 # (their own dispatcher then lists no signature)
-# kernels only other kernels call (compiled, or loaded from the cache, with their callers)
-CALLED_BY_KERNELS = {"closure_rows", "frame_one", "rnea_kernel", "outward_lanes", "inward_lanes"}
+CALLED_BY_KERNELS = {"closure_rows", "frame_one", "rnea_kernel", "crba_kernel", "aba_kernel", "outward_lanes",
+                     "inward_lanes", "merge_lanes",
+                     "column_lanes", "velocity_lanes", "articulated_lanes", "inertia_up_lanes", "acceleration_lanes"}
 
 
 def kernels():
