@@ -2,8 +2,8 @@
 
 ``import manipdyn`` and every algorithm need only numpy, scipy, numba and yourdfpy. The rest comes with the
 extras of pyproject.toml: validate (Pinocchio, example-robot-data, mpmath, tqdm), viz (meshcat), plots
-(matplotlib), engines (MuJoCo, PyBullet, Drake), dask (Dask arrays of states). Each import of one of them goes
-through ``require``::
+(matplotlib), engines (MuJoCo, PyBullet, Drake), dask (Dask arrays of states), gpu (numba-cuda: manipdyn.gpu).
+Each import of one of them goes through ``require``::
 
     pin = require("pinocchio", "validate", "manipdyn validate")
     # not installed: MissingExtraError('manipdyn validate needs Pinocchio: pip install "manipdyn[validate]"')
@@ -18,7 +18,8 @@ from .errors import MissingExtraError
 LABELS = {"pinocchio": "Pinocchio", "example_robot_data": "example-robot-data", "meshcat": "meshcat",
           "umsgpack": "u-msgpack-python (meshcat's)", "matplotlib": "matplotlib", "mpmath": "mpmath",
           "tqdm": "tqdm", "mujoco": "MuJoCo", "pybullet": "PyBullet", "pybullet_data": "PyBullet",
-          "pydrake": "Drake", "dask": "Dask", "distributed": "Dask distributed"}
+          "pydrake": "Drake", "dask": "Dask", "distributed": "Dask distributed", "numba_cuda": "numba-cuda",
+          "cupy": "CuPy"}
 
 
 def install_command(extra) -> str:

@@ -606,6 +606,8 @@ def first_nonfinite_entry(A):
 # sin and cos (tests/unit/test_sincos.py): within 1 ulp for |x| ≤ 256 (40 turns), within 2 ulp and 1.2e-16 absolute
 # up to SINCOS_MAX; a lane kernel runs a block with a larger angle through its one-state form.
 SINCOS_MAX = 1.0e5
+_ROUND = 6755399441055744.0         # 1.5 · 2^52: (y + _ROUND) − _ROUND is y rounded to an integer for |y| < 2^51,
+#                                     in two additions (numpy's floor has no GPU form; CUDA compiles these as they are)
 _TWO_OVER_PI = 0.63661977236758134308
 _PIO2_1, _PIO2_2, _PIO2_2T = 1.57079632673412561417e+00, 6.07710050630396597660e-11, 2.02226624879595063154e-21
 _S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
@@ -618,14 +620,14 @@ _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.1359
 def sincos(x):
     """(sin x, cos x) for |x| ≤ SINCOS_MAX, within 1 ulp for |x| ≤ 256 and 2 ulp beyond, without a branch or a
     call (see above)."""
-    k = np.floor(x * _TWO_OVER_PI + 0.5)                        # x = k π/2 + r, |r| ≤ π/4
+    k = (x * _TWO_OVER_PI + _ROUND) - _ROUND                     # x = k π/2 + r, |r| ≤ π/4 (k: nearest integer)
     r = ((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_2T
     z = r * r
     s = r + r * z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
     hz = 0.5 * z
     w = 1.0 - hz
     c = w + (((1.0 - w) - hz) + z * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6))))))
-    m = k - 4.0 * np.floor(k * 0.25)                            # the quadrant, 0 … 3
+    m = k - 4.0 * (((k - 1.5) * 0.25 + _ROUND) - _ROUND)       # the quadrant k mod 4, 0 … 3 (no tie to round)
     even = m == 0.0 or m == 2.0
     sn, cs = s if even else c, c if even else s
     return (-sn if m >= 2.0 else sn), (-cs if (m == 1.0 or m == 2.0) else cs)

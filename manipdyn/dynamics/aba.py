@@ -35,13 +35,14 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
 from ..joints import joint_placement
 from . import mimic
-from ..spatial import (add, block3, cholesky, cholesky_solve, cross, cross_force, cross_motion, first_nonfinite,
-                       force_cross, force_to_parent, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
+from ..spatial import (add, cholesky, cholesky_solve, cross, cross_force, cross_motion, first_nonfinite, force_cross,
+                       force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
                        motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, lane_record,
-                   no_wrenches, placement_lanes, scatter_lanes, shift_code, tree_depth, unpack, wrench_rows_of)
+                   no_wrenches, placement_lanes, scatter_lanes, set3, set6, shift_code, tree_depth, unpack,
+                   wrench_rows_of)
 from .crba import crba, crba_kernel
-from .rnea import rnea, rnea_kernel
+from .rnea import inertial_model, motion_model, rnea, rnea_kernel
 from .route import route
 
 
@@ -294,9 +295,6 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
         base[6 * L + l], base[7 * L + l], base[8 * L + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
     Z, QDD = np.empty(3 * nb * L), np.empty(nb * L)          # q, q̇, τ and q̈ of the block, state index last
     depth, dmin = tree_depth(parent), singular_threshold(mdl.inertia, mdl.mass)
-    I0 = np.empty((nb, 21))                                  # each I_i in the record's rows, constant
-    for i in range(nb):
-        rigid_record(mdl, i, I0[i])
     for s0 in range(0, N, L):
         n = min(L, N - s0)
         ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(Tau, s0, n, Z, 2 * nb)
@@ -305,7 +303,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
             for i in range(nb):                                          # pass 1 (outward)
                 j = parent[i]
                 par = base[:6 * L] if j < 0 else lane_record(even, odd, depth, j, ARTICULATED)[_V * L:(_V + 6) * L]
-                velocity_lanes(i, mdl, I0[i], lane_record(even, odd, depth, i, ARTICULATED), par, Z)
+                velocity_lanes(i, mdl, lane_record(even, odd, depth, i, ARTICULATED), par, Z)
             singular = 0
             for i in range(nb - 1, -1, -1):                              # pass 2 (inward)
                 j = parent[i]
@@ -329,139 +327,179 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
 
 
 @njit(cache=True, inline="always")
-def rigid_record(mdl, i, out):
-    """out (21,) = I_i = [[m 1, −m [c]×], [m [c]×, I_C − m [c]×²]] (``spatial.rigid_inertia``) in the lane record's
-    rows: C, B = m [c]× (row-major), A."""
+def rigid_model(i, mdl):
+    """I_i = [[m 1, −m [c]×], [m [c]×, I_C − m [c]×²]] (``spatial.rigid_inertia``) as the lane record stores I^A: the
+    blocks C (xx, yy, zz, xy, xz, yz), B = m [c]× (its rows), A (as C)."""
     m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), mdl.inertia
     mc, cc = scale(m, cm), cm[0] * cm[0] + cm[1] * cm[1] + cm[2] * cm[2]
-    out[0], out[1], out[2], out[3], out[4], out[5] = m, m, m, 0.0, 0.0, 0.0
-    out[6], out[7], out[8], out[9], out[10], out[11], out[12], out[13], out[14] = \
-        0.0, -mc[2], mc[1], mc[2], 0.0, -mc[0], -mc[1], mc[0], 0.0
-    out[15], out[16], out[17] = J[i, 0, 0] + m * (cc - cm[0] * cm[0]), J[i, 1, 1] + m * (cc - cm[1] * cm[1]), \
-        J[i, 2, 2] + m * (cc - cm[2] * cm[2])
-    out[18], out[19], out[20] = J[i, 0, 1] - m * cm[0] * cm[1], J[i, 0, 2] - m * cm[0] * cm[2], \
-        J[i, 1, 2] - m * cm[1] * cm[2]
+    A = (J[i, 0, 0] + m * (cc - cm[0] * cm[0]), J[i, 1, 1] + m * (cc - cm[1] * cm[1]),
+         J[i, 2, 2] + m * (cc - cm[2] * cm[2]), J[i, 0, 1] - m * cm[0] * cm[1], J[i, 0, 2] - m * cm[0] * cm[2],
+         J[i, 1, 2] - m * cm[1] * cm[2])
+    return (m, m, m, 0.0, 0.0, 0.0), ((0.0, -mc[2], mc[1]), (mc[2], 0.0, -mc[0]), (-mc[1], mc[0], 0.0)), A
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def velocity_lanes(i, mdl, rigid, B, par, Z):
-    """Pass 1 for body i, every lane (``aba_kernel``'s velocities_and_biases): placement, v_i = ⁱX_λ v_λ + v_J
-    (v_J = s q̇; par: v_λ), c_i = v_i × v_J, I^A_i = I_i (rigid: ``rigid_record``), p^A_i = v_i ×* I_i v_i."""
-    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
+def velocity_lanes(i, mdl, B, par, Z):
+    """Pass 1 for body i, every lane of the block (``aba_kernel``'s velocities_and_biases): placement, then
+    ``velocity_lane``, then ``bias_lane``."""
     placement_lanes(i, mdl, B, Z)
-    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
-    zv = Z[(nb + r) * L:(nb + r + 1) * L]
-    for l in range(L):
-        R, p, w = get_rotation(B, l), get3(B, 9, l), get3(par, 3, l)
-        vl, va = mul3t(R, add(get3(par, 0, l), cross(w, p))), mul3t(R, w)            # ⁱX_λ v_λ
-        jl, ja = scale(zv[l], sl), scale(zv[l], sa)                                   # v_J = s q̇
-        v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
-        c = motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]))
-        for k in range(6):
-            B[(_V + k) * L + l] = v[k]
-            B[(_C + k) * L + l] = c[k]
-    m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), block3(mdl.inertia[i], 0, 0)
-    for k in range(21):                                                               # I^A_i = I_i
-        x = rigid[k]
-        for l in range(L):
-            B[(_IA + k) * L + l] = x
-    for l in range(L):
-        v = get6(B, _V, l)
-        pa = force_cross(v, inertia_motion(m, cm, J, (v[0], v[1], v[2]), (v[3], v[4], v[5])))    # v ×* I_i v
-        for k in range(6):
-            B[(_PA + k) * L + l] = pa[k]
+    mm, rm, im = motion_model(i, mdl), rigid_model(i, mdl), inertial_model(i, mdl)
+    for l in range(LANES):
+        velocity_lane(mm, B, par, Z, l, LANES)
+    for l in range(LANES):
+        bias_lane(rm, im, B, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def velocity_lane(mm, B, par, Z, l, L):
+    """At lane l: v_i = ⁱX_λ v_λ + v_J (v_J = s q̇; par: v_λ), c_i = v_i × v_J (mm: ``rnea.motion_model``)."""
+    r, sl, sa, nb = mm
+    R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
+    vl, va = mul3t(R, add(get3(par, 0, l, L), cross(w, p))), mul3t(R, w)            # ⁱX_λ v_λ
+    qd = Z[(nb + r) * L + l]
+    jl, ja = scale(qd, sl), scale(qd, sa)                                           # v_J = s q̇
+    v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
+    c = motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]))
+    set6(B, _V, l, L, v)
+    set6(B, _C, l, L, c)
+
+
+@njit(cache=True, inline="always")
+def bias_lane(rm, im, B, l, L):
+    """At lane l: I^A_i = I_i (rm: ``rigid_model``), p^A_i = v_i ×* I_i v_i (``spatial.inertia_motion``; im:
+    ``rnea.inertial_model``)."""
+    C, Bm, A = rm
+    set6(B, _IA, l, L, C)
+    set3(B, _IB, l, L, Bm[0])
+    set3(B, _IB + 3, l, L, Bm[1])
+    set3(B, _IB + 6, l, L, Bm[2])
+    set6(B, _IAA, l, L, A)
+    m, cm, J = im
+    v = get6(B, _V, l, L)
+    set6(B, _PA, l, L, force_cross(v, inertia_motion(m, cm, J, (v[0], v[1], v[2]), (v[3], v[4], v[5]))))
+
+
+@njit(cache=True, inline="always")
+def articulated_model(i, mdl):
+    """What body i's pass 2 and 3 take from the model: (its row r of S, s as a 6-tuple, nb: Z's rows per state)."""
+    S, r = mdl.S, mdl.iv[i]
+    return r, (S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]), mdl.parent.shape[0]
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")      # (x / 0 is ±inf, not a raise: a branch less)
 def articulated_lanes(i, mdl, dmin, B, Z, child):
-    """Pass 2 for body i, every lane (``aba_kernel``'s articulated_inertias, one velocity): U_i = I^A_i s,
-    D_i = sᵀ U_i, u_i = τ_i − sᵀ p^A_i; for a child of a body (``child``) also, in place, Iᵃ = I^A_i − U (Uᵀ/D) and
-    pᵃ = p^A_i + Iᵃ c_i + U u/D. Returns the number of lanes whose D_i is not > dmin (singular, or NaN)."""
-    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
-    s = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2], mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
-    zt = Z[(2 * nb + r) * L:(2 * nb + r + 1) * L]
+    """Pass 2 for body i, every lane of the block (``aba_kernel``'s articulated_inertias, one velocity):
+    ``articulated_lane``, and for a child of a body (``child``) ``handed_lane``. Returns the number of lanes whose
+    D_i is not > dmin (singular, or NaN)."""
+    am = articulated_model(i, mdl)
     singular = 0
-    for l in range(L):
-        C, Bm, A = get_sym3(B, _IA, l), (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), \
-            get_sym3(B, _IAA, l)
-        sl, sa = (s[0], s[1], s[2]), (s[3], s[4], s[5])
-        Ul, Ua = add(mul3(C, sl), mul3t(Bm, sa)), add(mul3(Bm, sl), mul3(A, sa))     # U = I^A s
-        U = (Ul[0], Ul[1], Ul[2], Ua[0], Ua[1], Ua[2])
-        pA = get6(B, _PA, l)
-        D = s[0] * U[0] + s[1] * U[1] + s[2] * U[2] + s[3] * U[3] + s[4] * U[4] + s[5] * U[5]
-        u = zt[l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4] + s[5] * pA[5])
-        singular += not D > dmin
-        for k in range(6):
-            B[(_U + k) * L + l] = U[k]
-        B[_D * L + l], B[(_D + 1) * L + l] = D, u
-    if not child:
-        return singular
-    for l in range(L):
-        U, D, u = get6(B, _U, l), B[_D * L + l], B[(_D + 1) * L + l]
-        W, ud = (U[0] / D, U[1] / D, U[2] / D, U[3] / D, U[4] / D, U[5] / D), u / D
-        for k in range(3):                                      # C −= U_l W_lᵀ, A −= U_a W_aᵀ (xx, yy, zz, xy, xz, yz)
-            B[(_IA + k) * L + l] -= U[k] * W[k]
-            B[(_IAA + k) * L + l] -= U[3 + k] * W[3 + k]
-        B[(_IA + 3) * L + l] -= U[1] * W[0]
-        B[(_IA + 4) * L + l] -= U[2] * W[0]
-        B[(_IA + 5) * L + l] -= U[2] * W[1]
-        B[(_IAA + 3) * L + l] -= U[4] * W[3]
-        B[(_IAA + 4) * L + l] -= U[5] * W[3]
-        B[(_IAA + 5) * L + l] -= U[5] * W[4]
-        for a in range(3):
-            for b in range(3):                                                        # B −= U_a W_lᵀ
-                B[(_IB + 3 * a + b) * L + l] -= U[3 + a] * W[b]
-        C, Bm, A = get_sym3(B, _IA, l), (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), \
-            get_sym3(B, _IAA, l)
-        c = get6(B, _C, l)
-        cl, ca = (c[0], c[1], c[2]), (c[3], c[4], c[5])
-        fl, fa = add(mul3(C, cl), mul3t(Bm, ca)), add(mul3(Bm, cl), mul3(A, ca))      # Iᵃ c
-        for k in range(3):
-            B[(_PA + k) * L + l] += fl[k] + U[k] * ud
-            B[(_PA + 3 + k) * L + l] += fa[k] + U[3 + k] * ud
+    for l in range(LANES):
+        singular += articulated_lane(am, dmin, B, Z, l, LANES)
+    if child:
+        for l in range(LANES):
+            handed_lane(B, l, LANES)
     return singular
+
+
+@njit(cache=True, inline="always")
+def articulated_lane(am, dmin, B, Z, l, L):
+    """At lane l: U_i = I^A_i s, D_i = sᵀ U_i, u_i = τ_i − sᵀ p^A_i (am: ``articulated_model``). Returns 1 if D_i is
+    not > dmin (singular, or NaN), else 0."""
+    r, s, nb = am
+    C, Bm, A = get_sym3(B, _IA, l, L), (get3(B, _IB, l, L), get3(B, _IB + 3, l, L), get3(B, _IB + 6, l, L)), \
+        get_sym3(B, _IAA, l, L)
+    sl, sa = (s[0], s[1], s[2]), (s[3], s[4], s[5])
+    Ul, Ua = add(mul3(C, sl), mul3t(Bm, sa)), add(mul3(Bm, sl), mul3(A, sa))     # U = I^A s
+    pA = get6(B, _PA, l, L)
+    D = s[0] * Ul[0] + s[1] * Ul[1] + s[2] * Ul[2] + s[3] * Ua[0] + s[4] * Ua[1] + s[5] * Ua[2]
+    u = Z[(2 * nb + r) * L + l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4]
+                                   + s[5] * pA[5])
+    set3(B, _U, l, L, Ul)
+    set3(B, _U + 3, l, L, Ua)
+    B[_D * L + l], B[(_D + 1) * L + l] = D, u
+    return 0 if D > dmin else 1
+
+
+@njit(cache=True, inline="always")
+def handed_lane(B, l, L):
+    """At lane l, in place: Iᵃ = I^A_i − U (Uᵀ/D) and pᵃ = p^A_i + Iᵃ c_i + U u/D, what body i hands its parent."""
+    U, D, u = get6(B, _U, l, L), B[_D * L + l], B[(_D + 1) * L + l]
+    W, ud = (U[0] / D, U[1] / D, U[2] / D, U[3] / D, U[4] / D, U[5] / D), u / D
+    for k in range(3):                                      # C −= U_l W_lᵀ, A −= U_a W_aᵀ (xx, yy, zz, xy, xz, yz)
+        B[(_IA + k) * L + l] -= U[k] * W[k]
+        B[(_IAA + k) * L + l] -= U[3 + k] * W[3 + k]
+    B[(_IA + 3) * L + l] -= U[1] * W[0]
+    B[(_IA + 4) * L + l] -= U[2] * W[0]
+    B[(_IA + 5) * L + l] -= U[2] * W[1]
+    B[(_IAA + 3) * L + l] -= U[4] * W[3]
+    B[(_IAA + 4) * L + l] -= U[5] * W[3]
+    B[(_IAA + 5) * L + l] -= U[5] * W[4]
+    for a in range(3):
+        for b in range(3):                                                        # B −= U_a W_lᵀ
+            B[(_IB + 3 * a + b) * L + l] -= U[3 + a] * W[b]
+    C, Bm, A = get_sym3(B, _IA, l, L), (get3(B, _IB, l, L), get3(B, _IB + 3, l, L), get3(B, _IB + 6, l, L)), \
+        get_sym3(B, _IAA, l, L)
+    c = get6(B, _C, l, L)
+    cl, ca = (c[0], c[1], c[2]), (c[3], c[4], c[5])
+    fl, fa = add(mul3(C, cl), mul3t(Bm, ca)), add(mul3(Bm, cl), mul3(A, ca))      # Iᵃ c
+    for k in range(3):
+        B[(_PA + k) * L + l] += fl[k] + U[k] * ud
+        B[(_PA + 3 + k) * L + l] += fa[k] + U[3 + k] * ud
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def inertia_up_lanes(B, P):
-    """The parent's I^A += ^λX*_i Iᵃ ⁱX_λ (``spatial.inertia_up``) and p^A += ^λX*_i pᵃ (``spatial.force_up``), every
-    lane; B: body i's record, P: its parent's."""
-    L = LANES
-    for l in range(L):
-        R, p = get_rotation(B, l), get3(B, 9, l)
-        C, Bm, A = inertia_up(R, p, get_sym3(B, _IA, l),
-                              (get3(B, _IB, l), get3(B, _IB + 3, l), get3(B, _IB + 6, l)), get_sym3(B, _IAA, l))
-        add_sym3(P, _IA, l, C)
-        add_sym3(P, _IAA, l, A)
-        for a in range(3):
-            for b in range(3):
-                P[(_IB + 3 * a + b) * L + l] += Bm[a][b]
-    for l in range(L):
-        R, p = get_rotation(B, l), get3(B, 9, l)
-        f = mul3(R, get3(B, _PA, l))
-        n = add(mul3(R, get3(B, _PA + 3, l)), cross(p, f))
-        for k in range(3):
-            P[(_PA + k) * L + l] += f[k]
-            P[(_PA + 3 + k) * L + l] += n[k]
+    """``inertia_up_lane`` then ``bias_up_lane`` for every lane of the block."""
+    for l in range(LANES):
+        inertia_up_lane(B, P, l, LANES)
+    for l in range(LANES):
+        bias_up_lane(B, P, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def inertia_up_lane(B, P, l, L):
+    """At lane l: the parent's I^A += ^λX*_i Iᵃ ⁱX_λ (``spatial.inertia_up``); B: body i's record, P: its parent's."""
+    R, p = get_rotation(B, l, L), get3(B, 9, l, L)
+    C, Bm, A = inertia_up(R, p, get_sym3(B, _IA, l, L),
+                          (get3(B, _IB, l, L), get3(B, _IB + 3, l, L), get3(B, _IB + 6, l, L)), get_sym3(B, _IAA, l, L))
+    add_sym3(P, _IA, l, L, C)
+    add_sym3(P, _IAA, l, L, A)
+    for a in range(3):
+        for b in range(3):
+            P[(_IB + 3 * a + b) * L + l] += Bm[a][b]
+
+
+@njit(cache=True, inline="always")
+def bias_up_lane(B, P, l, L):
+    """At lane l: the parent's p^A += ^λX*_i pᵃ (``spatial.force_up``)."""
+    pa = get6(B, _PA, l, L)
+    F = force_up(get_rotation(B, l, L), get3(B, 9, l, L), pa[0], pa[1], pa[2], pa[3], pa[4], pa[5])
+    for k in range(6):
+        P[(_PA + k) * L + l] += F[k]
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")
 def acceleration_lanes(i, mdl, B, par, QDD):
-    """Pass 3 for body i, every lane (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ),
-    q̈_i = (u_i − U_iᵀ a'_i) / D_i into row iv_i of QDD, a_i = a'_i + s q̈_i."""
-    L, r = LANES, mdl.iv[i]
-    s = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2], mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
-    qb = QDD[r * L:(r + 1) * L]
-    for l in range(L):
-        R, p, w = get_rotation(B, l), get3(B, 9, l), get3(par, 3, l)
-        al, aa = mul3t(R, add(get3(par, 0, l), cross(w, p))), mul3t(R, w)           # ⁱX_λ a_λ
-        c, U = get6(B, _C, l), get6(B, _U, l)
-        a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
-        qdd = (B[(_D + 1) * L + l] - (U[0] * a[0] + U[1] * a[1] + U[2] * a[2] + U[3] * a[3] + U[4] * a[4]
-                                      + U[5] * a[5])) / B[_D * L + l]
-        qb[l] = qdd
-        for k in range(6):
-            B[(_A + k) * L + l] = a[k] + s[k] * qdd
+    """Pass 3 for body i, every lane of the block: ``acceleration_lane``."""
+    am = articulated_model(i, mdl)
+    for l in range(LANES):
+        acceleration_lane(am, B, par, QDD, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def acceleration_lane(am, B, par, QDD, l, L):
+    """At lane l (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ), q̈_i = (u_i − U_iᵀ a'_i) / D_i into
+    row iv_i of QDD, a_i = a'_i + s q̈_i (am: ``articulated_model``)."""
+    r, s, nb = am
+    R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
+    al, aa = mul3t(R, add(get3(par, 0, l, L), cross(w, p))), mul3t(R, w)           # ⁱX_λ a_λ
+    c, U = get6(B, _C, l, L), get6(B, _U, l, L)
+    a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
+    qdd = (B[(_D + 1) * L + l] - (U[0] * a[0] + U[1] * a[1] + U[2] * a[2] + U[3] * a[3] + U[4] * a[4]
+                                  + U[5] * a[5])) / B[_D * L + l]
+    QDD[r * L + l] = qdd
+    set6(B, _A, l, L, (a[0] + s[0] * qdd, a[1] + s[1] * qdd, a[2] + s[2] * qdd, a[3] + s[3] * qdd, a[4] + s[4] * qdd,
+                       a[5] + s[5] * qdd))
 
 
 @njit(cache=True)

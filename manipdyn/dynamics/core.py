@@ -215,47 +215,55 @@ def shift_code(code, s0, nb, step, size):
 
 
 @njit(cache=True, inline="always")
-def get3(B, r, l):
-    """Rows r … r + 2 of a lane record at lane l, a 3-tuple."""
-    return B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l]
+def get3(B, r, l, L):
+    """Rows r … r + 2 of a lane record (rows of L numbers: L = LANES on the CPU, the batch size on a GPU) at lane l,
+    a 3-tuple."""
+    return B[r * L + l], B[(r + 1) * L + l], B[(r + 2) * L + l]
 
 
 @njit(cache=True, inline="always")
-def get6(B, r, l):
-    """Rows r … r + 5 of a lane record at lane l, a 6-tuple."""
-    return (B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l], B[(r + 3) * LANES + l],
-            B[(r + 4) * LANES + l], B[(r + 5) * LANES + l])
+def get6(B, r, l, L):
+    """Rows r … r + 5 of a lane record at lane l, a 6-tuple (``get3``)."""
+    return (B[r * L + l], B[(r + 1) * L + l], B[(r + 2) * L + l], B[(r + 3) * L + l], B[(r + 4) * L + l],
+            B[(r + 5) * L + l])
 
 
 @njit(cache=True, inline="always")
-def set3(B, r, l, x):
-    """Rows r … r + 2 of a lane record at lane l ← the 3-tuple x."""
-    B[r * LANES + l], B[(r + 1) * LANES + l], B[(r + 2) * LANES + l] = x[0], x[1], x[2]
+def set3(B, r, l, L, x):
+    """Rows r … r + 2 of a lane record at lane l ← the 3-tuple x (``get3``)."""
+    B[r * L + l], B[(r + 1) * L + l], B[(r + 2) * L + l] = x[0], x[1], x[2]
 
 
 @njit(cache=True, inline="always")
-def get_sym3(B, r, l):
+def set6(B, r, l, L, x):
+    """Rows r … r + 5 of a lane record at lane l ← the 6-tuple x (``get3``)."""
+    B[r * L + l], B[(r + 1) * L + l], B[(r + 2) * L + l] = x[0], x[1], x[2]
+    B[(r + 3) * L + l], B[(r + 4) * L + l], B[(r + 5) * L + l] = x[3], x[4], x[5]
+
+
+@njit(cache=True, inline="always")
+def get_sym3(B, r, l, L):
     """A symmetric 3×3 stored in rows r … r + 5 of a lane record (xx, yy, zz, xy, xz, yz) at lane l, as a tuple
-    of its rows."""
-    xx, yy, zz, xy, xz, yz = get6(B, r, l)
+    of its rows (``get3``)."""
+    xx, yy, zz, xy, xz, yz = get6(B, r, l, L)
     return (xx, xy, xz), (xy, yy, yz), (xz, yz, zz)
 
 
 @njit(cache=True, inline="always")
-def add_sym3(B, r, l, X):
+def add_sym3(B, r, l, L, X):
     """Rows r … r + 5 of a lane record (``get_sym3``) at lane l += the upper triangle of X (a tuple of rows)."""
-    B[r * LANES + l] += X[0][0]
-    B[(r + 1) * LANES + l] += X[1][1]
-    B[(r + 2) * LANES + l] += X[2][2]
-    B[(r + 3) * LANES + l] += X[0][1]
-    B[(r + 4) * LANES + l] += X[0][2]
-    B[(r + 5) * LANES + l] += X[1][2]
+    B[r * L + l] += X[0][0]
+    B[(r + 1) * L + l] += X[1][1]
+    B[(r + 2) * L + l] += X[2][2]
+    B[(r + 3) * L + l] += X[0][1]
+    B[(r + 4) * L + l] += X[0][2]
+    B[(r + 5) * L + l] += X[1][2]
 
 
 @njit(cache=True, inline="always")
-def get_rotation(B, l):
-    """R, rows 0–8 of a lane record (core.placement_lanes) at lane l, as a tuple of its rows."""
-    return get3(B, 0, l), get3(B, 3, l), get3(B, 6, l)
+def get_rotation(B, l, L):
+    """R, rows 0–8 of a lane record (``placement_lane``) at lane l, as a tuple of its rows."""
+    return get3(B, 0, l, L), get3(B, 3, l, L), get3(B, 6, l, L)
 
 
 @njit(cache=True, inline="always")
@@ -289,34 +297,47 @@ def angles_in_range(mdl, Z):
 
 
 @njit(cache=True, inline="always")
-def placement_lanes(i, mdl, B, Z):
-    """Rows 0–11 of body i's lane record B: R^{i−1}_i (9, row-major) and p^{i−1}_i (3) for every lane of the block
-    (``joints.joint_placement`` for a revolute or prismatic joint, the lane kernels' form; Z: q in its first rows)."""
-    L = LANES
-    # R^{i−1}_i = R0 R_J(q), R_J = c 1 + s [k]× + (1 − c) k kᵀ (Rodrigues) = c R0 + s R0[k]× + (1 − c) R0 k kᵀ;
-    # p = p0 + d R0 k for a prismatic joint (its R_J = 1: s = 0, c = 1 from an angle of 0)
-    R0, x, y, z = mdl.R0, mdl.axis[i, 0], mdl.axis[i, 1], mdl.axis[i, 2]
+def placement_model(i, mdl):
+    """What body i's placement takes from the model, once per block (``placement_lane``): R^{i−1}_i = R0 R_J(q),
+    R_J = c 1 + s [k]× + (1 − c) k kᵀ (Rodrigues), so R = c R0 + s R0[k]× + (1 − c) R0 k kᵀ — the rows a of R0, the
+    rows of R0[k]× (a × k) and R0 k; p = p0 + d R0 k for a prismatic joint (its R_J = 1: s = 0, c = 1 from an angle
+    of 0). Returns (a0, a1, a2, k0, k1, k2, R0 k, p0, k, turn: 1 revolute / 0 prismatic, q's row)."""
+    R0, k = mdl.R0, (mdl.axis[i, 0], mdl.axis[i, 1], mdl.axis[i, 2])
     a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
         (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
-    k0, k1, k2 = cross(a0, (x, y, z)), cross(a1, (x, y, z)), cross(a2, (x, y, z))   # rows of R0 [k]×: a × k
-    u0, u1, u2 = a0[0] * x + a0[1] * y + a0[2] * z, a1[0] * x + a1[1] * y + a1[2] * z, a2[0] * x + a2[1] * y + a2[2] * z
-    o0, o1, o2 = mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]
-    turn = 1.0 if mdl.kind[i] == REVOLUTE else 0.0
-    zq = Z[mdl.iq[i] * L:(mdl.iq[i] + 1) * L]
-    for l in range(L):
-        qi = zq[l]
-        s, c = sincos(turn * qi)
-        t, d = 1.0 - c, (1.0 - turn) * qi
-        B[0 * L + l] = c * a0[0] + s * k0[0] + t * u0 * x
-        B[1 * L + l] = c * a0[1] + s * k0[1] + t * u0 * y
-        B[2 * L + l] = c * a0[2] + s * k0[2] + t * u0 * z
-        B[3 * L + l] = c * a1[0] + s * k1[0] + t * u1 * x
-        B[4 * L + l] = c * a1[1] + s * k1[1] + t * u1 * y
-        B[5 * L + l] = c * a1[2] + s * k1[2] + t * u1 * z
-        B[6 * L + l] = c * a2[0] + s * k2[0] + t * u2 * x
-        B[7 * L + l] = c * a2[1] + s * k2[1] + t * u2 * y
-        B[8 * L + l] = c * a2[2] + s * k2[2] + t * u2 * z
-        B[9 * L + l], B[10 * L + l], B[11 * L + l] = o0 + d * u0, o1 + d * u1, o2 + d * u2
+    u = (a0[0] * k[0] + a0[1] * k[1] + a0[2] * k[2], a1[0] * k[0] + a1[1] * k[1] + a1[2] * k[2],
+         a2[0] * k[0] + a2[1] * k[1] + a2[2] * k[2])
+    return (a0, a1, a2, cross(a0, k), cross(a1, k), cross(a2, k), u, (mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]), k,
+            1.0 if mdl.kind[i] == REVOLUTE else 0.0, mdl.iq[i])
+
+
+@njit(cache=True, inline="always")
+def placement_lane(pm, B, Z, l, L):
+    """Rows 0–11 of a body's lane record B at lane l: R^{i−1}_i (9, row-major) and p^{i−1}_i (3) (``joints.
+    joint_placement`` for a revolute or prismatic joint, the lane kernels' form; pm: ``placement_model``; Z: q in
+    its first rows). Records are rows of L numbers: L = LANES on the CPU, the batch size on a GPU."""
+    a0, a1, a2, k0, k1, k2, u, o, k, turn, iq = pm
+    qi = Z[iq * L + l]
+    s, c = sincos(turn * qi)
+    t, d = 1.0 - c, (1.0 - turn) * qi
+    B[0 * L + l] = c * a0[0] + s * k0[0] + t * u[0] * k[0]
+    B[1 * L + l] = c * a0[1] + s * k0[1] + t * u[0] * k[1]
+    B[2 * L + l] = c * a0[2] + s * k0[2] + t * u[0] * k[2]
+    B[3 * L + l] = c * a1[0] + s * k1[0] + t * u[1] * k[0]
+    B[4 * L + l] = c * a1[1] + s * k1[1] + t * u[1] * k[1]
+    B[5 * L + l] = c * a1[2] + s * k1[2] + t * u[1] * k[2]
+    B[6 * L + l] = c * a2[0] + s * k2[0] + t * u[2] * k[0]
+    B[7 * L + l] = c * a2[1] + s * k2[1] + t * u[2] * k[1]
+    B[8 * L + l] = c * a2[2] + s * k2[2] + t * u[2] * k[2]
+    B[9 * L + l], B[10 * L + l], B[11 * L + l] = o[0] + d * u[0], o[1] + d * u[1], o[2] + d * u[2]
+
+
+@njit(cache=True, inline="always")
+def placement_lanes(i, mdl, B, Z):
+    """``placement_lane`` for every lane of the block."""
+    pm = placement_model(i, mdl)
+    for l in range(LANES):
+        placement_lane(pm, B, Z, l, LANES)
 
 
 @njit(cache=True)

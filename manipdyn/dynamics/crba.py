@@ -180,56 +180,93 @@ def crba_lanes(I, F, Q, M):
 
 @njit(cache=True, inline="always")
 def own_inertia_lanes(i, mdl, B):
-    """Rows 12–20 of body i's record: its own centre of mass and inertia about it, in every lane (pass 1's start)."""
-    L, c, J = LANES, mdl.com, mdl.inertia
-    for l in range(L):
-        B[12 * L + l], B[13 * L + l], B[14 * L + l] = c[i, 0], c[i, 1], c[i, 2]
-        B[15 * L + l], B[16 * L + l], B[17 * L + l] = J[i, 0, 0], J[i, 1, 1], J[i, 2, 2]
-        B[18 * L + l], B[19 * L + l], B[20 * L + l] = J[i, 0, 1], J[i, 0, 2], J[i, 1, 2]
+    """``own_inertia_lane`` for every lane of the block."""
+    om = own_inertia_model(i, mdl)
+    for l in range(LANES):
+        own_inertia_lane(om, B, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def own_inertia_model(i, mdl):
+    """Body i's centre of mass and its inertia about it (xx, yy, zz, xy, xz, yz): the start of its composite."""
+    c, J = mdl.com, mdl.inertia
+    return (c[i, 0], c[i, 1], c[i, 2]), (J[i, 0, 0], J[i, 1, 1], J[i, 2, 2], J[i, 0, 1], J[i, 0, 2], J[i, 1, 2])
+
+
+@njit(cache=True, inline="always")
+def own_inertia_lane(om, B, l, L):
+    """Rows 12–20 of a body's record at lane l: its own centre of mass and inertia (om: ``own_inertia_model``)."""
+    c, J = om
+    B[12 * L + l], B[13 * L + l], B[14 * L + l] = c
+    B[15 * L + l], B[16 * L + l], B[17 * L + l] = J[0], J[1], J[2]
+    B[18 * L + l], B[19 * L + l], B[20 * L + l] = J[3], J[4], J[5]
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def merge_lanes(w, B, P):
-    """The composite of B's body carried into its parent's frame and merged into the parent's (P), every lane:
+    """``merge_lane`` for every lane of the block."""
+    wt = (w[0], w[1], w[2])
+    for l in range(LANES):
+        merge_lane(wt, B, P, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def merge_lane(w, B, P, l, L):
+    """The composite of B's body carried into its parent's frame and merged into the parent's (P) at lane l:
     d = R c + p, I_c,λ += R I_c Rᵀ, then ``spatial.merge_inertia`` (w = its weights, ``merge_weights``)."""
-    L, w0, w1, k = LANES, w[0], w[1], w[2]
-    for l in range(L):
-        R = get_rotation(B, l)
-        d = add(mul3(R, get3(B, 12, l)), get3(B, 9, l))                       # c_i in λ's frame: R c + p
-        c2 = get3(P, 12, l)
-        dx, dy, dz = d[0] - c2[0], d[1] - c2[1], d[2] - c2[2]
-        add_sym3(P, 15, l, congruence3(R, get_sym3(B, 15, l)))                # R I_c Rᵀ, then the shift:
-        add_sym3(P, 15, l, ((k * (dy * dy + dz * dz), -k * dx * dy, -k * dx * dz),
-                            (0.0, k * (dx * dx + dz * dz), -k * dy * dz), (0.0, 0.0, k * (dx * dx + dy * dy))))
-        P[12 * L + l], P[13 * L + l], P[14 * L + l] = w0 * d[0] + w1 * c2[0], w0 * d[1] + w1 * c2[1], \
-            w0 * d[2] + w1 * c2[2]
+    w0, w1, k = w
+    R = get_rotation(B, l, L)
+    d = add(mul3(R, get3(B, 12, l, L)), get3(B, 9, l, L))                       # c_i in λ's frame: R c + p
+    c2 = get3(P, 12, l, L)
+    dx, dy, dz = d[0] - c2[0], d[1] - c2[1], d[2] - c2[2]
+    add_sym3(P, 15, l, L, congruence3(R, get_sym3(B, 15, l, L)))                # R I_c Rᵀ, then the shift:
+    add_sym3(P, 15, l, L, ((k * (dy * dy + dz * dz), -k * dx * dy, -k * dx * dz),
+                           (0.0, k * (dx * dx + dz * dz), -k * dy * dz), (0.0, 0.0, k * (dx * dx + dy * dy))))
+    P[12 * L + l], P[13 * L + l], P[14 * L + l] = w0 * d[0] + w1 * c2[0], w0 * d[1] + w1 * c2[1], \
+        w0 * d[2] + w1 * c2[2]
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
-    """Column iv_i of M for every lane: F = I^c_i s (``spatial.inertia_motion``; m: the composite's mass), M_ii =
-    sᵀ F, then F carried up the ancestors k (``spatial.force_up``), M_ki = S_kᵀ F; lower triangle of Mb
-    (row-major nv × nv blocks of LANES)."""
-    L, parent, iv, S = LANES, mdl.parent, mdl.iv, mdl.S
-    nv, r = S.shape[0], iv[i]
-    sl, sa = (S[r, 0], S[r, 1], S[r, 2]), (S[r, 3], S[r, 4], S[r, 5])
-    B = lane_record(even, odd, depth, i, COMPOSITE)
-    for l in range(L):
-        F = inertia_motion(m, get3(B, 12, l), get_sym3(B, 15, l), sl, sa)
-        Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
-        Mb[(r * nv + r) * L + l] = (sl[0] * F[0] + sl[1] * F[1] + sl[2] * F[2]
-                                    + sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5])
+    """Column iv_i of M for every lane of the block: ``column_lane``, then ``column_up_lane`` for each ancestor."""
+    parent = mdl.parent
+    B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, i, mdl)
+    for l in range(LANES):
+        column_lane(cm, m, B, Fw, Mb, l, LANES)
     k = i
     while parent[k] >= 0:
-        B, x = lane_record(even, odd, depth, k, COMPOSITE), iv[parent[k]]
-        tl, ta = (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5])
-        for l in range(L):
-            F = force_up(get_rotation(B, l), get3(B, 9, l), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l],
-                         Fw[4 * L + l], Fw[5 * L + l])
-            Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
-            Mb[(r * nv + x) * L + l] = (tl[0] * F[0] + tl[1] * F[1] + tl[2] * F[2]
-                                        + ta[0] * F[3] + ta[1] * F[4] + ta[2] * F[5])
+        B, cm = lane_record(even, odd, depth, k, COMPOSITE), column_model(i, parent[k], mdl)
+        for l in range(LANES):
+            column_up_lane(cm, B, Fw, Mb, l, LANES)
         k = parent[k]
+
+
+@njit(cache=True, inline="always")
+def column_model(i, k, mdl):
+    """What M's entry (iv_i, iv_k) takes from the model: (its flat index in Mb's rows, S_k's row as s_l, s_a)."""
+    S, x = mdl.S, mdl.iv[k]
+    return mdl.iv[i] * S.shape[0] + x, (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5])
+
+
+@njit(cache=True, inline="always")
+def column_lane(cm, m, B, Fw, Mb, l, L):
+    """At lane l: F = I^c_i s (``spatial.inertia_motion``; m: the composite's mass; cm: ``column_model(i, i)``) into
+    Fw's 6 rows, and M_ii = sᵀ F into Mb (row-major nv × nv rows of L numbers: the lower triangle is written)."""
+    e, sl, sa = cm
+    F = inertia_motion(m, get3(B, 12, l, L), get_sym3(B, 15, l, L), sl, sa)
+    Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
+    Mb[e * L + l] = sl[0] * F[0] + sl[1] * F[1] + sl[2] * F[2] + sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5]
+
+
+@njit(cache=True, inline="always")
+def column_up_lane(cm, B, Fw, Mb, l, L):
+    """At lane l: column i's wrench F (Fw) carried from body k to its parent λ(k) (``spatial.force_up``; B: k's record),
+    and M[iv_i, iv_λ(k)] = S_λ(k)ᵀ F (cm: ``column_model(i, λ(k))``)."""
+    e, tl, ta = cm
+    F = force_up(get_rotation(B, l, L), get3(B, 9, l, L), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l],
+                 Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l])
+    Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
+    Mb[e * L + l] = tl[0] * F[0] + tl[1] * F[1] + tl[2] * F[2] + ta[0] * F[3] + ta[1] * F[4] + ta[2] * F[5]
 
 
 @njit(cache=True, inline="always")

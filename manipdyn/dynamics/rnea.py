@@ -35,8 +35,8 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
-from .core import (LANES, angles_in_range, finite_state, gather_lanes, kernel_arrays, lane_record, no_wrenches,
-                   placement_lanes, scatter_lanes, shift_code, tree_depth, unpack, wrench_rows_of)
+from .core import (LANES, angles_in_range, finite_state, gather_lanes, get3, get_rotation, kernel_arrays, lane_record,
+                   no_wrenches, placement_lanes, scatter_lanes, set3, shift_code, tree_depth, unpack, wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
@@ -244,65 +244,86 @@ def outward_lanes(i, mdl, B, par, Z):
     its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'), then f'_i = m v̇'_C and
     n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes). Three loops, not one: the
     model's numbers that each needs fit in the vector registers (one loop spilled them: 13.7 → 11.5 ns per lane)."""
-    L, nb, r = LANES, mdl.parent.shape[0], mdl.iv[i]
     placement_lanes(i, mdl, B, Z)
-    # the motion: Eqs. 3, 5, 6 (prismatic 9, 10, 12), as ``outward``
-    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
-    zv, za = Z[(nb + r) * L:(nb + r + 1) * L], Z[(2 * nb + r) * L:(2 * nb + r + 1) * L]
-    for l in range(L):
-        R = ((B[0 * L + l], B[1 * L + l], B[2 * L + l]), (B[3 * L + l], B[4 * L + l], B[5 * L + l]),
-             (B[6 * L + l], B[7 * L + l], B[8 * L + l]))
-        p = (B[9 * L + l], B[10 * L + l], B[11 * L + l])
-        w0, dw0, dv0 = (par[l], par[L + l], par[2 * L + l]), (par[3 * L + l], par[4 * L + l], par[5 * L + l]), \
-            (par[6 * L + l], par[7 * L + l], par[8 * L + l])
-        w_in = mul3t(R, w0)                                    # R^i_{i−1} ω'_{i−1}
-        dw_in = mul3t(R, dw0)
-        dv_in = mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))    # Eq. 6 (32c)
-        qd, qdd = zv[l], za[l]
-        VL, VA, AL, AA = scale(qd, sl), scale(qd, sa), scale(qdd, sl), scale(qdd, sa)
-        w = add(w_in, VA)                                           # Eq. 3
-        dw = add(add(dw_in, AA), cross(w_in, VA))                   # Eq. 5
-        dv = add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL)))     # Eqs. 6, 12
-        B[12 * L + l], B[13 * L + l], B[14 * L + l] = w
-        B[15 * L + l], B[16 * L + l], B[17 * L + l] = dw
-        B[18 * L + l], B[19 * L + l], B[20 * L + l] = dv
-    # the inertial wrench: Eqs. 7, 13, 14 and Eq. 16's CoM term, as ``inertial``
-    m, cm, J = mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), mdl.inertia
-    j0, j1, j2 = (J[i, 0, 0], J[i, 0, 1], J[i, 0, 2]), (J[i, 1, 0], J[i, 1, 1], J[i, 1, 2]), \
-        (J[i, 2, 0], J[i, 2, 1], J[i, 2, 2])
-    for l in range(L):
-        w, dw = (B[12 * L + l], B[13 * L + l], B[14 * L + l]), (B[15 * L + l], B[16 * L + l], B[17 * L + l])
-        dv = (B[18 * L + l], B[19 * L + l], B[20 * L + l])
-        fc = scale(m, add(dv, add(cross(dw, cm), cross(w, cross(w, cm)))))          # Eqs. 7, 13
-        Iw = (j0[0] * w[0] + j0[1] * w[1] + j0[2] * w[2], j1[0] * w[0] + j1[1] * w[1] + j1[2] * w[2],
-              j2[0] * w[0] + j2[1] * w[1] + j2[2] * w[2])
-        Idw = (j0[0] * dw[0] + j0[1] * dw[1] + j0[2] * dw[2], j1[0] * dw[0] + j1[1] * dw[1] + j1[2] * dw[2],
-               j2[0] * dw[0] + j2[1] * dw[1] + j2[2] * dw[2])
-        nc = add(Idw, cross(w, Iw))                                                  # Eq. 14
-        B[21 * L + l], B[22 * L + l], B[23 * L + l] = fc
-        B[24 * L + l], B[25 * L + l], B[26 * L + l] = add(nc, cross(cm, fc))
+    mm, im = motion_model(i, mdl), inertial_model(i, mdl)
+    for l in range(LANES):
+        motion_lane(mm, B, par, Z, l, LANES)
+    for l in range(LANES):
+        inertial_lane(im, B, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def motion_model(i, mdl):
+    """What body i's motion and torque take from the model: (its row r of S, s_l, s_a, nb: Z's rows per q, q̇, q̈)."""
+    r = mdl.iv[i]
+    return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), mdl.parent.shape[0]
+
+
+@njit(cache=True, inline="always")
+def motion_lane(mm, B, par, Z, l, L):
+    """ω'_i, ω̇'_i, v̇'_i (Eqs. 3, 5, 6; prismatic 9, 10, 12, as ``outward``) into rows 12–20 of B at lane l, from the
+    placement (rows 0–11) and the parent's (par: 9 rows ω', ω̇', v̇'); mm: ``motion_model``."""
+    r, sl, sa, nb = mm
+    R, p = get_rotation(B, l, L), get3(B, 9, l, L)
+    w0, dw0, dv0 = get3(par, 0, l, L), get3(par, 3, l, L), get3(par, 6, l, L)
+    w_in = mul3t(R, w0)                                    # R^i_{i−1} ω'_{i−1}
+    dw_in = mul3t(R, dw0)
+    dv_in = mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))    # Eq. 6 (32c)
+    qd, qdd = Z[(nb + r) * L + l], Z[(2 * nb + r) * L + l]
+    VL, VA, AL, AA = scale(qd, sl), scale(qd, sa), scale(qdd, sl), scale(qdd, sa)
+    w = add(w_in, VA)                                           # Eq. 3
+    dw = add(add(dw_in, AA), cross(w_in, VA))                   # Eq. 5
+    dv = add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL)))     # Eqs. 6, 12
+    set3(B, 12, l, L, w)
+    set3(B, 15, l, L, dw)
+    set3(B, 18, l, L, dv)
+
+
+@njit(cache=True, inline="always")
+def inertial_model(i, mdl):
+    """What body i's inertial wrench takes from the model: (m, its centre of mass, its inertia's rows)."""
+    J = mdl.inertia
+    return mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), ((J[i, 0, 0], J[i, 0, 1], J[i, 0, 2]),
+                                                                         (J[i, 1, 0], J[i, 1, 1], J[i, 1, 2]),
+                                                                         (J[i, 2, 0], J[i, 2, 1], J[i, 2, 2]))
+
+
+@njit(cache=True, inline="always")
+def inertial_lane(im, B, l, L):
+    """f'_i = m v̇'_C and n'_i (about the origin) into rows 21–26 of B at lane l (Eqs. 7, 13, 14 and Eq. 16's CoM term,
+    as ``inertial``); im: ``inertial_model``."""
+    m, cm, J = im
+    w, dw, dv = get3(B, 12, l, L), get3(B, 15, l, L), get3(B, 18, l, L)
+    fc = scale(m, add(dv, add(cross(dw, cm), cross(w, cross(w, cm)))))          # Eqs. 7, 13
+    nc = add(mul3(J, dw), cross(w, mul3(J, w)))                                  # Eq. 14
+    set3(B, 21, l, L, fc)
+    set3(B, 24, l, L, add(nc, cross(cm, fc)))
 
 
 @njit(cache=True, fastmath=CONTRACT)
 def inward_lanes(i, mdl, B, to, TB):
+    """``inward_lane`` for every lane of the block."""
+    mm = motion_model(i, mdl)
+    for l in range(LANES):
+        inward_lane(mm, B, to, TB, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def inward_lane(mm, B, to, TB, l, L):
     """τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18) into row iv_i of TB, and the parent's f', n' (``to``: 6 rows) += R f'_i,
-    R n'_i + p × R f'_i (Eqs. 15, 16), for every lane of the block, as ``inward`` for one state."""
-    L, r = LANES, mdl.iv[i]
-    sl, sa = (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5])
-    tb = TB[r * L:(r + 1) * L]
-    for l in range(L):
-        f, n = (B[21 * L + l], B[22 * L + l], B[23 * L + l]), (B[24 * L + l], B[25 * L + l], B[26 * L + l])
-        tb[l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2]
-        R = ((B[0 * L + l], B[1 * L + l], B[2 * L + l]), (B[3 * L + l], B[4 * L + l], B[5 * L + l]),
-             (B[6 * L + l], B[7 * L + l], B[8 * L + l]))
-        Rf, Rn = mul3(R, f), mul3(R, n)
-        n_up = add(Rn, cross((B[9 * L + l], B[10 * L + l], B[11 * L + l]), Rf))
-        to[l] += Rf[0]
-        to[L + l] += Rf[1]
-        to[2 * L + l] += Rf[2]
-        to[3 * L + l] += n_up[0]
-        to[4 * L + l] += n_up[1]
-        to[5 * L + l] += n_up[2]
+    R n'_i + p × R f'_i (Eqs. 15, 16), at lane l, as ``inward`` for one state; mm: ``motion_model``."""
+    r, sl, sa, nb = mm
+    f, n = get3(B, 21, l, L), get3(B, 24, l, L)
+    TB[r * L + l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2]
+    R = get_rotation(B, l, L)
+    Rf, Rn = mul3(R, f), mul3(R, n)
+    n_up = add(Rn, cross(get3(B, 9, l, L), Rf))
+    to[l] += Rf[0]
+    to[L + l] += Rf[1]
+    to[2 * L + l] += Rf[2]
+    to[3 * L + l] += n_up[0]
+    to[4 * L + l] += n_up[1]
+    to[5 * L + l] += n_up[2]
 
 
 # The compiled code every batch reaches (``_jit.entry``; arrays of any strides). The scalar batch kernel had a

@@ -1,0 +1,385 @@
+"""Batched dynamics on an NVIDIA GPU, in float64: the lane kernels' per-lane steps compiled for CUDA by numba-cuda
+(the ``[gpu]`` extra), one thread per state.
+
+    import manipdyn.gpu as gpu
+    tau = gpu.rnea(model, q, v, a)     # q (N, nq), v, a (N, nv)
+    h = gpu.nonlinear_effects(model, q, v);  g = gpu.gravity_torques(model, q)
+
+The states are device arrays — anything with ``__cuda_array_interface__`` (CuPy, PyTorch, numba; JAX's GPU arrays),
+read where they lie, or with ``__dlpack__`` (through CuPy) — or numpy arrays, copied to the device. The result is
+a numba device array (N, nv): ``cupy.asarray(tau)`` or ``torch.as_tensor(tau, device="cuda")`` take it without a
+copy, ``tau.copy_to_host()`` brings it back.
+
+The same source as the CPU (docs/design.md §4c): a lane kernel's step for one state — ``core.placement_lane``,
+``rnea.motion_lane``, ``rnea.inertial_lane``, ``rnea.inward_lane``, with a record's rows L numbers long — is the
+innermost loop's body on the CPU (L = LANES, a block) and one thread's work here (L = N, the whole batch), so that
+a warp's 32 threads read and write 32 consecutive numbers (coalesced). What differs is only the driver below: which
+thread runs which state, and scratch in device memory (kept between calls of the same size).
+
+Checks as on the CPU, on the device: a non-finite input or result, or a revolute angle beyond
+``spatial.SINCOS_MAX`` (where the GPU, unlike the CPU, has no one-state fallback: reduce the angle modulo 2π),
+raises the typed error naming the first such row. Joints with one velocity only (a free flyer is refused by name).
+Tested on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, tests/gpu/), compiled to PTX where NVVM is installed,
+and timed by ``scripts/gpu_bench.py`` on a GPU.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .dynamics.aba import (_A, _V, ARTICULATED, acceleration_lane, articulated_lane, articulated_model, bias_lane,
+                           bias_up_lane, handed_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane)
+from .dynamics.core import placement_lane, placement_model, unpack
+from .dynamics.crba import (COMPOSITE, column_lane, column_model, column_up_lane, merge_lane, merge_weights,
+                            own_inertia_lane, own_inertia_model)
+from .dynamics.rnea import _F, _W, RECORD, inertial_lane, inertial_model, inward_lane, motion_lane, motion_model
+from ._jit import njit
+from .errors import InputError, ManipdynError, NumericalError
+from .extras import missing, require
+from .joints import REVOLUTE
+from .model import Model
+from .spatial import SINCOS_MAX
+
+try:                          # numba-cuda (the [gpu] extra); a kernel's ``cuda`` must be this module's global (the
+    from numba import cuda    # simulator swaps it for its own while a kernel runs)
+except ImportError:           # pragma: no cover - without the extra: _cuda() names it
+    cuda = None
+
+THREADS = 128                 # threads per block
+_BIG = 2 ** 62                # "no row": the flags' start value
+_KERNELS, _SCRATCH = {}, {}
+
+
+def _cuda():
+    """numba.cuda, or MissingExtraError naming the [gpu] extra."""
+    if cuda is None:
+        raise missing("numba_cuda", "gpu", "manipdyn.gpu")
+    return cuda
+
+
+# -- the drivers: one thread per state ----------------------------------------------------------------------------
+# Each thread s gathers its state into Z (index last), checks it (flags[0] ← the first bad row: a non-finite input or
+# an angle beyond SINCOS_MAX, left uncomputed), runs the lane steps with L = N, writes its result and flags a
+# non-finite one (flags[1]) or, in the ABA, a singular articulated inertia (flags[2]).
+
+@njit(inline="always")
+def _gather(Q, Z, s, N, row, kind, angles):
+    """Z[(row + k)·N + s] = Q[s, k]; returns 0.0, or inf/NaN for a non-finite entry or (``angles``) a revolute
+    angle beyond SINCOS_MAX."""
+    bad = 0.0
+    for k in range(Q.shape[1]):
+        x = Q[s, k]
+        Z[(row + k) * N + s] = x
+        bad += x - x
+        if angles and kind[k] == REVOLUTE and not abs(x) <= SINCOS_MAX:
+            bad += np.inf
+    return bad
+
+
+def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, with_a):
+    """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0."""
+    s = cuda.grid(1)
+    N, nb = tau.shape[0], I.shape[1]
+    if s >= N:
+        return
+    mdl = unpack(I, F)
+    bad = _gather(Q, Z, s, N, 0, mdl.kind, True)
+    if with_v:
+        bad += _gather(V, Z, s, N, nb, mdl.kind, False)
+    if with_a:
+        bad += _gather(A, Z, s, N, 2 * nb, mdl.kind, False)
+    for k in range(nb):
+        if not with_v:
+            Z[(nb + k) * N + s] = 0.0
+        if not with_a:
+            Z[(2 * nb + k) * N + s] = 0.0
+    if not bad == 0.0:
+        cuda.atomic.min(flags, 0, s)
+        return
+    for k in range(3):                                    # the base as a parent: ω' = ω̇' = 0, v̇' = −g
+        base[k * N + s], base[(3 + k) * N + s], base[(6 + k) * N + s] = 0.0, 0.0, mdl.mg[k]
+    for k in range(6):
+        spare[k * N + s] = 0.0
+    for i in range(nb):                                   # outward, Eqs. 3–14
+        j = mdl.parent[i]
+        B = rec[i * RECORD * N:(i + 1) * RECORD * N]
+        par = base if j < 0 else rec[(j * RECORD + _W) * N:(j * RECORD + _W + 9) * N]
+        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        motion_lane(motion_model(i, mdl), B, par, Z, s, N)
+        inertial_lane(inertial_model(i, mdl), B, s, N)
+    for i in range(nb - 1, -1, -1):                       # inward, Eqs. 15–18
+        j = mdl.parent[i]
+        B = rec[i * RECORD * N:(i + 1) * RECORD * N]
+        to = spare if j < 0 else rec[(j * RECORD + _F) * N:(j * RECORD + _F + 6) * N]
+        inward_lane(motion_model(i, mdl), B, to, TB, s, N)
+    if not _result(TB, tau, s, N) == 0.0:
+        cuda.atomic.min(flags, 1, s)
+
+
+@njit(inline="always")
+def _result(T, out, s, N):
+    """out[s, k] = T[k·N + s]; returns 0.0, or inf/NaN if one is not finite."""
+    bad = 0.0
+    for k in range(out.shape[1]):
+        x = T[k * N + s]
+        out[s, k] = x
+        bad += x - x
+    return bad
+
+
+def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, flags):
+    """Thread s: state s's M by the composite-rigid-body algorithm (``crba.crba_lanes``' steps)."""
+    s = cuda.grid(1)
+    N, nb = M.shape[0], I.shape[1]
+    if s >= N:
+        return
+    mdl = unpack(I, F)
+    if not _gather(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
+        cuda.atomic.min(flags, 0, s)
+        return
+    for i in range(nb):                                   # pass 1: placements, own inertias
+        B = rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N]
+        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        own_inertia_lane(own_inertia_model(i, mdl), B, s, N)
+    for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
+        j = mdl.parent[i]
+        if j >= 0:
+            merge_lane((W[i, 0], W[i, 1], W[i, 2]), rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N],
+                       rec[j * COMPOSITE * N:(j + 1) * COMPOSITE * N], s, N)
+    for k in range(nb * nb):                              # bodies on different branches do not couple
+        Mb[k * N + s] = 0.0
+    for i in range(nb):                                   # pass 2: column iv_i of M
+        column_lane(column_model(i, i, mdl), mC[i], rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N], Fw, Mb, s, N)
+        k = i
+        while mdl.parent[k] >= 0:
+            column_up_lane(column_model(i, mdl.parent[k], mdl), rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N], Fw,
+                           Mb, s, N)
+            k = mdl.parent[k]
+    bad = 0.0
+    for a in range(nb):
+        for b in range(a + 1):
+            y = Mb[(a * nb + b) * N + s]
+            M[s, a, b] = y
+            M[s, b, a] = y
+            bad += y - y
+    if not bad == 0.0:
+        cuda.atomic.min(flags, 1, s)
+
+
+def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
+    """Thread s: state s's q̈ by the articulated-body algorithm (``aba.aba_lanes``' steps)."""
+    s = cuda.grid(1)
+    N, nb = out.shape[0], I.shape[1]
+    if s >= N:
+        return
+    mdl = unpack(I, F)
+    bad = _gather(Q, Z, s, N, 0, mdl.kind, True) + _gather(V, Z, s, N, nb, mdl.kind, False) + \
+        _gather(T, Z, s, N, 2 * nb, mdl.kind, False)
+    if not bad == 0.0:
+        cuda.atomic.min(flags, 0, s)
+        return
+    for k in range(3):                                    # the base: v_0 = 0, a_0 = [−g; 0]
+        base[k * N + s], base[(3 + k) * N + s], base[(6 + k) * N + s], base[(9 + k) * N + s] = 0.0, 0.0, mdl.mg[k], 0.0
+    for i in range(nb):                                   # pass 1 (outward)
+        j = mdl.parent[i]
+        B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
+        par = base[:6 * N] if j < 0 else rec[(j * ARTICULATED + _V) * N:(j * ARTICULATED + _V + 6) * N]
+        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        velocity_lane(motion_model(i, mdl), B, par, Z, s, N)
+        bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, s, N)
+    singular = 0
+    for i in range(nb - 1, -1, -1):                       # pass 2 (inward)
+        j = mdl.parent[i]
+        B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
+        singular += articulated_lane(articulated_model(i, mdl), dmin, B, Z, s, N)
+        if j >= 0:
+            P = rec[j * ARTICULATED * N:(j + 1) * ARTICULATED * N]
+            handed_lane(B, s, N)
+            inertia_up_lane(B, P, s, N)
+            bias_up_lane(B, P, s, N)
+    if singular > 0:
+        cuda.atomic.min(flags, 2, s)
+        return
+    for i in range(nb):                                   # pass 3 (outward)
+        j = mdl.parent[i]
+        par = base[6 * N:] if j < 0 else rec[(j * ARTICULATED + _A) * N:(j * ARTICULATED + _A + 6) * N]
+        acceleration_lane(articulated_model(i, mdl), rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N], par, QDD,
+                          s, N)
+    if not _result(QDD, out, s, N) == 0.0:
+        cuda.atomic.min(flags, 1, s)
+
+
+def _kernel(name, func):
+    """func compiled by numba-cuda, once per process."""
+    if name not in _KERNELS:
+        _KERNELS[name] = _cuda().jit(func)
+    return _KERNELS[name]
+
+
+def _scratch(key, shape):
+    """A device array of the shape, kept between calls (``key``: its use); calls from several threads at once
+    would share it: one host thread at a time per process."""
+    x = _SCRATCH.get(key)
+    if x is None or x.shape != shape:
+        x = _SCRATCH[key] = _cuda().device_array(shape)
+    return x
+
+
+# -- states in and out -------------------------------------------------------------------------------------------
+
+def to_device(x, name, n, call):
+    """A state array x (N, n) float64 on the device: a numba device array as it is, a ``__cuda_array_interface__``
+    object viewed where it lies, a ``__dlpack__`` one through CuPy, a numpy array copied in. InputError names a
+    wrong shape or dtype."""
+    _cuda()
+    if hasattr(x, "copy_to_host"):
+        d = x
+    elif hasattr(x, "__cuda_array_interface__"):
+        d = cuda.as_cuda_array(x)
+    elif hasattr(x, "__dlpack__") and not isinstance(x, np.ndarray):
+        cp = require("cupy", "gpu", f"{call} on a DLPack array")
+        d = cuda.as_cuda_array(cp.from_dlpack(x))
+    else:
+        try:
+            h = np.asarray(x, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{call}: {name} must be an (N, {n}) array of numbers: {exc}") from None
+        if h.ndim != 2 or h.shape[1] != n:
+            raise InputError(f"{call}: {name} must be (N, {n}), it is {h.shape}")
+        return cuda.to_device(np.ascontiguousarray(h))
+    if len(d.shape) != 2 or d.shape[1] != n:
+        raise InputError(f"{call}: {name} must be (N, {n}), it is {tuple(d.shape)}")
+    if np.dtype(d.dtype) != np.float64:
+        raise InputError(f"{call}: {name} must be float64 on the GPU (the CPU's precision), it is {d.dtype}")
+    return d
+
+
+def _model(model, call):
+    if type(model) is not Model:
+        raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
+    if not (model.nq == model.nv == model.njoints):
+        others = [n for n, k in zip(model.joint_names, model.kernel.arrays[0][4]) if k != 1]
+        raise InputError(f"{call}: the GPU kernels take joints with one velocity each; {others} have more "
+                         f"(use the CPU call)")
+    return model.kernel.arrays
+
+
+def _raise(model, call, flags, states, cpu):
+    """The typed error of the first flagged row: an angle past the GPU's sincos range by name, else the error the
+    CPU call gives on that row (``cpu``: the row's host states → the CPU call), prefixed with the row."""
+    first = min(int(x) for x in flags.copy_to_host())
+    rows = [d[first:first + 1].copy_to_host()[0] for _, d in states]
+    q = rows[0]
+    for k, x in enumerate(q):
+        if np.isfinite(x) and model.kind[k] == REVOLUTE and abs(x) > SINCOS_MAX:
+            raise InputError(f"{call}: q[{first}, {k}] (joint {model.q_names[k]!r}) is {x:.6g}, beyond "
+                             f"{SINCOS_MAX:.0e} rad, the GPU's sin and cos range: reduce it modulo 2π (the CPU call takes it)")
+    try:
+        cpu(*rows)
+    except ManipdynError as exc:
+        raise type(exc)(f"{call} on the GPU, row {first}: {exc}") from None
+    raise NumericalError(f"{call} on the GPU, row {first}: the result is not finite (an intermediate overflowed on "
+                         f"the GPU, not on the CPU)")
+
+
+def _launch(name, func, N, *args):
+    if N:
+        _kernel(name, func)[(N + THREADS - 1) // THREADS, THREADS](*args)
+
+
+def _states(model, call, given):
+    """[(name, device array)] of the given states (name → array or None), one number of rows."""
+    out = []
+    for name, x in given:
+        if x is not None:
+            out.append((name, to_device(x, name, model.nq if name == "q" else model.nv, call)))
+    N = out[0][1].shape[0]
+    for name, d in out[1:]:
+        if d.shape[0] != N:
+            raise InputError(f"{call}: {name} has {d.shape[0]} rows, q has {N}")
+    return out, N
+
+
+def _flags():
+    return _cuda().to_device(np.full(3, _BIG, np.int64))
+
+
+def _run_rnea(model, call, q, v, a):
+    import manipdyn as md
+    I, F = _model(model, call)
+    states, N = _states(model, call, (("q", q), ("v", v), ("a", a)))
+    nb, Q = model.njoints, states[0][1]
+    V, A = (dict(states).get(n, Q) for n in ("v", "a"))
+    tau, flags = _cuda().device_array((N, nb)), _flags()
+    _launch("rnea", _rnea_threads, N, _cuda().to_device(I), _cuda().to_device(F), Q, V, A,
+            _scratch("rec", (nb * RECORD * N,)), _scratch("base", (9 * N,)), _scratch("spare", (6 * N,)),
+            _scratch("Z", (3 * nb * N,)), _scratch("T", (nb * N,)), tau, flags, v is not None, a is not None)
+    if N and (flags.copy_to_host() < _BIG).any():
+        _raise(model, call, flags, states, lambda *x: getattr(md, call)(model, *x))
+    return tau
+
+
+def rnea(model, q, v, a):
+    """τ (N, nv) on the GPU for device (or numpy) arrays q (N, nq), v, a (N, nv): ``manipdyn.rnea``'s numbers
+    (tests/gpu/), a device array."""
+    return _run_rnea(model, "rnea", q, v, a)
+
+
+def nonlinear_effects(model, q, v):
+    """h = C q̇ + g (N, nv) on the GPU (``rnea`` with q̈ = 0)."""
+    return _run_rnea(model, "nonlinear_effects", q, v, None)
+
+
+def gravity_torques(model, q):
+    """g(q) (N, nv) on the GPU (``rnea`` with q̇ = q̈ = 0)."""
+    return _run_rnea(model, "gravity_torques", q, None, None)
+
+
+def mass_matrix(model, q):
+    """M(q) (N, nv, nv) on the GPU by the composite-rigid-body algorithm (``manipdyn.mass_matrix``'s numbers)."""
+    import manipdyn as md
+    I, F = _model(model, "mass_matrix")
+    states, N = _states(model, "mass_matrix", (("q", q),))
+    nb = model.njoints
+    mdl = unpack(I, F)
+    mC, W = np.empty(nb), np.zeros((nb, 3))
+    merge_weights(mdl.parent, mdl.mass, mC, W)
+    M, flags, cuda = _cuda().device_array((N, nb, nb)), _flags(), _cuda()
+    _launch("crba", _crba_threads, N, cuda.to_device(I), cuda.to_device(F), states[0][1], cuda.to_device(W),
+            cuda.to_device(mC), _scratch("rec", (nb * COMPOSITE * N,)), _scratch("Z", (nb * N,)),
+            _scratch("F", (6 * N,)), _scratch("M", (nb * nb * N,)), M, flags)
+    if N and (flags.copy_to_host() < _BIG).any():
+        _raise(model, "mass_matrix", flags, states, lambda q: md.mass_matrix(model, q))
+    return M
+
+
+def aba(model, q, v, tau):
+    """q̈ (N, nv) on the GPU by the articulated-body algorithm (``manipdyn.aba``'s numbers)."""
+    import manipdyn as md
+    I, F = _model(model, "aba")
+    states, N = _states(model, "aba", (("q", q), ("v", v), ("tau", tau)))
+    nb, cuda = model.njoints, _cuda()
+    mdl = unpack(I, F)
+    out, flags = cuda.device_array((N, nb)), _flags()
+    _launch("aba", _aba_threads, N, cuda.to_device(I), cuda.to_device(F), *(d for _, d in states),
+            float(singular_threshold(mdl.inertia, mdl.mass)), _scratch("rec", (nb * ARTICULATED * N,)),
+            _scratch("base", (12 * N,)), _scratch("Z", (3 * nb * N,)), _scratch("T", (nb * N,)), out, flags)
+    if N and (flags.copy_to_host() < _BIG).any():
+        _raise(model, "aba", flags, states, lambda q, v, t: md.aba(model, q, v, t))
+    return out
+
+
+def ptx(name, cc=(9, 0)):
+    """The PTX that numba-cuda makes of a driver ("rnea", "crba", "aba") for compute capability ``cc`` — without a GPU
+    (it needs NVVM, ``pip install "cuda-toolkit[nvvm,nvrtc]"``): the check that the CPU kernels' lane steps compile for
+    CUDA as they are, where the simulator would run them as Python."""
+    from numba import types
+    c = _cuda()
+    i2, f3 = types.Array(types.int64, 2, "C"), types.Array(types.float64, 3, "C")
+    a2, c1, c2 = types.Array(types.float64, 2, "A"), types.Array(types.float64, 1, "C"), \
+        types.Array(types.float64, 2, "C")
+    flags = types.Array(types.int64, 1, "C")
+    sigs = {"rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, c1, c1, c1, c1, c2, flags, types.boolean, types.boolean)),
+            "crba": (_crba_threads, (i2, f3, a2, c2, c1, c1, c1, c1, c1, f3, flags)),
+            "aba": (_aba_threads, (i2, f3, a2, a2, a2, types.float64, c1, c1, c1, c1, c2, flags))}
+    func, sig = sigs[name]
+    return c.compile_ptx(func, sig, device=False, cc=cc)[0]
