@@ -28,11 +28,11 @@ import numpy as np
 
 from .dynamics.aba import (_A, _V, ARTICULATED, acceleration_lane, articulated_lane, articulated_model, bias_lane,
                            bias_up_lane, handed_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane)
-from .dynamics.core import placement_lane, placement_model, unpack
+from .dynamics.core import (gather_lane, inertial_model, motion_model, placement_lane, placement_model, scatter_lane,
+                            unpack)
 from .dynamics.crba import (COMPOSITE, column_lane, column_model, column_up_lane, merge_lane, merge_weights,
                             own_inertia_lane, own_inertia_model)
-from .dynamics.rnea import _F, _W, RECORD, inertial_lane, inertial_model, inward_lane, motion_lane, motion_model
-from ._jit import njit
+from .dynamics.rnea import _F, _W, RECORD, inertial_lane, inward_lane, motion_lane
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
 from .joints import REVOLUTE
@@ -61,20 +61,6 @@ def _cuda():
 # an angle beyond SINCOS_MAX, left uncomputed), runs the lane steps with L = N, writes its result and flags a
 # non-finite one (flags[1]) or, in the ABA, a singular articulated inertia (flags[2]).
 
-@njit(inline="always")
-def _gather(Q, Z, s, N, row, kind, angles):
-    """Z[(row + k)·N + s] = Q[s, k]; returns 0.0, or inf/NaN for a non-finite entry or (``angles``) a revolute
-    angle beyond SINCOS_MAX."""
-    bad = 0.0
-    for k in range(Q.shape[1]):
-        x = Q[s, k]
-        Z[(row + k) * N + s] = x
-        bad += x - x
-        if angles and kind[k] == REVOLUTE and not abs(x) <= SINCOS_MAX:
-            bad += np.inf
-    return bad
-
-
 def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, with_a):
     """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0."""
     s = cuda.grid(1)
@@ -82,11 +68,11 @@ def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, wi
     if s >= N:
         return
     mdl = unpack(I, F)
-    bad = _gather(Q, Z, s, N, 0, mdl.kind, True)
+    bad = gather_lane(Q, Z, s, N, 0, mdl.kind, True)
     if with_v:
-        bad += _gather(V, Z, s, N, nb, mdl.kind, False)
+        bad += gather_lane(V, Z, s, N, nb, mdl.kind, False)
     if with_a:
-        bad += _gather(A, Z, s, N, 2 * nb, mdl.kind, False)
+        bad += gather_lane(A, Z, s, N, 2 * nb, mdl.kind, False)
     for k in range(nb):
         if not with_v:
             Z[(nb + k) * N + s] = 0.0
@@ -111,19 +97,8 @@ def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, wi
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         to = spare if j < 0 else rec[(j * RECORD + _F) * N:(j * RECORD + _F + 6) * N]
         inward_lane(motion_model(i, mdl), B, to, TB, s, N)
-    if not _result(TB, tau, s, N) == 0.0:
+    if not scatter_lane(TB, tau, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
-
-
-@njit(inline="always")
-def _result(T, out, s, N):
-    """out[s, k] = T[k·N + s]; returns 0.0, or inf/NaN if one is not finite."""
-    bad = 0.0
-    for k in range(out.shape[1]):
-        x = T[k * N + s]
-        out[s, k] = x
-        bad += x - x
-    return bad
 
 
 def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, flags):
@@ -133,7 +108,7 @@ def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, flags):
     if s >= N:
         return
     mdl = unpack(I, F)
-    if not _gather(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
+    if not gather_lane(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
     for i in range(nb):                                   # pass 1: placements, own inertias
@@ -172,8 +147,8 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
     if s >= N:
         return
     mdl = unpack(I, F)
-    bad = _gather(Q, Z, s, N, 0, mdl.kind, True) + _gather(V, Z, s, N, nb, mdl.kind, False) + \
-        _gather(T, Z, s, N, 2 * nb, mdl.kind, False)
+    bad = gather_lane(Q, Z, s, N, 0, mdl.kind, True) + gather_lane(V, Z, s, N, nb, mdl.kind, False) + \
+        gather_lane(T, Z, s, N, 2 * nb, mdl.kind, False)
     if not bad == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
@@ -204,7 +179,7 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
         par = base[6 * N:] if j < 0 else rec[(j * ARTICULATED + _A) * N:(j * ARTICULATED + _A + 6) * N]
         acceleration_lane(articulated_model(i, mdl), rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N], par, QDD,
                           s, N)
-    if not _result(QDD, out, s, N) == 0.0:
+    if not scatter_lane(QDD, out, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
 
 

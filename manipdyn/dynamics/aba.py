@@ -38,11 +38,11 @@ from . import mimic
 from ..spatial import (add, cholesky, cholesky_solve, cross, cross_force, cross_motion, first_nonfinite, force_cross,
                        force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
                        motion_to_child, mul3, mul3t, rigid_inertia, scale)
-from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, lane_record,
-                   no_wrenches, placement_lanes, scatter_lanes, set3, set6, shift_code, tree_depth, unpack,
-                   wrench_rows_of)
+from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model,
+                   lane_record, motion_model, no_wrenches, placement_lanes, scatter_lanes, set3, set6, shift_code,
+                   tree_depth, unpack, wrench_rows_of)
 from .crba import crba, crba_kernel
-from .rnea import inertial_model, motion_model, rnea, rnea_kernel
+from .rnea import rnea, rnea_kernel
 from .route import route
 
 

@@ -333,6 +333,47 @@ def placement_lane(pm, B, Z, l, L):
 
 
 @njit(cache=True, inline="always")
+def motion_model(i, mdl):
+    """What body i's motion and torque take from the model: (its row r of S, s_l, s_a, nb: Z's rows per q, q̇, q̈)."""
+    r = mdl.iv[i]
+    return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), mdl.parent.shape[0]
+
+
+@njit(cache=True, inline="always")
+def inertial_model(i, mdl):
+    """What body i's inertial wrench takes from the model: (m, its centre of mass, its inertia's rows)."""
+    J = mdl.inertia
+    return mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), ((J[i, 0, 0], J[i, 0, 1], J[i, 0, 2]),
+                                                                         (J[i, 1, 0], J[i, 1, 1], J[i, 1, 2]),
+                                                                         (J[i, 2, 0], J[i, 2, 1], J[i, 2, 2]))
+
+
+@njit(cache=True, inline="always")
+def gather_lane(X, Z, s, N, row, kind, angles):
+    """One state's row into a record of rows N long (a GPU thread's ``gather_lanes``): Z[(row + k)·N + s] = X[s, k].
+    Returns 0.0, or inf/NaN for a non-finite entry or (``angles``: X is q) a revolute angle beyond SINCOS_MAX."""
+    bad = 0.0
+    for k in range(X.shape[1]):
+        x = X[s, k]
+        Z[(row + k) * N + s] = x
+        bad += x - x
+        if angles and kind[k] == REVOLUTE and not abs(x) <= SINCOS_MAX:
+            bad += np.inf
+    return bad
+
+
+@njit(cache=True, inline="always")
+def scatter_lane(Z, Y, s, N):
+    """Y[s, k] = Z[k·N + s] (``gather_lane`` undone). Returns 0.0, or inf/NaN if an entry is not finite."""
+    bad = 0.0
+    for k in range(Y.shape[1]):
+        y = Z[k * N + s]
+        Y[s, k] = y
+        bad += y - y
+    return bad
+
+
+@njit(cache=True, inline="always")
 def placement_lanes(i, mdl, B, Z):
     """``placement_lane`` for every lane of the block."""
     pm = placement_model(i, mdl)

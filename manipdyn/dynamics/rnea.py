@@ -35,8 +35,9 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
-from .core import (LANES, angles_in_range, finite_state, gather_lanes, get3, get_rotation, kernel_arrays, lane_record,
-                   no_wrenches, placement_lanes, scatter_lanes, set3, shift_code, tree_depth, unpack, wrench_rows_of)
+from .core import (LANES, angles_in_range, finite_state, gather_lanes, get3, get_rotation, inertial_model, kernel_arrays,
+                   lane_record, motion_model, no_wrenches, placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
+                   unpack, wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
@@ -253,13 +254,6 @@ def outward_lanes(i, mdl, B, par, Z):
 
 
 @njit(cache=True, inline="always")
-def motion_model(i, mdl):
-    """What body i's motion and torque take from the model: (its row r of S, s_l, s_a, nb: Z's rows per q, q̇, q̈)."""
-    r = mdl.iv[i]
-    return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), mdl.parent.shape[0]
-
-
-@njit(cache=True, inline="always")
 def motion_lane(mm, B, par, Z, l, L):
     """ω'_i, ω̇'_i, v̇'_i (Eqs. 3, 5, 6; prismatic 9, 10, 12, as ``outward``) into rows 12–20 of B at lane l, from the
     placement (rows 0–11) and the parent's (par: 9 rows ω', ω̇', v̇'); mm: ``motion_model``."""
@@ -277,15 +271,6 @@ def motion_lane(mm, B, par, Z, l, L):
     set3(B, 12, l, L, w)
     set3(B, 15, l, L, dw)
     set3(B, 18, l, L, dv)
-
-
-@njit(cache=True, inline="always")
-def inertial_model(i, mdl):
-    """What body i's inertial wrench takes from the model: (m, its centre of mass, its inertia's rows)."""
-    J = mdl.inertia
-    return mdl.mass[i], (mdl.com[i, 0], mdl.com[i, 1], mdl.com[i, 2]), ((J[i, 0, 0], J[i, 0, 1], J[i, 0, 2]),
-                                                                         (J[i, 1, 0], J[i, 1, 1], J[i, 1, 2]),
-                                                                         (J[i, 2, 0], J[i, 2, 1], J[i, 2, 2]))
 
 
 @njit(cache=True, inline="always")
