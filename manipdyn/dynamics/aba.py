@@ -287,6 +287,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
     if body.shape[0] > 0 or nq != nb or nv != nb:
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
+    I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
     parent, L = mdl.parent, LANES
     even, odd = np.empty(nb * ARTICULATED * L), np.empty(nb * ARTICULATED * L)     # records by depth parity

@@ -147,6 +147,7 @@ def crba_lanes(I, F, Q, M):
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
     if nq != nb or nv != nb:
         return crba_kernel(I, F, Q, M)
+    I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
     parent, L = mdl.parent, LANES
     mC, W = np.empty(nb), np.empty((nb, 3))
