@@ -71,7 +71,8 @@ def run(out_dir, quick=False, progress=print) -> dict:
 
 
 # (our route, its key, Pinocchio's same route's key): each of ours is held to Pinocchio's same algorithm
-HARD_ROUTES = (("ABA", "aba", "pinocchio"), ("Cholesky (M⁻¹)", "cholesky", "pinocchio_cholesky"),
+HARD_ROUTES = (("ABA", "aba", "pinocchio"), ("ABA, batched (lanes)", "aba_lanes", "pinocchio"),
+               ("Cholesky (M⁻¹)", "cholesky", "pinocchio_cholesky"),
                ("Pinocchio aba", "pinocchio", None), ("Pinocchio crba + Cholesky", "pinocchio_cholesky", None))
 EPS = float(np.finfo(float).eps)
 

@@ -25,8 +25,8 @@ SINGLE_CALLS = ("rnea", "aba", "rnea with f_ext", "aba with f_ext", "mass_matrix
                 "aba_derivatives", "joint_torque_regressor")
 LAGRANGE = ("mass_matrix (lagrange)",)        # the chapter's O(n³) route, against Pinocchio's crba
 LANE_ARMS = ("ur5", "aau_arm")                # the lane kernels' targets: these arms, and the 32-link chain
-HARD_ROUTES = ("ABA", "Cholesky (M⁻¹)")      # our forward-dynamics routes in the hard cases, each against
-#                                             Pinocchio's same algorithm (aba; crba + cholesky.solve)
+# our forward-dynamics routes in the hard cases, each against Pinocchio's same algorithm (aba; crba + cholesky.solve)
+HARD_ROUTES = ("ABA", "ABA, batched (lanes)", "Cholesky (M⁻¹)")
 
 
 @dataclass(frozen=True)
