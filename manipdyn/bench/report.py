@@ -156,6 +156,14 @@ def markdown(d) -> str:
          _table(d["batched"], ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"]
                 + (["refused"] if any("refused" in r for r in d["batched"]) else []),
                 dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
+         "\n### Work–precision of the lane kernels\n\nThe batched rows at N = 10 000 of the calls the lane kernels run: "
+         "the median and 95th percentile of the error over states spread through the batch (wp_states), against "
+         "Pinocchio (err_pin_…) and against the same call on one state, the scalar kernel (err_one_…); q̈ divided by "
+         "cond(M) (note). The lane ABA on ill-conditioned chains: the hard cases (section f).\n\n",
+         _table([r for r in d["batched"] if "err_one_median" in r], ["robot", "call", "wp_states", "err_pin_median",
+                                                                      "err_pin_p95", "err_one_median", "err_one_p95",
+                                                                      "note"],
+                dict(err_pin_median=e, err_pin_p95=e, err_one_median=e, err_one_p95=e)),
          "\n### The lane kernels against their arithmetic floor\n\nflops: floating-point operations per state, "
          "counted by running the lane kernels on Flop numbers (manipdyn/bench/flops.py); floor_ns = flops ÷ (16 "
          "a cycle × the clock, ghz): every flop a fused multiply-add on two 256-bit units; ours_ns: the batched "

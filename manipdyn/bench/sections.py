@@ -197,6 +197,24 @@ def latency(sts, quick=False):
 LANE_CALLS = ("rnea", "aba", "mass_matrix (crba)")      # the lane kernels' calls: timed at N = big too
 
 
+WP_STATES = 200      # the lane kernels' work–precision rows: states spread through the batch
+
+
+def _work_precision(c, mine, pin_s, cond, Q, V, A, n):
+    """Median and 95th percentile of the error of a batched result's states (the lane kernels) against Pinocchio
+    and against the same call on one state (the scalar kernel), over n states spread through the batch."""
+    picks = np.unique(np.linspace(0, len(Q) - 1, min(n, len(Q))).astype(int))
+    e_pin, e_one = [], []
+    for s in picks:
+        k = cond(s) if c.by_cond else 1.0
+        e_pin.append(_err(c, _row(mine, s), pin_s(s), k))
+        one = c.ours(Q[s], V[s], A[s])
+        e_one.append(error(np.asarray(c.as_ours(_row(mine, s)), float), np.asarray(c.as_ours(one), float)) / k)
+    return dict(wp_states=len(picks), err_pin_median=float(np.median(e_pin)),
+                err_pin_p95=float(np.percentile(e_pin, 95)), err_one_median=float(np.median(e_one)),
+                err_one_p95=float(np.percentile(e_one, 95)))
+
+
 def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
     """b. Every public call on a batch (N, nv), time per state on one thread, against Pinocchio's C++ batch
     (pin.*InParallel, 1 thread) where it exists, else its cheapest Python loop over the same states
@@ -234,8 +252,11 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
                     theirs, route, pin_s = (lambda: [c.theirs(s) for s in range(N)]), "loop", c.theirs
                 err = max(_err(c, _row(mine, s), pin_s(s), conds[s]) for s in picks)
                 t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A), theirs))
-                rows.append(dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
-                                 pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
+                row = dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                           pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else "")
+                if N == big and name in LANE_CALLS:
+                    row.update(_work_precision(c, mine, pin_s, cond, Q, V, A, 20 if quick else WP_STATES))
+                rows.append(row)
     return rows
 
 

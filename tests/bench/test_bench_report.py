@@ -20,6 +20,12 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
         (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in targets.SINGLE_CALLS + targets.LAGRANGE}
     assert all("refused" not in r and r["err"] <= 1e-12 for r in data["batched"])
     assert {r["robot"] for r in data["latency"]} == {"ur5", "aau_arm", "chain32", "spm (open tree)"}
+    # the lane kernels' work–precision rows: against the one-state kernel within the batch-vs-single bound (1e-14;
+    # measured p95 ≤ 5.4e-15, the chain's q̈), against Pinocchio within the batched err column's 1e-12 (≤ 3.5e-13)
+    wp = [r for r in data["batched"] if "err_one_median" in r]
+    assert {(r["robot"], r["call"]) for r in wp} == {
+        (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in ("rnea", "aba", "mass_matrix (crba)")}
+    assert all(r["err_one_p95"] <= 1e-14 and r["err_pin_p95"] <= 1e-12 and r["wp_states"] == 20 for r in wp)
     # the lane kernels' flop counts, beside their batched rows at N = 10 000 (the timings here are stand-ins)
     assert {(r["robot"], r["call"]) for r in data["floors"] if "over_floor" in r} == {
         (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in ("rnea", "aba", "mass_matrix (crba)")}
