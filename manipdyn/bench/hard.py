@@ -66,7 +66,7 @@ def _pin_cholesky(pin, pm, pd, pq, v, tau):
 
 def ill_conditioned(n=6, spread=(1e-6, 1e3), seed=0, states=5, light_root=False, lengths=(0.05, 0.5)):
     """Errors of q̈ from ABA and the Cholesky (M⁻¹) route, ours and Pinocchio's, against the 50-digit reference; and
-    from the lane ABA (``aba_lanes``: the same chain with revolute joints, q as angles, all states in one batch)."""
+    from the lane ABA (``aba_lanes``: all states in one batch)."""
     pin = require("pinocchio", "validate", "manipdyn bench")
 
     from ..dynamics.aba import aba, forward_dynamics
@@ -88,9 +88,7 @@ def ill_conditioned(n=6, spread=(1e-6, 1e3), seed=0, states=5, light_root=False,
                          cholesky=error(forward_dynamics(model, q, v, tau, method="cholesky"), exact),
                          pinocchio=error(pin.aba(pm, pd, pq, v, tau), exact),
                          pinocchio_cholesky=error(_pin_cholesky(pin, pm, pd, pq, v, tau), exact)))
-    revolute = load_urdf_string(text.replace('type="continuous"', 'type="revolute"').replace(
-        '<axis xyz="0 1 0"/>', '<axis xyz="0 1 0"/><limit lower="-4" upper="4" effort="1" velocity="1"/>'))
     Q, V, T = (np.array([b[k] for b in batch]) for k in range(3))      # one batch: the lane kernel's blocks
-    for row, qdd, b in zip(rows, aba(revolute, Q, V, T, threads=1), batch):
+    for row, qdd, b in zip(rows, aba(model, Q, V, T, threads=1), batch):
         row["aba_lanes"] = error(qdd, b[3])
     return rows
