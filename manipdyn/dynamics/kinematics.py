@@ -22,10 +22,11 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .._jit import A1, A2, A3, MODEL, entry, njit
+from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
-from ..spatial import first_nonfinite, first_nonfinite_entry, rotate6, sandwich3
-from .core import fk_pass, fk_path, kernel_arrays, nonfinite_input, unpack
+from ..spatial import add, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6, sandwich3, sub
+from .core import (LANES, angles_in_range, fk_pass, fk_path, gather_lanes, get3, get_rotation, kernel_arrays,
+                   lane_record, nonfinite_input, placement_lanes, set3, shift_code, tree_depth, unpack)
 from .state import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
@@ -142,6 +143,161 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     return -1
 
 
+# -- the lane kernel: placements and Jacobians across a block of states ------------------------------------------
+# As the dynamics' lane kernels (docs/design.md §4c): blocks of LANES states, the state index last, steps and a
+# driver. A path body's record (WORLD rows of LANES numbers): R, p in its parent (core.placement_lane), then its
+# world placement Rw (9), pw (3); two arrays by depth parity. The frame's block: Rf (9), pf (3); J's block: 6 × nv
+# rows (row-major).
+WORLD = 24
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
+    """``frame_kernel``'s placement and Jacobian (want ≤ 1) for a batch, block by block across lanes: the batch
+    entry of frame_placement and frame_jacobian. Runs ``frame_kernel`` for J̇ (want = 2), a frame on the fixed
+    base, a model with a multi-dof joint, and a block with a non-finite q or an angle beyond ``spatial.SINCOS_MAX``
+    (its code then names the entry)."""
+    N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], J.shape[2]
+    if want == 2 or V.shape[1] > 0 or b < 0 or nq != nb or I[4].sum() != nb:
+        return frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ)
+    I, F = I.copy(), F.copy()                            # the model for this call alone (as rnea.rnea_lanes)
+    mdl = unpack(I, F)
+    parent, L = mdl.parent, LANES
+    path, n = np.empty(nb, np.int64), 0                  # b, its parent, …, the root
+    j = b
+    while j >= 0:
+        path[n] = j
+        n += 1
+        j = parent[j]
+    even, odd = np.empty(nb * WORLD * L), np.empty(nb * WORLD * L)
+    base = np.zeros(WORLD * L)                           # the world as a parent: Rw = 1, pw = 0
+    for l in range(L):
+        base[12 * L + l] = base[16 * L + l] = base[20 * L + l] = 1.0
+    Z, Fb = np.empty(nq * L), np.empty(12 * L)
+    Jb = np.empty(6 * nv * L if want >= 1 else 0)
+    depth = tree_depth(parent)
+    X = ((Rl[0, 0], Rl[0, 1], Rl[0, 2]), (Rl[1, 0], Rl[1, 1], Rl[1, 2]), (Rl[2, 0], Rl[2, 1], Rl[2, 2])), \
+        (pl[0], pl[1], pl[2])
+    for s0 in range(0, N, L):
+        m = min(L, N - s0)
+        ok = gather_lanes(Q, s0, m, Z, 0)
+        ok &= angles_in_range(mdl, Z)
+        if ok:
+            for k in range(n - 1, -1, -1):                               # root → b: placements
+                i = path[k]
+                B = lane_record(even, odd, depth, i, WORLD)
+                P = base if parent[i] < 0 else lane_record(even, odd, depth, parent[i], WORLD)
+                world_lanes(i, mdl, B, P, Z)
+            B = lane_record(even, odd, depth, b, WORLD)
+            for l in range(L):
+                frame_point_lane(X, B, Fb, l, L)
+            if want >= 1:
+                Jb[:] = 0.0                                               # joints that do not move b
+                for k in range(n):
+                    jacobian_lanes(path[k], mdl, lane_record(even, odd, depth, path[k], WORLD), Fb, Jb)
+                if local:
+                    local_lanes(Fb, Jb, nv)
+            ok = scatter_frame(Fb, Jb, m, Rf, pf, J, s0, want >= 1)
+        if not ok:                                    # the block's states one by one: the code names the culprit
+            code = frame_kernel(I, F, Q[s0:s0 + m], V, b, Rl, pl, want, local, Rf[s0:s0 + m], pf[s0:s0 + m],
+                                J[s0:s0 + m], dJ)
+            if code != -1:
+                return shift_code(code, s0, nb, nq, 0)
+    return -1
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def world_lanes(i, mdl, B, P, Z):
+    """Body i's placement in its parent (``core.placement_lane``), then ``world_lane``, every lane of the block."""
+    placement_lanes(i, mdl, B, Z)
+    for l in range(LANES):
+        world_lane(B, P, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def world_lane(B, P, l, L):
+    """At lane l: a body's world placement Rw = Rw_λ R, pw = pw_λ + Rw_λ p (rows 12–23 of B) from its parent's (P)
+    and its own in the parent (rows 0–11) (``core.fk_place``)."""
+    R, p = get_rotation(B, l, L), get3(B, 9, l, L)
+    W = (get3(P, 12, l, L), get3(P, 15, l, L), get3(P, 18, l, L))
+    set3(B, 12, l, L, mul3t(R, W[0]))                    # row a of Rw_λ R = Rᵀ (row a of Rw_λ)
+    set3(B, 15, l, L, mul3t(R, W[1]))
+    set3(B, 18, l, L, mul3t(R, W[2]))
+    set3(B, 21, l, L, add(get3(P, 21, l, L), mul3(W, p)))
+
+
+@njit(cache=True, inline="always")
+def frame_point_lane(X, B, Fb, l, L):
+    """At lane l: the frame (X = (R, p) in body b) in the world, Rf = Rw_b R, pf = pw_b + Rw_b p, into Fb (rows
+    0–11) (``body_point``)."""
+    Rl, pl = X
+    W = (get3(B, 12, l, L), get3(B, 15, l, L), get3(B, 18, l, L))
+    set3(Fb, 0, l, L, mul3t(Rl, W[0]))
+    set3(Fb, 3, l, L, mul3t(Rl, W[1]))
+    set3(Fb, 6, l, L, mul3t(Rl, W[2]))
+    set3(Fb, 9, l, L, add(get3(B, 21, l, L), mul3(W, pl)))
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def jacobian_lanes(j, mdl, B, Fb, Jb):
+    """``jacobian_lane`` for joint j's column, every lane of the block."""
+    S, r = mdl.S, mdl.iv[j]
+    jm = r, S.shape[0], (S[r, 0], S[r, 1], S[r, 2]), (S[r, 3], S[r, 4], S[r, 5])
+    for l in range(LANES):
+        jacobian_lane(jm, B, Fb, Jb, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def jacobian_lane(jm, B, Fb, Jb, l, L):
+    """At lane l: joint j's column of the frame's world-aligned Jacobian, [l + a × (pf − o_j); a], (l; a) = Rw_j s
+    (``point_jacobian``; B: body j's record, jm: (its column r, nv, s_l, s_a))."""
+    r, nv, sl, sa = jm
+    W = (get3(B, 12, l, L), get3(B, 15, l, L), get3(B, 18, l, L))
+    lw, aw = mul3(W, sl), mul3(W, sa)
+    lin = add(lw, cross(aw, sub(get3(Fb, 9, l, L), get3(B, 21, l, L))))
+    for k in range(3):
+        Jb[(k * nv + r) * L + l] = lin[k]
+        Jb[((3 + k) * nv + r) * L + l] = aw[k]
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def local_lanes(Fb, Jb, nv):
+    """J ← diag(Rfᵀ, Rfᵀ) J, every lane and column: the Jacobian in the frame's axes (``_to_local``)."""
+    L = LANES
+    for r in range(nv):
+        for l in range(L):
+            Rf = get_rotation(Fb, l, L)
+            lin = mul3t(Rf, (Jb[(0 * nv + r) * L + l], Jb[(1 * nv + r) * L + l], Jb[(2 * nv + r) * L + l]))
+            ang = mul3t(Rf, (Jb[(3 * nv + r) * L + l], Jb[(4 * nv + r) * L + l], Jb[(5 * nv + r) * L + l]))
+            for k in range(3):
+                Jb[(k * nv + r) * L + l] = lin[k]
+                Jb[((3 + k) * nv + r) * L + l] = ang[k]
+
+
+@njit(cache=True, inline="always")
+def scatter_frame(Fb, Jb, m, Rf, pf, J, s0, jac):
+    """Rf[s0 + l], pf[s0 + l] (and J[s0 + l] with ``jac``) from the blocks, for their m states. Returns False if an
+    entry is not finite."""
+    bad, L = 0.0, LANES
+    for l in range(m):
+        for a in range(3):
+            for c in range(3):
+                x = Fb[(3 * a + c) * L + l]
+                Rf[s0 + l, a, c] = x
+                bad += x - x
+            x = Fb[(9 + a) * L + l]
+            pf[s0 + l, a] = x
+            bad += x - x
+        if jac:
+            nv = J.shape[2]
+            for k in range(6):
+                for r in range(nv):
+                    x = Jb[(k * nv + r) * L + l]
+                    J[s0 + l, k, r] = x
+                    bad += x - x
+    return bad == 0.0
+
+
 @njit(cache=True)
 def frame_one(I, F, q, v, X, want, out):
     """One state q (nq,) [v (nv,)]: for the frame row X (5, 3) = [R; p; (b, want, local)] (``one_state_row``:
@@ -196,7 +352,7 @@ def placement_one(I, F, q, X, R, p):
 
 # The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state with
 # its frame row
-FRAME = entry(frame_kernel, *MODEL, A2, A2, numba.int64, A2, A1, numba.int64, numba.boolean, A3, A2, A3, A3)
+FRAME = entry(frame_lanes, *MODEL, A2, A2, numba.int64, A2, A1, numba.int64, numba.boolean, A3, A2, A3, A3)
 JACOBIAN_ONE = entry(jacobian_one, *MODEL, A1, A2, A2)
 JACOBIAN_DOT_ONE = entry(jacobian_dot_one, *MODEL, A1, A1, A2, A2)
 PLACEMENT_ONE = entry(placement_one, *MODEL, A1, A2, A2, A1)

@@ -1,5 +1,6 @@
 """The lane kernels (rnea.rnea_lanes: the batch entry of rnea, nonlinear_effects and gravity_torques;
-crba.crba_lanes: of mass_matrix; aba.aba_lanes: of aba) against Pinocchio and against the one-state kernels: blocks
+crba.crba_lanes: of mass_matrix; aba.aba_lanes: of aba; kinematics.frame_lanes: of frame_placement and
+frame_jacobian) against Pinocchio and against the one-state kernels: blocks
 of LANES states, a partial last block, a block that falls back to the one-state form (an angle beyond
 spatial.SINCOS_MAX, a non-finite input, a singular articulated inertia), prismatic joints and a branching tree; the
 batch-vs-single bound of docs/design.md §3 (1e-14; q̈ scaled by cond(M))."""
@@ -164,3 +165,40 @@ def test_lane_aba_names_a_singular_joint_in_a_later_block():
     Q, V, T = random_states(model, LANES + 3, np.random.default_rng(0))
     with pytest.raises(md.SingularError, match="joint 'j1'"):
         md.aba(model, Q, V, T)
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "tree"])
+@pytest.mark.parametrize("reference", ["local_world_aligned", "local"])
+def test_lane_frames_match_pinocchio_and_the_one_state_kernel(models, name, reference):
+    model, pm = models[name]
+    Q, _, _ = random_states(model, 2 * LANES + 5, np.random.default_rng(6))
+    data, ref = pm.createData(), {"local_world_aligned": pin.LOCAL_WORLD_ALIGNED, "local": pin.LOCAL}[reference]
+    for frame in (model.body_names[-1], model.body_names[len(model.body_names) // 2]):
+        R, p = md.frame_placement(model, Q, frame)
+        J = md.frame_jacobian(model, Q, frame, reference=reference)
+        fid = pm.getFrameId(frame)
+        pins = []
+        for q in Q:
+            pin.framesForwardKinematics(pm, data, q)
+            pins.append((data.oMf[fid].rotation.copy(), data.oMf[fid].translation.copy(),
+                         pin.computeFrameJacobian(pm, data, q, fid, ref)))
+        assert_close(R, np.stack([x[0] for x in pins]), 1e-14, f"{name} {frame} R")    # measured ≤ 1.7e-15
+        assert_close(p, np.stack([x[1] for x in pins]), 1e-14, f"{name} {frame} p")
+        assert_close(J, np.stack([x[2] for x in pins]), 1e-14, f"{name} {frame} J")    # measured ≤ 1.8e-15
+        one = [md.frame_placement(model, q, frame) for q in Q]
+        assert_close(R, np.stack([x[0] for x in one]), 1e-14, "R one")
+        assert_close(p, np.stack([x[1] for x in one]), 1e-14, "p one")
+        assert_close(J, np.stack([md.frame_jacobian(model, q, frame, reference=reference) for q in Q]), 1e-14,
+                     "J one")                                                        # measured ≤ 1.1e-15
+
+
+def test_a_lane_frame_block_with_a_bad_angle_runs_the_one_state_form(models):
+    model, _ = models["aau_arm"]
+    Q, _, _ = random_states(model, LANES + 9, np.random.default_rng(9))
+    Q[LANES + 4, 2] = 4 * SINCOS_MAX
+    tip = model.body_names[-1]
+    J = md.frame_jacobian(model, Q, tip)
+    assert np.array_equal(J[LANES:], np.stack([md.frame_jacobian(model, q, tip) for q in Q[LANES:]]))
+    Q[LANES + 7, 1] = np.nan
+    with pytest.raises(InputError, match=rf"q\[{LANES + 7}, 1\]"):
+        md.frame_placement(model, Q, tip)
