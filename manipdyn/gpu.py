@@ -4,6 +4,8 @@
     import manipdyn.gpu as gpu
     tau = gpu.rnea(model, q, v, a)     # q (N, nq), v, a (N, nv)
     h = gpu.nonlinear_effects(model, q, v);  g = gpu.gravity_torques(model, q)
+    M = gpu.mass_matrix(model, q);  qdd = gpu.aba(model, q, v, tau)
+    R, p = gpu.frame_placement(model, q, "tool0");  J = gpu.frame_jacobian(model, q, "tool0")
 
 The states are device arrays — anything with ``__cuda_array_interface__`` (CuPy, PyTorch, numba; JAX's GPU arrays),
 read where they lie, or with ``__dlpack__`` (through CuPy) — or numpy arrays, copied to the device. The result is
@@ -32,6 +34,8 @@ from .dynamics.core import (gather_lane, inertial_model, motion_model, placement
                             unpack)
 from .dynamics.crba import (COMPOSITE, column_lane, column_model, column_up_lane, merge_lane, merge_weights,
                             own_inertia_lane, own_inertia_model)
+from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
+                                  local_lane, world_lane)
 from .dynamics.rnea import _F, _W, RECORD, inertial_lane, inward_lane, motion_lane
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
@@ -180,6 +184,56 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
         acceleration_lane(articulated_model(i, mdl), rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N], par, QDD,
                           s, N)
     if not scatter_lane(QDD, out, s, N) == 0.0:
+        cuda.atomic.min(flags, 1, s)
+
+
+def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J, jac, local, flags):
+    """Thread s: the world placement of the frame (Rl, pl) on body b and, with ``jac``, its Jacobian (in the frame's
+    axes with ``local``) (``kinematics.frame_lanes``' steps); path[:n]: b, its parent, …, the root."""
+    s = cuda.grid(1)
+    N = Rf.shape[0]
+    if s >= N:
+        return
+    mdl = unpack(I, F)
+    if not gather_lane(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
+        cuda.atomic.min(flags, 0, s)
+        return
+    for a in range(3):                                    # the world as a parent: Rw = 1, pw = 0
+        for c in range(3):
+            base[(12 + 3 * a + c) * N + s] = 1.0 if a == c else 0.0
+        base[(21 + a) * N + s] = 0.0
+    for k in range(n - 1, -1, -1):                        # root → b: placements
+        i, j = path[k], mdl.parent[path[k]]
+        B = rec[i * WORLD * N:(i + 1) * WORLD * N]
+        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        world_lane(B, base if j < 0 else rec[j * WORLD * N:(j + 1) * WORLD * N], s, N)
+    X = ((Rl[0, 0], Rl[0, 1], Rl[0, 2]), (Rl[1, 0], Rl[1, 1], Rl[1, 2]), (Rl[2, 0], Rl[2, 1], Rl[2, 2])), \
+        (pl[0], pl[1], pl[2])
+    frame_point_lane(X, rec[b * WORLD * N:(b + 1) * WORLD * N], Fb, s, N)
+    bad = 0.0
+    for a in range(3):
+        for c in range(3):
+            x = Fb[(3 * a + c) * N + s]
+            Rf[s, a, c] = x
+            bad += x - x
+        x = Fb[(9 + a) * N + s]
+        pf[s, a] = x
+        bad += x - x
+    if jac:
+        nv = J.shape[2]
+        for k in range(6 * nv):                           # joints that do not move b
+            Jb[k * N + s] = 0.0
+        for k in range(n):
+            i = path[k]
+            jacobian_lane(jacobian_model(i, mdl), rec[i * WORLD * N:(i + 1) * WORLD * N], Fb, Jb, s, N)
+        for r in range(nv):
+            if local:
+                local_lane(Fb, Jb, nv, r, s, N)
+            for k in range(6):
+                x = Jb[(k * nv + r) * N + s]
+                J[s, k, r] = x
+                bad += x - x
+    if not bad == 0.0:
         cuda.atomic.min(flags, 1, s)
 
 
@@ -343,8 +397,49 @@ def aba(model, q, v, tau):
     return out
 
 
+def _run_frame(model, call, q, frame, jac, reference):
+    import manipdyn as md
+    I, F = _model(model, call)
+    _check_reference(reference)
+    b, X = frame_row(model, frame)
+    states, N = _states(model, call, (("q", q),))
+    nb, nv, c = model.njoints, model.nv, _cuda()
+    if b < 0:                                             # a frame on the fixed base: constant, no joint moves it
+        R, p = np.broadcast_to(X[:3], (N, 3, 3)), np.broadcast_to(X[3], (N, 3))
+        return c.to_device(np.ascontiguousarray(R)), c.to_device(np.ascontiguousarray(p)), \
+            c.to_device(np.zeros((N, 6, nv)))
+    path, j = [], b
+    while j >= 0:
+        path.append(j)
+        j = model.kernel.arrays[0][0][j]
+    Rf, pf = c.device_array((N, 3, 3)), c.device_array((N, 3))
+    J, flags = c.device_array((N, 6, nv) if jac else (N, 0, 0)), _flags()
+    _launch("frame", _frame_threads, N, c.to_device(I), c.to_device(F), states[0][1], b,
+            c.to_device(np.array(path, np.int64)), len(path), c.to_device(np.ascontiguousarray(X[:3])),
+            c.to_device(np.ascontiguousarray(X[3])), _scratch("rec", (nb * WORLD * N,)), _scratch("base", (WORLD * N,)),
+            _scratch("Z", (nb * N,)), _scratch("F", (12 * N,)), _scratch("J", (max(6 * nv * N, 1) if jac else 1,)),
+            Rf, pf, J, jac, reference == "local", flags)
+    if N and (flags.copy_to_host() < _BIG).any():
+        cpu = (lambda x: md.frame_jacobian(model, x, frame, reference=reference)) if jac else \
+            (lambda x: md.frame_placement(model, x, frame))
+        _raise(model, call, flags, states, cpu)
+    return Rf, pf, J
+
+
+def frame_placement(model, q, frame):
+    """The frame's pose in the world on the GPU: device arrays R (N, 3, 3), p (N, 3) (``manipdyn.frame_placement``'s
+    numbers)."""
+    return _run_frame(model, "frame_placement", q, frame, False, "local_world_aligned")[:2]
+
+
+def frame_jacobian(model, q, frame, reference="local_world_aligned"):
+    """J (N, 6, nv) on the GPU, rows [linear; angular], world-aligned at the frame's origin or in its axes
+    (``reference="local"``) (``manipdyn.frame_jacobian``'s numbers)."""
+    return _run_frame(model, "frame_jacobian", q, frame, True, reference)[2]
+
+
 def ptx(name, cc=(9, 0)):
-    """The PTX that numba-cuda makes of a driver ("rnea", "crba", "aba") for compute capability ``cc`` — without a GPU
+    """The PTX that numba-cuda makes of a driver ("rnea", "crba", "aba", "frame") for compute capability ``cc`` — without a GPU
     (it needs NVVM, ``pip install "cuda-toolkit[nvvm,nvrtc]"``): the check that the CPU kernels' lane steps compile for
     CUDA as they are, where the simulator would run them as Python."""
     from numba import types
@@ -353,7 +448,10 @@ def ptx(name, cc=(9, 0)):
     a2, c1, c2 = types.Array(types.float64, 2, "A"), types.Array(types.float64, 1, "C"), \
         types.Array(types.float64, 2, "C")
     flags = types.Array(types.int64, 1, "C")
-    sigs = {"rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, c1, c1, c1, c1, c2, flags, types.boolean, types.boolean)),
+    i1, c3, a1 = types.Array(types.int64, 1, "C"), types.Array(types.float64, 3, "C"), types.Array(types.float64, 1, "A")
+    sigs = {"frame": (_frame_threads, (i2, f3, a2, types.int64, i1, types.int64, c2, a1, c1, c1, c1, c1, c1, c3, c2,
+                                       c3, types.boolean, types.boolean, flags)),
+            "rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, c1, c1, c1, c1, c2, flags, types.boolean, types.boolean)),
             "crba": (_crba_threads, (i2, f3, a2, c2, c1, c1, c1, c1, c1, f3, flags)),
             "aba": (_aba_threads, (i2, f3, a2, a2, a2, types.float64, c1, c1, c1, c1, c2, flags))}
     func, sig = sigs[name]

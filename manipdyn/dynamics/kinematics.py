@@ -241,10 +241,16 @@ def frame_point_lane(X, B, Fb, l, L):
 @njit(cache=True, fastmath=CONTRACT)
 def jacobian_lanes(j, mdl, B, Fb, Jb):
     """``jacobian_lane`` for joint j's column, every lane of the block."""
-    S, r = mdl.S, mdl.iv[j]
-    jm = r, S.shape[0], (S[r, 0], S[r, 1], S[r, 2]), (S[r, 3], S[r, 4], S[r, 5])
+    jm = jacobian_model(j, mdl)
     for l in range(LANES):
         jacobian_lane(jm, B, Fb, Jb, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def jacobian_model(j, mdl):
+    """What joint j's Jacobian column takes from the model: (its column r, nv, s_l, s_a)."""
+    S, r = mdl.S, mdl.iv[j]
+    return r, S.shape[0], (S[r, 0], S[r, 1], S[r, 2]), (S[r, 3], S[r, 4], S[r, 5])
 
 
 @njit(cache=True, inline="always")
@@ -262,16 +268,21 @@ def jacobian_lane(jm, B, Fb, Jb, l, L):
 
 @njit(cache=True, fastmath=CONTRACT)
 def local_lanes(Fb, Jb, nv):
-    """J ← diag(Rfᵀ, Rfᵀ) J, every lane and column: the Jacobian in the frame's axes (``_to_local``)."""
-    L = LANES
+    """``local_lane`` for every column and lane of the block."""
     for r in range(nv):
-        for l in range(L):
-            Rf = get_rotation(Fb, l, L)
-            lin = mul3t(Rf, (Jb[(0 * nv + r) * L + l], Jb[(1 * nv + r) * L + l], Jb[(2 * nv + r) * L + l]))
-            ang = mul3t(Rf, (Jb[(3 * nv + r) * L + l], Jb[(4 * nv + r) * L + l], Jb[(5 * nv + r) * L + l]))
-            for k in range(3):
-                Jb[(k * nv + r) * L + l] = lin[k]
-                Jb[((3 + k) * nv + r) * L + l] = ang[k]
+        for l in range(LANES):
+            local_lane(Fb, Jb, nv, r, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def local_lane(Fb, Jb, nv, r, l, L):
+    """At lane l: column r of J ← diag(Rfᵀ, Rfᵀ) J, the Jacobian in the frame's axes (``_to_local``)."""
+    Rf = get_rotation(Fb, l, L)
+    lin = mul3t(Rf, (Jb[(0 * nv + r) * L + l], Jb[(1 * nv + r) * L + l], Jb[(2 * nv + r) * L + l]))
+    ang = mul3t(Rf, (Jb[(3 * nv + r) * L + l], Jb[(4 * nv + r) * L + l], Jb[(5 * nv + r) * L + l]))
+    for k in range(3):
+        Jb[(k * nv + r) * L + l] = lin[k]
+        Jb[((3 + k) * nv + r) * L + l] = ang[k]
 
 
 @njit(cache=True, inline="always")

@@ -32,7 +32,12 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", md.load_urdf_st
     for N in (1, 7, 40):
         Q, V, A = random_states(model, N, np.random.default_rng(N))
         dq = cuda.to_device(Q)                      # a device array in, as a user's would be
+        tip, mid = model.body_names[-1], model.body_names[len(model.body_names) // 2]
+        R, p = gpu.frame_placement(model, dq, tip)
         out[f"{{name}}/{{N}}"] = dict(
+            frame_R=R.copy_to_host().tolist(), frame_p=p.copy_to_host().tolist(),
+            frame_J=gpu.frame_jacobian(model, Q, tip).copy_to_host().tolist(),
+            frame_J_local=gpu.frame_jacobian(model, Q, mid, reference="local").copy_to_host().tolist(),
             rnea=gpu.rnea(model, dq, V, A).copy_to_host().tolist(),
             nonlinear_effects=gpu.nonlinear_effects(model, Q, V).copy_to_host().tolist(),
             gravity_torques=gpu.gravity_torques(model, Q).copy_to_host().tolist(),
@@ -54,6 +59,8 @@ fails("huge_angle", lambda: gpu.mass_matrix(model, big))
 hot = V.copy(); hot[4] = 1e200
 fails("overflow", lambda: gpu.aba(model, Q, hot, A))
 fails("shape", lambda: gpu.rnea(model, Q[:, :3], V, A))
+fails("frame_name", lambda: gpu.frame_placement(model, Q, "no_such_link"))
+fails("frame_nan", lambda: gpu.frame_jacobian(model, bad, model.body_names[-1]))
 fails("rows", lambda: gpu.aba(model, Q, V[:4], A))
 fails("float32", lambda: gpu.rnea(model, cuda.to_device(Q.astype(np.float32)), V, A))
 fails("free_flyer", lambda: gpu.rnea(md.load_urdf({aau!r}, root_joint="free_flyer"), np.zeros((2, 12)),
@@ -92,6 +99,12 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     assert_close(got["mass_matrix"], md.mass_matrix(model, Q), 1e-14, "M")
     cond = np.linalg.cond(md.mass_matrix(model, Q)).max()
     assert_close(got["aba"], md.aba(model, Q, V, A), 1e-14 * cond, "q̈")
+    tip, mid = model.body_names[-1], model.body_names[len(model.body_names) // 2]
+    R, p = md.frame_placement(model, Q, tip)
+    assert_close(got["frame_R"], R, 1e-14, "R")
+    assert_close(got["frame_p"], p, 1e-14, "p")
+    assert_close(got["frame_J"], md.frame_jacobian(model, Q, tip), 1e-14, "J")
+    assert_close(got["frame_J_local"], md.frame_jacobian(model, Q, mid, reference="local"), 1e-14, "J local")
 
 
 @pytest.mark.parametrize("key, kind, words", [
@@ -99,6 +112,8 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     ("huge_angle", "InputError", ["q[6, 0]", "300000", "modulo 2π"]),
     ("overflow", "NumericalError", ["aba on the GPU, row 4"]),
     ("shape", "InputError", ["q must be (N, 5)", "(9, 3)"]),
+    ("frame_name", "InputError", ["no_such_link"]),
+    ("frame_nan", "InputError", ["frame_jacobian on the GPU, row 5", "nan"]),
     ("rows", "InputError", ["v has 4 rows, q has 9"]),
     ("float32", "InputError", ["float64", "float32"]),
     ("free_flyer", "InputError", ["one velocity each", "root_joint"])])
@@ -121,7 +136,7 @@ def _nvvm():
 
 @pytest.mark.skipif(os.environ.get("NUMBA_ENABLE_CUDASIM") == "1" or not _nvvm(),
                     reason="no NVVM here (pip install \"cuda-toolkit[nvvm,nvrtc]\") to compile PTX")
-@pytest.mark.parametrize("name", ["rnea", "crba", "aba"])
+@pytest.mark.parametrize("name", ["rnea", "crba", "aba", "frame"])
 def test_the_drivers_compile_for_an_h100(name):
     from manipdyn import gpu
     text = gpu.ptx(name, cc=(9, 0))
