@@ -231,7 +231,7 @@ FAULTS = (
           ("tests/batch/test_threads.py",), "a batch split over threads names an overflowed result by its row in "
           "the chunk, not in the batch"),
     Fault("route-dask-chunks-not-aligned", "rnea", "manipdyn/dynamics/route.py",
-          "        states = [y.rechunk((rows, -1)) for y in states]\n", "",
+          "    states = [y.rechunk((rows, -1)) for y in states]\n", "",
           ("tests/batch/test_dask.py",), "Dask arrays of states with other chunks than the first's (rows or "
           "columns) handed to the kernels unaligned"),
     Fault("route-run-chunks-keeps-the-first-code", "rnea", "manipdyn/dynamics/route.py",
@@ -311,6 +311,9 @@ FAULTS = (
     Fault("gpu-frame-skips-the-local-turn", "kinematics", "manipdyn/gpu.py",
           "            if local:\n                local_lane(Fb, Jb, nv, r, s, N)\n", "",
           ("tests/gpu/test_gpu.py",), "the GPU's frame Jacobian ignores reference='local'"),
+    Fault("dask-derivatives-outputs-swapped", "rnea", "manipdyn/dynamics/derivatives.py",
+          "return tuple(stacked[:, k] for k in range(3))", "return tuple(stacked[:, 2 - k] for k in range(3))",
+          ("tests/batch/test_dask.py",), "Dask derivatives come back as (∂/∂q̈, ∂/∂q̇, ∂/∂q) instead of (∂/∂q, ∂/∂q̇, ∂/∂q̈)"),
     Fault("route-chunk-rows-from-the-top", "rnea", "manipdyn/dynamics/route.py",
           "*(y[a:b] for y in states)", "*(y[:b - a] for y in states)",
           ("tests/batch/test_threads.py",), "every chunk of a threaded batch reads the batch's first rows"),

@@ -48,7 +48,7 @@ from ..joints import joint_placement
 from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
                        spd_inverse, world_inertia, world_motion)
 from .aba import aba_kernel
-from .route import run_chunks, thread_count
+from .route import is_dask, lazy, run_chunks, thread_count
 from .core import finite_state, kernel_arrays, no_wrenches, unpack
 from .state import (
     as_batch,
@@ -382,6 +382,11 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
     names, call, outs = (_QVT, "aba_derivatives", OUT_ABA) if fd else (_QVA, "rnea_derivatives", OUT_RNEA)
     if threads is not None:
         thread_count(threads, call)
+    if any(is_dask(y) for y in (q, v, x)):                # Dask arrays of states: three lazy results
+        public = aba_derivatives if fd else rnea_derivatives
+        stacked = lazy(call, names, lambda m, *b, threads: np.stack(public(m, *b, threads=threads), axis=1),
+                       model, (q, v, x), f_ext, (3, model.nv, model.nv))
+        return tuple(stacked[:, k] for k in range(3))
     nd = fast_shape(model, q, v, x) if f_ext is None and f_ext_frame == "local" else 0
     if nd == 1:
         nv = model.nv

@@ -123,6 +123,39 @@ def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     return -1
 
 
+def lazy(call, names, public, model, x, f_ext, shape):
+    """Dask arrays of states (N, n) (numpy arrays among them are wrapped): a Dask array of the results
+    (N, *one state's shape), rows chunked as the first state's, each chunk computed when asked as a batch of
+    this call on one thread (the scheduler runs chunks in parallel; a Model pickles as its description)."""
+    da = require("dask.array", "dask", f"{call} on a Dask array")
+    if f_ext is not None:
+        raise InputError(f"{call}: f_ext with Dask arrays of states is not supported; pass numpy arrays "
+                         f"(or call {call} per chunk with dask's map_blocks)")
+    if type(model) is not Model:
+        raise InputError(f"{call}: Dask arrays of states need a Model, not a {type(model).__name__}")
+    states = [da.asarray(y) for y in x]
+    N = states[0].shape[0] if states[0].ndim else None
+    for name, y in zip(names, states):
+        n = model.nq if is_config(name) else model.nv
+        if y.ndim != 2 or y.shape[1] != n or y.shape[0] != N:
+            raise InputError(f"{call}: a Dask array of states is (N, n), the same N for every state: {name} "
+                             f"must be (N, {n}), it is {tuple(y.shape)}")
+    rows = states[0].chunks[0]
+    states = [y.rechunk((rows, -1)) for y in states]
+
+    def block(*b, block_info=None):
+        try:
+            return public(model, *b, threads=1)
+        except ManipdynError as exc:                        # name the chunk: its row indices start at 0
+            if not block_info:
+                raise
+            a, z = block_info[0]["array-location"][0]
+            raise type(exc)(f"in the chunk of rows {a}–{z - 1} of the Dask batch (row indices below count from "
+                            f"{a}): {exc}") from None
+    return da.map_blocks(block, *states, dtype=np.float64, chunks=(rows,) + tuple((n,) for n in shape),
+                         new_axis=list(range(2, 1 + len(shape))) or None, meta=np.empty((0,) * (1 + len(shape))))
+
+
 def route(call, names, result, shape, one, batch, **options):
     """Decorator: the public function below it — its signature and docstring — runs the path of
     ``Route(call, names, result, shape, one, batch, **options)`` (its body is not run: write the docstring only).
@@ -238,38 +271,9 @@ class Route:
         return unbatch(out, single)
 
     def lazy(self, model, x, f_ext):
-        """Dask arrays of states (N, n) (numpy arrays among them are wrapped): a Dask array of the results
-        (N, *one state's shape), rows chunked as the first state's, each chunk computed when asked as a batch of
-        this call on one thread (the scheduler runs chunks in parallel; a Model pickles as its description)."""
-        da = require("dask.array", "dask", f"{self.call} on a Dask array")
-        if f_ext is not None:
-            raise InputError(f"{self.call}: f_ext with Dask arrays of states is not supported; pass numpy arrays "
-                             f"(or call {self.call} per chunk with dask's map_blocks)")
-        if type(model) is not Model:
-            raise InputError(f"{self.call}: Dask arrays of states need a Model, not a {type(model).__name__}")
-        states = [da.asarray(y) for y in x]
-        N = states[0].shape[0] if states[0].ndim else None
-        for name, y in zip(self.names, states):
-            n = model.nq if is_config(name) else model.nv
-            if y.ndim != 2 or y.shape[1] != n or y.shape[0] != N:
-                raise InputError(f"{self.call}: a Dask array of states is (N, n), the same N for every state: {name} "
-                                 f"must be (N, {n}), it is {tuple(y.shape)}")
-        rows = states[0].chunks[0]
-        states = [y.rechunk((rows, -1)) for y in states]
-        shape = model.kernel.result_shapes[SHAPES.index(self.shape)]
-        public = self.public
-
-        def block(*b, block_info=None):
-            try:
-                return public(model, *b, threads=1)
-            except ManipdynError as exc:                        # name the chunk: its row indices start at 0
-                if not block_info:
-                    raise
-                a, z = block_info[0]["array-location"][0]
-                raise type(exc)(f"in the chunk of rows {a}–{z - 1} of the Dask batch (row indices below count from "
-                                f"{a}): {exc}") from None
-        return da.map_blocks(block, *states, dtype=np.float64, chunks=(rows,) + tuple((n,) for n in shape),
-                             new_axis=list(range(2, 1 + len(shape))) or None, meta=np.empty((0,) * (1 + len(shape))))
+        """Dask arrays of states: ``lazy`` with this call's public function and one state's result shape."""
+        return lazy(self.call, self.names, self.public, model, x, f_ext,
+                    model.kernel.result_shapes[SHAPES.index(self.shape)])
 
     def fail(self, model, code, states, out, f_ext=None, f_ext_frame="local"):
         """6. Raise the error a kernel code stands for (a non-finite wrench first: it is the cause)."""

@@ -77,3 +77,31 @@ def test_what_a_dask_batch_cannot_take_is_refused(arm):
     bad[450, 1] = np.nan                                  # an error surfaces when the chunk is computed
     with pytest.raises(md.InputError, match=r"chunk of rows 400–599 of the Dask batch .*: q\[50, 1\]"):
         md.rnea(model, da.from_array(bad, chunks=(200, -1)), V, A).compute(scheduler="synchronous")
+
+
+@pytest.mark.parametrize("name", ["rnea_derivatives", "aba_derivatives"])
+def test_dask_states_give_lazy_derivatives_of_the_same_numbers(arm, name):
+    model, Q, V, A = arm
+    f = getattr(md, name)
+    lazy = f(model, da.from_array(Q, chunks=(250, -1)), V, da.from_array(A, chunks=(100, -1)))
+    assert len(lazy) == 3 and all(isinstance(x, da.Array) and x.chunks[0] == (250, 250, 200) for x in lazy)
+    got = da.compute(*lazy, scheduler="threads")                # one pass per chunk for the three
+    for x, y in zip(got, f(model, Q, V, A)):
+        assert np.array_equal(x, y)
+    ref = Reference(model, AAU)
+    pin_call = pin.computeRNEADerivatives if name == "rnea_derivatives" else pin.computeABADerivatives
+    for s in (0, 333, N - 1):                                   # and the chunks' rows are Pinocchio's
+        theirs = [np.array(y) for y in pin_call(ref.pm, ref.pd, ref.to_pin_q(Q[s]), V[s], A[s])]
+        if name == "rnea_derivatives":
+            theirs[2] = np.triu(theirs[2]) + np.triu(theirs[2], 1).T           # M: Pinocchio fills its upper half
+        for x, y in zip(got, theirs):
+            assert np.max(np.abs(x[s] - y)) <= 1e-11 * max(1.0, np.max(np.abs(y))), s   # measured ≤ 6.7e-13
+
+
+def test_dask_derivatives_name_a_bad_chunk(arm):
+    model, Q, V, A = arm
+    bad = Q.copy()
+    bad[450, 1] = np.nan
+    lazy = md.rnea_derivatives(model, da.from_array(bad, chunks=(200, -1)), V, A)
+    with pytest.raises(md.InputError, match=r"chunk of rows 400–599.*q\[50, 1\]"):
+        da.compute(*lazy, scheduler="threads")
