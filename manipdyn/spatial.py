@@ -9,12 +9,13 @@ algebra of its own). Two parts:
    - 6-vectors, order [linear; angular] (the order of the motion subspace S and of Pinocchio), in a body's
      own frame about its origin — motion m = [v_O; ω], force f = [f; n_O]: ``row6``, ``dot6``,
      ``motion_cross`` (v ×), ``force_cross`` (v ×*), their array forms ``cross_motion`` / ``cross_force``,
-     the transforms ``motion_to_child`` (ⁱX_λ), ``force_up`` / ``force_to_parent`` (^λX*_i), ``world_motion``
+     the transforms ``motion_down`` / ``motion_to_child`` (ⁱX_λ), ``force_up`` / ``force_to_parent`` (^λX*_i),
+     ``compose`` (a placement in a placed frame), ``world_motion``
      (⁰X_i), ``rotate6`` (R on both halves);
    - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up`` (tuples) and
      ``inertia_to_parent`` (arrays), ``block3``, ``congruence3``,
      ``mat6``, ``rigid6``, ``inertia_variation``, ``add_force_cross``, and the (m, c, I_C) form of the CRBA:
-     ``merge_inertia``, ``inertia_motion``;
+     ``merge_shift``, ``merge_inertia``, ``inertia_motion``;
    - small dense solves: ``cholesky``, ``cholesky_solve``, ``spd_inverse``;
    - the one finiteness check: ``first_nonfinite`` (a vector) and ``first_nonfinite_entry`` (a matrix, row
      by row through it);
@@ -281,15 +282,25 @@ def cross_force(v, f, out):
 
 
 @njit(cache=True, inline="always")
+def motion_down(R, p, l, w):
+    """ⁱX_λ [l; w] = (Rᵀ (l + w × p), Rᵀ w): a motion of the parent, at its origin and in its axes, at body i's
+    origin and in its axes (RBDA Table 2.2), R a tuple of rows (``block3``), two 3-tuples back."""
+    u = (l[0] + w[1] * p[2] - w[2] * p[1], l[1] + w[2] * p[0] - w[0] * p[2], l[2] + w[0] * p[1] - w[1] * p[0])
+    return mul3t(R, u), mul3t(R, w)
+
+
+@njit(cache=True, inline="always")
 def motion_to_child(R, p, m, out):
-    """out = ⁱX_λ m = [Rᵀ (m_lin + m_ang × p); Rᵀ m_ang] (RBDA Table 2.2; out must not alias m)."""
-    wx, wy, wz = m[3], m[4], m[5]
-    lx = m[0] + wy * p[2] - wz * p[1]
-    ly = m[1] + wz * p[0] - wx * p[2]
-    lz = m[2] + wx * p[1] - wy * p[0]
-    for a in range(3):
-        out[a] = R[0, a] * lx + R[1, a] * ly + R[2, a] * lz
-        out[3 + a] = R[0, a] * wx + R[1, a] * wy + R[2, a] * wz
+    """out = ⁱX_λ m (``motion_down`` of the arrays R (3, 3), m (6,); out must not alias m)."""
+    lo, wo = motion_down(block3(R, 0, 0), p, (m[0], m[1], m[2]), (m[3], m[4], m[5]))
+    out[0], out[1], out[2], out[3], out[4], out[5] = lo[0], lo[1], lo[2], wo[0], wo[1], wo[2]
+
+
+@njit(cache=True, inline="always")
+def compose(Ra, pa, R, p):
+    """(Ra R, pa + Ra p): a placement (R, p) in frame a, given with a's own (Ra, pa) in another, in that other
+    (x = Ra (R x' + p) + pa); rotations as tuples of rows: row k of Ra R is Rᵀ (row k of Ra)."""
+    return (mul3t(R, Ra[0]), mul3t(R, Ra[1]), mul3t(R, Ra[2])), add(pa, mul3(Ra, p))
 
 
 @njit(cache=True, inline="always")
@@ -455,22 +466,25 @@ def inertia_variation(Y, v, h, P, out):
 
 
 @njit(cache=True, inline="always")
+def merge_shift(k, d):
+    """k (|d|² 1 − d dᵀ), a tuple of rows: what the union of two bodies adds to their inertia about the common
+    centre of mass (``merge_inertia``; k = m₁m₂/m, d = c₁ − c₂). The diagonal is formed from sums of the other
+    two squares (as ``parallel_axis``): a large offset along one axis keeps the small moment about it."""
+    dx, dy, dz = d[0], d[1], d[2]
+    xy, xz, yz = -k * dx * dy, -k * dx * dz, -k * dy * dz
+    return ((k * (dy * dy + dz * dz), xy, xz), (xy, k * (dx * dx + dz * dz), yz),
+            (xz, yz, k * (dx * dx + dy * dy)))
+
+
+@njit(cache=True, inline="always")
 def merge_inertia(w, c1, c2, I2):
     """(c2, I2) ← the union of a body (c1; its inertia already in I2) and the composite (c2, I2), one
     frame, about their common centre of mass: I2 += (m₁m₂/m)(|d|² 1 − d dᵀ), d = c1 − c2;
-    c2 ← (m₁ c1 + m₂ c2)/m; w = (m₁/m, m₂/m, m₁m₂/m). The diagonal is formed from sums of the other two
-    squares (as ``parallel_axis``): a large offset along one axis keeps the small moment about it."""
-    k = w[2]
-    dx, dy, dz = c1[0] - c2[0], c1[1] - c2[1], c1[2] - c2[2]
-    I2[0, 0] += k * (dy * dy + dz * dz)
-    I2[1, 1] += k * (dx * dx + dz * dz)
-    I2[2, 2] += k * (dx * dx + dy * dy)
-    I2[0, 1] -= k * dx * dy
-    I2[1, 0] -= k * dx * dy
-    I2[0, 2] -= k * dx * dz
-    I2[2, 0] -= k * dx * dz
-    I2[1, 2] -= k * dy * dz
-    I2[2, 1] -= k * dy * dz
+    c2 ← (m₁ c1 + m₂ c2)/m; w = (m₁/m, m₂/m, m₁m₂/m) (``merge_shift``)."""
+    X = merge_shift(w[2], (c1[0] - c2[0], c1[1] - c2[1], c1[2] - c2[2]))
+    for a in range(3):
+        for b in range(3):
+            I2[a, b] += X[a][b]
     for a in range(3):
         c2[a] = w[0] * c1[a] + w[1] * c2[a]
 

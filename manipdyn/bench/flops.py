@@ -66,10 +66,6 @@ class _Numpy:
     def zeros(self, shape, dtype=None):
         return self._flops(shape, dtype, 0.0)
 
-    @staticmethod
-    def floor(x):                # (sincos's quadrant: what it computes from stays counted)
-        return Flop(np.floor(float(x))) if isinstance(x, Flop) else np.floor(x)
-
 
 def _objects(x, flop=False):
     """x as an object array of Python floats (the model: its arithmetic with a Flop counts) or of Flops."""

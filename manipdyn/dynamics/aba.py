@@ -35,9 +35,9 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
 from ..joints import joint_placement
 from . import mimic
-from ..spatial import (add, cholesky, cholesky_solve, cross, cross_force, cross_motion, first_nonfinite, force_cross,
+from ..spatial import (add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_cross,
                        force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
-                       motion_to_child, mul3, mul3t, rigid_inertia, scale)
+                       motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model,
                    lane_record, motion_model, no_wrenches, placement_lanes, scatter_lanes, set3, set6, shift_code,
                    tree_depth, unpack, wrench_rows_of)
@@ -356,7 +356,7 @@ def velocity_lane(mm, B, par, Z, l, L):
     """At lane l: v_i = ⁱX_λ v_λ + v_J (v_J = s q̇; par: v_λ), c_i = v_i × v_J (mm: ``rnea.motion_model``)."""
     r, sl, sa, nb = mm
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
-    vl, va = mul3t(R, add(get3(par, 0, l, L), cross(w, p))), mul3t(R, w)            # ⁱX_λ v_λ
+    vl, va = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ v_λ
     qd = Z[(nb + r) * L + l]
     jl, ja = scale(qd, sl), scale(qd, sa)                                           # v_J = s q̇
     v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
@@ -493,7 +493,7 @@ def acceleration_lane(am, B, par, QDD, l, L):
     row iv_i of QDD, a_i = a'_i + s q̈_i (am: ``articulated_model``)."""
     r, s, nb = am
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
-    al, aa = mul3t(R, add(get3(par, 0, l, L), cross(w, p))), mul3t(R, w)           # ⁱX_λ a_λ
+    al, aa = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ a_λ
     c, U = get6(B, _C, l, L), get6(B, _U, l, L)
     a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
     qdd = (B[(_D + 1) * L + l] - (U[0] * a[0] + U[1] * a[1] + U[2] * a[2] + U[3] * a[3] + U[4] * a[4]

@@ -25,8 +25,8 @@ from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..joints import joint_placement
 from ..errors import InputError
 from ..model import MimicModel
-from ..spatial import (add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
-                       inertia_motion, merge_inertia, mul3, rot3, sandwich3)
+from ..spatial import (add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up, inertia_motion,
+                       merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
 from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get_rotation, get_sym3, lane_record,
                    placement_lanes, shift_code, tree_depth, unpack)
@@ -219,10 +219,8 @@ def merge_lane(w, B, P, l, L):
     R = get_rotation(B, l, L)
     d = add(mul3(R, get3(B, 12, l, L)), get3(B, 9, l, L))                       # c_i in λ's frame: R c + p
     c2 = get3(P, 12, l, L)
-    dx, dy, dz = d[0] - c2[0], d[1] - c2[1], d[2] - c2[2]
-    add_sym3(P, 15, l, L, congruence3(R, get_sym3(B, 15, l, L)))                # R I_c Rᵀ, then the shift:
-    add_sym3(P, 15, l, L, ((k * (dy * dy + dz * dz), -k * dx * dy, -k * dx * dz),
-                           (0.0, k * (dx * dx + dz * dz), -k * dy * dz), (0.0, 0.0, k * (dx * dx + dy * dy))))
+    add_sym3(P, 15, l, L, congruence3(R, get_sym3(B, 15, l, L)))                # R I_c Rᵀ, then the shift
+    add_sym3(P, 15, l, L, merge_shift(k, sub(d, c2)))
     P[12 * L + l], P[13 * L + l], P[14 * L + l] = w0 * d[0] + w1 * c2[0], w0 * d[1] + w1 * c2[1], \
         w0 * d[2] + w1 * c2[2]
 

@@ -24,7 +24,8 @@ import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
-from ..spatial import add, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6, sandwich3, sub
+from ..spatial import (add, compose, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6, sandwich3,
+                       sub)
 from .core import (LANES, angles_in_range, fk_pass, fk_path, gather_lanes, get3, get_rotation, kernel_arrays,
                    lane_record, nonfinite_input, placement_lanes, set3, shift_code, tree_depth, unpack)
 from .state import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
@@ -218,24 +219,23 @@ def world_lanes(i, mdl, B, P, Z):
 def world_lane(B, P, l, L):
     """At lane l: a body's world placement Rw = Rw_λ R, pw = pw_λ + Rw_λ p (rows 12–23 of B) from its parent's (P)
     and its own in the parent (rows 0–11) (``core.fk_place``)."""
-    R, p = get_rotation(B, l, L), get3(B, 9, l, L)
-    W = (get3(P, 12, l, L), get3(P, 15, l, L), get3(P, 18, l, L))
-    set3(B, 12, l, L, mul3t(R, W[0]))                    # row a of Rw_λ R = Rᵀ (row a of Rw_λ)
-    set3(B, 15, l, L, mul3t(R, W[1]))
-    set3(B, 18, l, L, mul3t(R, W[2]))
-    set3(B, 21, l, L, add(get3(P, 21, l, L), mul3(W, p)))
+    Rw, pw = compose((get3(P, 12, l, L), get3(P, 15, l, L), get3(P, 18, l, L)), get3(P, 21, l, L),
+                     get_rotation(B, l, L), get3(B, 9, l, L))
+    set3(B, 12, l, L, Rw[0])
+    set3(B, 15, l, L, Rw[1])
+    set3(B, 18, l, L, Rw[2])
+    set3(B, 21, l, L, pw)
 
 
 @njit(cache=True, inline="always")
 def frame_point_lane(X, B, Fb, l, L):
     """At lane l: the frame (X = (R, p) in body b) in the world, Rf = Rw_b R, pf = pw_b + Rw_b p, into Fb (rows
     0–11) (``body_point``)."""
-    Rl, pl = X
-    W = (get3(B, 12, l, L), get3(B, 15, l, L), get3(B, 18, l, L))
-    set3(Fb, 0, l, L, mul3t(Rl, W[0]))
-    set3(Fb, 3, l, L, mul3t(Rl, W[1]))
-    set3(Fb, 6, l, L, mul3t(Rl, W[2]))
-    set3(Fb, 9, l, L, add(get3(B, 21, l, L), mul3(W, pl)))
+    Rf, pf = compose((get3(B, 12, l, L), get3(B, 15, l, L), get3(B, 18, l, L)), get3(B, 21, l, L), X[0], X[1])
+    set3(Fb, 0, l, L, Rf[0])
+    set3(Fb, 3, l, L, Rf[1])
+    set3(Fb, 6, l, L, Rf[2])
+    set3(Fb, 9, l, L, pf)
 
 
 @njit(cache=True, fastmath=CONTRACT)
