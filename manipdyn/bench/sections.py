@@ -309,7 +309,7 @@ def throughput(paths, sizes, quick=False):
                 ours(1), ours(cores)
                 time.sleep(0.3)        # let the threads other libraries keep spinning after their last job
                 pair = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
-                    (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # one core and every core in
+                    (lambda f, g: per_call_pair(f, g, repeat=31, min_time=0.005))   # one core and every core in
                 one, every = (t / N * 1e6 for t in pair(lambda: ours(1), lambda: ours(cores)))   # alternation
                 row = dict(robot=model.name, call=call, N=N, cores=cores, big=N >= 10_000, ours_us=one,
                            ours_all_us=every, all_over_one=every / one,

@@ -41,11 +41,18 @@ def _calls(model):
 
 
 def test_chunks_cover_the_batch_in_order():
-    assert route.chunks(1000, 4) == [(0, 250), (250, 500), (500, 750), (750, 1000)]
-    assert route.chunks(1001, 3) == [(0, 333), (333, 667), (667, 1001)]
+    c = route.CALLER_SHARE
+    for N, threads in ((1000, 4), (1001, 3), (10_000, 2), (5 * route.MIN_CHUNK, 64), (10**6, 7)):
+        parts = route.chunks(N, threads)
+        n = min(threads, N // route.MIN_CHUNK)
+        assert len(parts) == n and parts[0][0] == 0 and parts[-1][1] == N, (N, threads)
+        assert all(b == a2 for (_, b), (a2, _) in zip(parts, parts[1:]))                  # contiguous, in order
+        sizes = [b - a for a, b in parts]
+        assert abs(sizes[0] - N * c / (n - 1 + c)) <= 0.5                       # the caller's: CALLER_SHARE × …
+        assert max(sizes[1:]) - min(sizes[1:]) <= 1                             # … the workers' equal chunks
     assert route.chunks(2 * route.MIN_CHUNK - 1, 8) == [(0, 2 * route.MIN_CHUNK - 1)]   # too few rows to split
     assert route.chunks(10_000, 1) == [(0, 10_000)]
-    assert route.chunks(5 * route.MIN_CHUNK, 64) == [(k * route.MIN_CHUNK, (k + 1) * route.MIN_CHUNK) for k in range(5)]
+    assert route.chunks(10_000, 2) == [(0, 5146), (5146, 10_000)]                 # 1.06 : 1
 
 
 @pytest.mark.parametrize("name", ["rnea", "rnea f_ext local", "rnea f_ext world", "nonlinear_effects",
