@@ -261,6 +261,18 @@ FAULTS = (
     Fault("rnea-lanes-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
           "return shift_code(code, s0, nb, 1, nv)", "return code",
           ("tests/batch/test_lanes.py",), "a bad state in a later lane block is named by its index within the block"),
+    Fault("rnea-lanes-fext-lever-reversed", "rnea", "manipdyn/dynamics/rnea.py",
+          "add(get3(W, 3, l, LANES), cross(p, fe))", "add(get3(W, 3, l, LANES), cross(fe, p))",
+          ("tests/batch/test_lanes.py", _RNEA), "the lane kernel takes a wrench's moment about the body's origin as "
+          "n + f × p instead of n + p × f"),
+    Fault("rnea-lanes-fext-world-path-reversed", "rnea", "manipdyn/dynamics/rnea.py",
+          "for t in range(m - 1, -1, -1):                  # from the base out", "for t in range(m):  # from b in",
+          ("tests/batch/test_lanes.py", _RNEA), "the lane kernel turns a world wrench into the body with "
+          "R_1ᵀ ⋯ R_bᵀ (the path from the body in) instead of R_bᵀ ⋯ R_1ᵀ"),
+    Fault("rnea-lanes-fallback-wrench-rows-of-block-0", "rnea", "manipdyn/dynamics/rnea.py",
+          "A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,", "A[s0:s0 + n], X, xb, xp, world,",
+          ("tests/batch/test_lanes.py",), "a lane block run by the one-state form takes the first block's "
+          "wrenches"),
     Fault("crba-lanes-merge-shift-term-dropped", "lagrange", "manipdyn/dynamics/crba.py",
           "add_sym3(P, 15, l, L, merge_shift(k, sub(d, c2)))", "add_sym3(P, 15, l, L, merge_shift(k, sub(c2, c2)))",
           ("tests/batch/test_lanes.py",), "the lane CRBA's composite merge drops the shift m₁m₂/m (|d|²1 − ddᵀ) "

@@ -199,14 +199,15 @@ _W, _F = 12, 21             # the first rows of ω' (the motion a child reads) a
 def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """``rnea_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of rnea.
 
-    Runs ``rnea_kernel`` itself for what the lanes do not cover — external wrenches, per-link terms, a joint
-    with more than one velocity (free flyer) — and for a block with a non-finite input or result or a revolute
-    angle beyond ``spatial.SINCOS_MAX`` (its code then names the state or entry, as the one-state form's does).
+    External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
+    itself for what the lanes do not cover — per-link terms, a joint with more than one velocity (free flyer) —
+    and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
+    then names the state or entry, as the one-state form's does).
     Every lane is computed alone, so a state's τ does not depend on the batch around it; it agrees with the
     one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if xb.shape[0] > 0 or T.shape[0] > 0 or nq != nb or nv != nb:      # a multi-dof joint, wrenches, terms
+    if T.shape[0] > 0 or nq != nb or nv != nb:                          # a multi-dof joint, the terms
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
     mdl = unpack(I, F)          # references, and threads sharing one array contend for its count (measured: two
@@ -218,6 +219,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
         base[6 * LANES + l], base[7 * LANES + l], base[8 * LANES + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
     spare = np.empty(6 * LANES)                 # where a root's f', n' go (the base takes them)
     Z, TB = np.empty(3 * nb * LANES), np.empty(nb * LANES)      # q, q̇, q̈ and τ of the block, state index last
+    W, path = np.empty(6 * LANES), np.empty(nb, np.int64)      # a wrench of the block, a body's path (external_lanes)
     depth = tree_depth(parent)
     for s0 in range(0, N, LANES):
         n = min(LANES, N - s0)
@@ -228,13 +230,15 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 j = parent[i]
                 par = base if j < 0 else lane_record(even, odd, depth, j, RECORD)[_W * LANES:(_W + 9) * LANES]
                 outward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), par, Z)
+            if xb.shape[0] > 0:
+                external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
                 j = parent[i]
                 to = spare if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
                 inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB)
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
-            code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X, xb, xp, world,
+            code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
                                tau[s0:s0 + n], T)
             if code != -1:
                 return shift_code(code, s0, nb, 1, nv)
@@ -285,6 +289,36 @@ def inertial_lane(im, B, l, L):
     nc = add(mul3(J, dw), cross(w, mul3(J, w)))                                  # Eq. 14
     set3(B, 21, l, L, fc)
     set3(B, 24, l, L, add(nc, cross(cm, fc)))
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path):
+    """``external`` for every lane of the block: f'_b −= f_e, n'_b −= n_e + p × f_e (rows 21–26 of body b's record)
+    for each wrench k, (f_e, n_e) = X[s, k] on body xb[k] about its point xp[k] (body axes). A wrench in world axes
+    is first turned into the body, Rw_bᵀ x = R_bᵀ ⋯ R_1ᵀ x with the placements R of the bodies on the path from the
+    base to b (their records, rows 0–8), applied from the base out. W: scratch of 6 rows, path: of nb entries."""
+    parent = mdl.parent
+    for k in range(xb.shape[0]):
+        b = xb[k]
+        for c in range(6):
+            for l in range(LANES):
+                W[c * LANES + l] = X[s0 + min(l, n - 1), k, c]
+        if world:
+            m, j = 0, b
+            while j >= 0:                                   # the path b, λ(b), …, up to a child of the base
+                path[m] = j
+                m, j = m + 1, parent[j]
+            for t in range(m - 1, -1, -1):                  # from the base out: x ← R_jᵀ x
+                Bj = lane_record(even, odd, depth, path[t], RECORD)
+                for l in range(LANES):
+                    R = get_rotation(Bj, l, LANES)
+                    set3(W, 0, l, LANES, mul3t(R, get3(W, 0, l, LANES)))
+                    set3(W, 3, l, LANES, mul3t(R, get3(W, 3, l, LANES)))
+        B, p = lane_record(even, odd, depth, b, RECORD), (xp[k, 0], xp[k, 1], xp[k, 2])
+        for l in range(LANES):
+            fe = get3(W, 0, l, LANES)
+            set3(B, _F, l, LANES, sub(get3(B, _F, l, LANES), fe))
+            set3(B, _F + 3, l, LANES, sub(get3(B, _F + 3, l, LANES), add(get3(W, 3, l, LANES), cross(p, fe))))
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -7,7 +7,7 @@ batch-vs-single bound of docs/design.md §3 (1e-14; q̈ scaled by cond(M))."""
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import AAU, assert_close, inertial_xml, urdf
+from conftest import AAU, assert_close, err, inertial_xml, urdf
 
 import manipdyn as md
 from manipdyn.dynamics.core import LANES
@@ -17,9 +17,10 @@ from manipdyn.spatial import SINCOS_MAX
 from manipdyn.validation import random_states
 
 
-def _tree(seed=7, n=9):
+def _tree(seed=7, n=9, tool=False):
     """A branching tree of revolute and prismatic joints with unaligned axes and rotated inertias (no continuous
-    joint: Pinocchio gives those two q entries)."""
+    joint: Pinocchio gives those two q entries); tool: a massless link "tool" fixed to the last, offset and turned
+    (a frame whose origin is not its body's)."""
     rng = np.random.default_rng(seed)
     links, joints = {"base": ""}, []
     for k in range(n):
@@ -30,6 +31,9 @@ def _tree(seed=7, n=9):
         axis = rng.normal(size=3)
         joints.append((f"j{k}", ("revolute", "prismatic")[k % 2], parent, f"L{k}",
                        rng.uniform(-0.5, 0.5, 3), rng.uniform(-3, 3, 3), axis / np.linalg.norm(axis)))
+    if tool:
+        links["tool"] = ""
+        joints.append(("tool_joint", "fixed", f"L{n - 1}", "tool", (0.2, -0.1, 0.3), (0.4, -1.1, 2.0), None))
     return urdf(links, joints, name="lanes_tree")
 
 
@@ -56,6 +60,47 @@ def test_lane_batches_match_pinocchio_and_the_one_state_kernel(models, name, N):
     assert_close(h, ref_h, 1e-14, "h")                                             # measured ≤ 1.9e-15
     assert_close(g, np.stack([pin.computeGeneralizedGravity(pm, data, q) for q in Q]), 1e-14, "g")
     assert_close(h, np.stack([md.nonlinear_effects(model, q, v) for q, v in zip(Q, V)]), 1e-14, "h one")
+
+
+def _pin_rnea_fext(pm, Q, V, A, fx, frame):
+    """Pinocchio's τ with the wrenches fx = {frame name: (force (N, 3), moment (N, 3))} in the frame's axes or the
+    world's, about the frame's origin, moved to each frame's joint (``pin.rnea``'s fext: joint axes, about its
+    origin)."""
+    pd, out = pm.createData(), []
+    for s in range(Q.shape[0]):
+        pin.framesForwardKinematics(pm, pd, Q[s])
+        fext = [pin.Force.Zero() for _ in range(pm.njoints)]
+        for name, (f, m) in fx.items():
+            fid = pm.getFrameId(name, pin.FrameType.BODY)
+            R = pd.oMf[fid].rotation if frame == "world" else np.eye(3)
+            fext[pm.frames[fid].parentJoint] += pm.frames[fid].placement.act(pin.Force(R.T @ f[s], R.T @ m[s]))
+        out.append(pin.rnea(pm, pd, Q[s], V[s], A[s], fext).copy())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("frame", ["local", "world"])
+def test_lane_rnea_with_external_wrenches_matches_pinocchio_and_the_one_state_kernel(frame):
+    """Wrenches on a frame offset from its body (p × f), on a body deep in the tree and on a child of the base, over
+    three blocks, the middle one run by the one-state form (an angle beyond SINCOS_MAX: its wrench rows must be
+    that block's)."""
+    text = _tree(tool=True)
+    model, pm = md.load_urdf_string(text), pin.buildModelFromXML(text)
+    N, rng = 2 * LANES + 5, np.random.default_rng(11)
+    Q, V, A = random_states(model, N, rng)
+    fx = {k: (rng.normal(0, 10, (N, 3)), rng.normal(0, 2, (N, 3))) for k in ("tool", "L5", "L0")}
+    assert model.frames["tool"].body == model.frames["L8"].body and np.abs(model.frames["tool"].p).max() > 0.1
+    tau = md.rnea(model, Q, V, A, f_ext=fx, f_ext_frame=frame)
+    assert_close(tau, _pin_rnea_fext(pm, Q, V, A, fx, frame), 1e-14, f"f_ext {frame} vs Pinocchio")  # ≤ 1.9e-15
+    one = np.stack([md.rnea(model, Q[s], V[s], A[s], f_ext={k: (f[s], m[s]) for k, (f, m) in fx.items()},
+                            f_ext_frame=frame) for s in range(N)])
+    assert_close(tau, one, 1e-14, f"f_ext {frame} vs one state")                                  # ≤ 8.6e-17
+    assert err(tau, md.rnea(model, Q, V, A)) > 1e-3                  # the wrenches change τ
+    Q[LANES + 3, 0] = 2 * SINCOS_MAX                                 # block 1 by the one-state form
+    tau = md.rnea(model, Q, V, A, f_ext=fx, f_ext_frame=frame)
+    assert_close(tau[LANES:2 * LANES], _pin_rnea_fext(pm, Q[LANES:2 * LANES], V[LANES:2 * LANES], A[LANES:2 * LANES],
+                                                       {k: (f[LANES:2 * LANES], m[LANES:2 * LANES])
+                                                        for k, (f, m) in fx.items()}, frame),
+                 1e-14, "the one-state block")                                                   # ≤ 1.7e-15
 
 
 def test_a_state_does_not_depend_on_its_block(models):
