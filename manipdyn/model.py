@@ -51,6 +51,9 @@ class Frame:
 # What the loader reports about a file (Model.quirks), one kind per engine difference or data flaw:
 QUIRK_KINDS = {
     "zero_mass_inertia": "mass 0 but a nonzero rotational inertia (kept or dropped: load_urdf zero_mass_inertia=)",
+    "point_mass": "an <inertial> with <mass> but no <inertia>: a point mass at its <origin> (Pinocchio 4.1's reading)",
+    "non_psd_inertia": "a body's inertia is not positive semi-definite: loaded as written (load_urdf "
+                       "non_psd_inertia=\"keep\"; the default refuses it)",
     "no_inertial": "a link carried by a moving joint has no <inertial> (a massless body unless fixed links add mass)",
     "triangle": "principal moments violate the triangle inequality I1 + I2 >= I3",
     "rotated_root_inertial": "the root link's <inertial><origin rpy> is not zero",
@@ -58,6 +61,8 @@ QUIRK_KINDS = {
                  "with a hanging appendage, or no joint at all): load with root_joint=\"free_flyer\"",
     "mimic": "a <mimic> joint (honoured with mimic=True, else loaded as an independent joint)",
     "version": "<robot version> that urdfdom 6 (Pinocchio 4.1's reader) refuses; manipdyn loads the file",
+    "xml_version": "an XML declaration whose version is not 1.x (<?xml version=\"0.0\"?>): read as XML 1.0, as "
+                   "urdfdom (Pinocchio), MuJoCo, PyBullet and Drake ignore it",
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
 }
 

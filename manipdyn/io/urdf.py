@@ -18,7 +18,13 @@ What the loader refuses (URDFError naming the file, the link or joint, the attri
 - revolute/prismatic joints without ``<limit effort= velocity=>`` (urdfdom refuses them too; a missing
   lower/upper is 0, as the URDF specification and urdfdom say), limits with lower > upper;
 - mimic joints naming a joint that does not exist, or themselves;
-- files larger than ``max_bytes`` (default ``MAX_BYTES``).
+- files larger than ``max_bytes`` (default ``MAX_BYTES``);
+- inertias that are not positive semi-definite beyond round-off (per body after merging), unless
+  ``non_psd_inertia="keep"`` (Pinocchio, PyBullet and Drake load them): then a "non_psd_inertia" quirk names each.
+
+What the loader reads as other engines do, with a quirk (see model.QUIRK_KINDS): an XML declaration whose version
+is not 1.x (``<?xml version="0.0"?>``, which libxml2 refuses) is read as XML 1.0 ("xml_version"); an ``<inertial>``
+with ``<mass>`` but no ``<inertia>`` is a point mass at its ``<origin>`` ("point_mass", Pinocchio 4.1's reading).
 
 The root link (docs/design.md §3): by default it is the fixed base, body −1; its mass and inertia (with the links
 fixed to it) move with no joint, so they have no effect on the dynamics — Pinocchio's buildModelFromUrdf
@@ -76,7 +82,7 @@ MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data'
 
 def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
               root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep",
-              mimic: bool = False):
+              non_psd_inertia: str = "refuse", mimic: bool = False):
     """Read a URDF file into a Model (revolute, continuous, prismatic and fixed joints).
 
     Parameters: path to the .urdf file; root_joint None (fixed base) or "free_flyer" (the root link is a
@@ -87,16 +93,18 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     locked={"root_joint": pose (7,)} fixes the root link at that pose, and ``root`` fixes it at the neutral
     pose); max_bytes: larger files are refused unread; zero_mass_inertia "keep" (a link of mass 0 keeps its
     rotational inertia, as Pinocchio 4.1 does: checked, ``model.inertias`` holds it with m = 0) or "drop"
-    (such a link is massless: no inertia at all); mimic=True honours <mimic> (returns a MimicModel: mimic
-    joints carry no coordinate, as Pinocchio 4.1's ``buildModelFromUrdf(path, mimic=True)``), mimic=False
-    loads them as independent joints.
+    (such a link is massless: no inertia at all); non_psd_inertia "refuse" (a body whose inertia is not positive
+    semi-definite beyond round-off is a ModelError naming every such body) or "keep" (loaded as Pinocchio, PyBullet
+    and Drake load it, with a "non_psd_inertia" quirk naming each body's link and its smallest eigenvalue);
+    mimic=True honours <mimic> (returns a MimicModel: mimic joints carry no coordinate, as Pinocchio 4.1's
+    ``buildModelFromUrdf(path, mimic=True)``), mimic=False loads them as independent joints.
     What the loader noticed is in ``model.quirks`` (see model.QUIRK_KINDS) and warned about once per kind.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
     for a root_joint other than None or "free_flyer" or a bad policy value.
     """
     path = os.fspath(path)
     _check_root_joint(root_joint, path)
-    _check_policy(zero_mass_inertia, mimic, path)
+    _check_policy(zero_mass_inertia, non_psd_inertia, mimic, path)
     if mimic and (locked or root or tips or prune):
         raise InputError(f"{path}: locked/root/tips/prune cannot yet be combined with mimic=True")
     if not os.path.isfile(path):
@@ -104,7 +112,8 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     with open(path, "rb") as fh:
         data = fh.read(max_bytes + 1)        # never more than the limit, whatever the file claims
     model = load_urdf_string(data, source=path, root_joint=root_joint, gravity=gravity, strict=strict,
-                             max_bytes=max_bytes, zero_mass_inertia=zero_mass_inertia, mimic=mimic)
+                             max_bytes=max_bytes, zero_mass_inertia=zero_mass_inertia,
+                             non_psd_inertia=non_psd_inertia, mimic=mimic)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
@@ -112,20 +121,21 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
 
 
 def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 0.0, -9.81), strict=False,
-                     max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", mimic: bool = False):
+                     max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse",
+                     mimic: bool = False):
     """Same as load_urdf for URDF text (str or bytes); ``source`` names it in messages."""
     _check_root_joint(root_joint, source)
-    _check_policy(zero_mass_inertia, mimic, source)
+    _check_policy(zero_mass_inertia, non_psd_inertia, mimic, source)
     data = text.encode() if isinstance(text, str) else bytes(text)
     if len(data) > max_bytes:
         raise URDFError(f"{source}: larger than the size limit of {max_bytes} bytes "
                         f"(pass max_bytes=... to load_urdf to raise it)")
     g = check_gravity(gravity, source)
-    root = _parse_xml(data, source)
     quirks = []
+    root = _parse_xml(data, source, quirks)
     _check_xml(root, source, strict, quirks)
     model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer",
-                   zero_mass_inertia=zero_mass_inertia, quirks=quirks)
+                   zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia, quirks=quirks)
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
     quirks += [Quirk("mimic", j, f"= {mult:g} * {t} + {off:g}: " + ("honoured (mimic=True)" if mimic else
@@ -136,17 +146,22 @@ def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 
     return _mimic_model(model, source) if mimic else model
 
 
-def _check_policy(zero_mass_inertia, mimic, source):
-    """zero_mass_inertia is "keep" or "drop", mimic a bool; InputError naming the accepted values otherwise."""
+def _check_policy(zero_mass_inertia, non_psd_inertia, mimic, source):
+    """zero_mass_inertia is "keep" or "drop", non_psd_inertia "refuse" or "keep", mimic a bool; InputError naming
+    the accepted values otherwise."""
     if not (isinstance(zero_mass_inertia, str) and zero_mass_inertia in ("keep", "drop")):
         raise InputError(f"{source}: zero_mass_inertia={zero_mass_inertia!r}; accepted values: 'keep' (Pinocchio's "
                          f"behaviour: the rotational inertia of a mass-0 link is kept) or 'drop'")
+    if not (isinstance(non_psd_inertia, str) and non_psd_inertia in ("refuse", "keep")):
+        raise InputError(f"{source}: non_psd_inertia={non_psd_inertia!r}; accepted values: 'refuse' (the default: a "
+                         f"ModelError) or 'keep' (Pinocchio's behaviour: the inertia is loaded as written)")
     if not isinstance(mimic, (bool, np.bool_)):
         raise InputError(f"{source}: mimic={mimic!r}; expected True or False")
 
 
-_WHAT = {"mimic": "joint", "version": "", "unknown_element": ""}
-_WARNING = {"triangle": InertiaWarning, "zero_mass_inertia": InertiaWarning, "free_root": FloatingBaseWarning}
+_WHAT = {"mimic": "joint", "version": "", "xml_version": "", "unknown_element": ""}
+_WARNING = {"triangle": InertiaWarning, "zero_mass_inertia": InertiaWarning, "point_mass": InertiaWarning,
+            "non_psd_inertia": InertiaWarning, "free_root": FloatingBaseWarning}
 
 
 def _warn(model, source):
@@ -171,10 +186,29 @@ def _check_root_joint(root_joint, source):
                          f"'free_flyer' (the root link is a free body, Pinocchio's JointModelFreeFlyer)")
 
 
-def _parse_xml(data: bytes, source: str):
-    """Well-formed XML with a <robot> root; DTDs and entities are refused (no expansion, no network)."""
+# A leading XML declaration's version pseudo-attribute (after an optional UTF-8 byte-order mark), its value in
+# XML 1.0's (4th edition) VersionNum grammar. libxml2 refuses a version that is not 1.x ("Unsupported version
+# '0.0'"); urdfdom's tinyxml2 (Pinocchio 4.1: checked), MuJoCo, PyBullet and Drake ignore it.
+_DECLARED_VERSION = re.compile(rb"(?:\xef\xbb\xbf)?<\?xml[ \t\r\n]+version[ \t\r\n]*=[ \t\r\n]*"
+                               rb"(['\"])([A-Za-z0-9_.:-]+)\1")
+_XML_1 = re.compile(rb"1\.[0-9]+")           # the versions libxml2 reads (XML 1.0 5th edition's VersionNum)
+
+
+def _parse_xml(data: bytes, source: str, quirks=None):
+    """Well-formed XML with a <robot> root; DTDs and entities are refused (no expansion, no network).
+
+    A leading XML declaration whose version is not 1.x is read as XML 1.0 (only its version value is replaced,
+    before parsing), with an "xml_version" quirk appended to ``quirks``; any other malformed declaration stays
+    malformed XML."""
     if b"<!ENTITY" in data:                   # before parsing: nothing is expanded or fetched
         raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
+    m = _DECLARED_VERSION.match(data)
+    if m and not _XML_1.fullmatch(m.group(2)):
+        version = m.group(2).decode("ascii")
+        data = data[:m.start(2)] + b"1.0" + data[m.end(2):]
+        if quirks is not None:
+            quirks.append(Quirk("xml_version", "<?xml?>", f"<?xml version={_show(version)}?>: not XML 1.x; read as "
+                                f"XML 1.0 (urdfdom, MuJoCo, PyBullet and Drake ignore the version)"))
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
                              remove_comments=True)
     try:
@@ -427,13 +461,14 @@ def _check_mimic(e, name, joint_names, source):
 
 
 def _check_link(link, source):
-    """One <link>: full inertial (mass, six moments, origin) within bounds; visual/collision origins."""
+    """One <link>: inertial (mass, six moments, origin) within bounds; visual/collision origins. A <mass> without
+    <inertia> is a point mass (a "point_mass" quirk, _inertial_quirks); an <inertia> lacking a moment is refused."""
     where = f"link {link.get('name')!r}"
     for inertial in link.findall("inertial"):
         masses, inertias = inertial.findall("mass"), inertial.findall("inertia")
         if not masses or any(m.get("value") is None for m in masses):
             raise URDFError(f"{source}: {where}: <inertial> without <mass value=...>")
-        if not inertias or any(e.get(k) is None for e in inertias for k in _INERTIA_KEYS):
+        if any(e.get(k) is None for e in inertias for k in _INERTIA_KEYS):
             raise URDFError(f"{source}: {where}: <inertia> needs all of {', '.join(_INERTIA_KEYS)}")
         for e in masses:
             m = _numbers(e, "value", 1, where, source)[0]
@@ -482,11 +517,12 @@ def _walk(children, root):
         stack.extend((c, c.child) for c in reversed(children[link]))
 
 
-def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep", quirks=None) -> Model:
+def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep", non_psd_inertia="refuse",
+           quirks=None) -> Model:
     """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links.
 
     free: the root link is body 0, carried by a free flyer (joint 0, parent −1); else the fixed base −1.
-    Inertial quirks (and the free-root one) are appended to ``quirks``."""
+    Inertial quirks (non-PSD ones with non_psd_inertia="keep", and the free-root one) are appended to ``quirks``."""
     quirks = [] if quirks is None else quirks
     links, children, root = _tree(robot, source)
     joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
@@ -526,15 +562,21 @@ def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep",
         why = _free_root_shape(root, joints, frames, parts, gravity) if note else None
         if why:
             quirks.append(Quirk("free_root", root, f"{note[0]}; it looks free: {why}"))
-    return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes)
+    return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes, non_psd_inertia, quirks)
 
 
 def _inertial_quirks(links, root, joints, free, policy):
-    """zero_mass_inertia, no_inertial and rotated_root_inertial quirks of the links (see model.QUIRK_KINDS)."""
+    """zero_mass_inertia, point_mass, no_inertial and rotated_root_inertial quirks of the links (see
+    model.QUIRK_KINDS)."""
     out = []
     for name, link in links.items():
         x = link.inertial
-        if x is not None and x.mass is not None and float(x.mass) == 0.0 and np.any(np.asarray(x.inertia, float)):
+        if x is not None and x.mass is not None and x.inertia is None:
+            c = (x.origin if x.origin is not None else np.eye(4))[:3, 3]
+            out.append(Quirk("point_mass", name, f"<mass value={float(x.mass):g}> without <inertia>: a point mass "
+                             f"at <origin xyz> {c.tolist()} (zero rotational inertia about it, as Pinocchio 4.1 "
+                             f"reads it)"))
+        elif x is not None and x.mass is not None and float(x.mass) == 0.0 and np.any(np.asarray(x.inertia, float)):
             what = ("kept (Pinocchio's behaviour: the body has rotational inertia without mass)" if policy == "keep"
                     else "dropped (zero_mass_inertia='drop': the link is massless)")
             out.append(Quirk("zero_mass_inertia", name, f"mass 0, inertia diagonal "
@@ -606,9 +648,12 @@ def _part_index(frames, parts):
         seen[f.body] += 1
 
 
-def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes) -> Model:
-    """The Model's arrays from the walk's joints (joint, parent body, R0, p0) and merged body parts."""
+def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes, non_psd_inertia="refuse",
+              quirks=None) -> Model:
+    """The Model's arrays from the walk's joints (joint, parent body, R0, p0) and merged body parts; with
+    non_psd_inertia="keep", a "non_psd_inertia" quirk per body whose inertia is not PSD goes to ``quirks``."""
     nb = len(joints)                       # joints = bodies (a free flyer included)
+    quirks = [] if quirks is None else quirks
     axes = [_unit_axis(j, source, notes) for j, *_ in joints]
     inertias = [combine_inertias(parts[i]) for i in range(nb)]
     what = [f"fixed base {root!r} (with merged links {', '.join(merged[root]) or 'none'})"]
@@ -616,7 +661,11 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
         extra = f" (with merged links {', '.join(merged[j.child])})" if merged[j.child] else ""
         what.append(f"body {j.child!r}{extra}")
     base = [combine_inertias(parts[-1])[2]] if parts[-1] else [np.zeros((3, 3))]   # free: no fixed base
-    _check_psd(base + [I for _, _, I in inertias], what, source)
+    links = [root] + [j.child for j, *_ in joints]          # the link that names each body (fixed base first)
+    for i, lam in _check_psd(base + [I for _, _, I in inertias], what, source, non_psd_inertia):
+        quirks.append(Quirk("non_psd_inertia", links[i], f"{what[i]}: inertia not positive semi-definite, smallest "
+                            f"eigenvalue {lam[0]:.6g} kg m² (eigenvalues {lam.tolist()}): kept "
+                            f"(non_psd_inertia='keep', as Pinocchio, PyBullet and Drake load it)"))
     lim = np.array([_limits(j) for j, *_ in joints], float).reshape(nb, 4)
     mimic = tuple((j.name, j.mimic.joint, float(j.mimic.multiplier), float(j.mimic.offset or 0.0))
                   for j, *_ in joints if j.mimic is not None)
@@ -671,7 +720,8 @@ def _limits(j):
 
 def _link_inertia(link, R, p, source, zero_mass_inertia="keep"):
     """(m, c, I_c) of a URDF link in the frame where the link sits at (R, p); checks mass and moments.
-    A link of mass 0 keeps its rotational inertia ("keep", Pinocchio) or has none ("drop")."""
+    A link of mass 0 keeps its rotational inertia ("keep", Pinocchio) or has none ("drop"); a <mass> without
+    <inertia> is a point mass at the <inertial> origin (I_c = 0, as Pinocchio 4.1 reads it)."""
     inertial = link.inertial
     if inertial is None or inertial.mass is None:
         return 0.0, p.copy(), np.zeros((3, 3))
@@ -681,20 +731,26 @@ def _link_inertia(link, R, p, source, zero_mass_inertia="keep"):
     if m == 0.0 and zero_mass_inertia == "drop":
         return 0.0, p.copy(), np.zeros((3, 3))
     To = inertial.origin if inertial.origin is not None else np.eye(4)
+    if inertial.inertia is None:              # a point mass (checked on the XML: no <inertia> element at all)
+        return m, p + R @ To[:3, 3], np.zeros((3, 3))
     I = To[:3, :3] @ np.asarray(inertial.inertia, float) @ To[:3, :3].T
     return m, p + R @ To[:3, 3], R @ I @ R.T
 
 
-def _check_psd(Is, what, source):
+def _check_psd(Is, what, source, policy="refuse"):
     """Inertias Is (n, 3, 3) must be positive semi-definite beyond round-off: smallest eigenvalue >=
-    -1e-12 trace - 1e-18 kg m² (round-off on massless bodies). ModelError names the first, what[i]."""
+    -1e-12 trace - 1e-18 kg m² (round-off on massless bodies). With policy "refuse", ModelError names every one
+    that is not, what[i], and the policy that loads them; with "keep", returns [(i, eigenvalues (3,) ascending)]
+    of each."""
     Is = np.asarray(Is, float).reshape(-1, 3, 3)
     lam = np.linalg.eigvalsh(Is)
     tr = np.maximum(np.trace(Is, axis1=1, axis2=2), 0.0)
     bad = np.flatnonzero(lam[:, 0] < -1e-12 * tr - 1e-18)
-    if len(bad):
+    if len(bad) and policy != "keep":
         raise ModelError(f"{source}: {len(bad)} inertia(s) not positive semi-definite: "
-                         + "; ".join(f"{what[i]}: eigenvalues {lam[i].tolist()}" for i in bad[:50]))
+                         + "; ".join(f"{what[i]}: eigenvalues {lam[i].tolist()}" for i in bad[:50])
+                         + "; pass non_psd_inertia='keep' to load them as Pinocchio does")
+    return [(int(i), lam[i]) for i in bad]
 
 
 def _triangle(Is, links, source, strict):

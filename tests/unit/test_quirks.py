@@ -1,5 +1,6 @@
-"""Loader quirks (Model.quirks), the zero_mass_inertia policy, <robot version>, unknown elements, URDF+ closures
-and couplings, mimic joints honoured — each against Pinocchio 4.1 where Pinocchio is the reference."""
+"""Loader quirks (Model.quirks), the zero_mass_inertia and non_psd_inertia policies, point masses, <robot version>
+and the XML declaration's version, unknown elements, URDF+ closures and couplings, mimic joints honoured — each
+against Pinocchio 4.1 where Pinocchio is the reference."""
 import re
 import warnings
 from pathlib import Path
@@ -7,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from manipdyn import FloatingBaseWarning, InertiaWarning, ModelError, URDFError, load_urdf, load_urdf_string
+from manipdyn import (FloatingBaseWarning, InertiaWarning, InputError, ModelError, URDFError, load_urdf,
+                      load_urdf_string)
 from manipdyn.constraints import closure_terms, constrained_forward_dynamics
 from manipdyn.dynamics import mimic as mim
 import manipdyn
@@ -102,6 +104,143 @@ def test_triangle_names_every_link_and_non_psd_lists_all():
                  joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0"))
     with pytest.raises(ModelError, match=r"2 inertia\(s\) not positive semi-definite.*'a'.*'b'"):
         load_quiet(text)
+
+
+def against_pinocchio(model, text, seed, n=10):
+    """The worst §3 errors (M, τ) of manipdyn's model against Pinocchio's model of the same URDF text, at n random
+    states (q uniform in [−π, π], q̇ ~ N(0, 2²), q̈ ~ N(0, 5²)); serial revolute chains: the same q order."""
+    pm = P.buildModelFromXML(text)
+    pd = pm.createData()
+    assert model.joint_names == tuple(pm.names[1:])
+    rng = np.random.default_rng(seed)
+    worst = [0.0, 0.0]
+    for _ in range(n):
+        q, v, a = rng.uniform(-np.pi, np.pi, model.nq), rng.normal(0, 2, model.nv), rng.normal(0, 5, model.nv)
+        M = P.crba(pm, pd, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        worst[0] = max(worst[0], error(mass_matrix(model, q), M))
+        worst[1] = max(worst[1], error(manipdyn.rnea(model, q, v, a), P.rnea(pm, pd, q, v, a)))
+    return worst
+
+
+# ---- non_psd_inertia: refuse (the default) and keep (Pinocchio) -----------------------------------------------
+
+NON_PSD = robot({"base": inertial(1.0, (0.1, 0.1, 0.1)).replace('ixy="0"', 'ixy="0.5"'),
+                 "a": inertial(1.0, (0.1, 0.2, 0.25)).replace('ixz="0"', 'ixz="0.3"'),
+                 "b": inertial(2.0, (0.05, 0.2, 0.3), xyz="0.1 0.2 0").replace('ixy="0"', 'ixy="0.4"'),
+                 "c": inertial(0.5, (0.01, 0.02, 0.03), xyz="0 0 0.1")},
+                joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0", axis="0 1 0")
+                + joint("j3", "b", "c", xyz="0 0.2 0.1", axis="1 0 0"))
+
+
+def test_non_psd_inertia_is_refused_by_default_naming_the_policy_and_kept_on_request():
+    with pytest.raises(ModelError, match=r"3 inertia\(s\) not positive semi-definite: fixed base 'base'.*"
+                                         r"body 'a'.*body 'b'.*pass non_psd_inertia='keep' to load them"):
+        load_quiet(NON_PSD)
+    with pytest.warns(InertiaWarning, match=r"non_psd_inertia \(3\): link 'base'.*link 'a'.*link 'b'") as rec:
+        model = load_urdf_string(NON_PSD, non_psd_inertia="keep")
+    assert sum("non_psd_inertia" in str(w.message) for w in rec) == 1               # one warning names all three
+    found = {q.name: q.detail for q in model.quirks if q.kind == "non_psd_inertia"}
+    assert set(found) == {"base", "a", "b"}                                        # every one, not the first
+    written = {"base": ((0.1, 0.5, 0), (0.5, 0.1, 0), (0, 0, 0.1)), "a": ((0.1, 0, 0.3), (0, 0.2, 0), (0.3, 0, 0.25)),
+           "b": ((0.05, 0.4, 0), (0.4, 0.2, 0), (0, 0, 0.3))}
+    for name, I in written.items():                               # the smallest eigenvalue of the file's inertia
+        assert f"smallest eigenvalue {np.linalg.eigvalsh(np.array(I))[0]:.6g} kg m²" in found[name]
+    assert np.linalg.eigvalsh(model.inertia[1])[0] < -0.1       # loaded as written, not repaired
+    worst = against_pinocchio(model, NON_PSD, seed=12)
+    assert max(worst) < 1e-14, worst                            # measured M 4.4e-16, τ 6.2e-16
+
+
+def test_non_psd_inertia_keep_loads_a_real_file_as_pinocchio_does():
+    """romeo_laas_small (example-robot-data): three bodies with eigenvalues down to −0.021 kg m², refused by default;
+    kept, with a free-flyer root (so the base's inertia counts), against Pinocchio's model of the same file."""
+    from manipdyn.validation.reference import Reference
+    path = robots_dir() / "romeo_description/urdf/romeo_laas_small.urdf"
+    if not path.is_file():
+        pytest.skip("example-robot-data's romeo_laas_small.urdf is not installed")
+    with pytest.raises(ModelError, match=r"3 inertia\(s\) not positive semi-definite.*non_psd_inertia='keep'"):
+        load_quiet(path.read_text(), root_joint="free_flyer")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = load_urdf(path, root_joint="free_flyer", non_psd_inertia="keep")
+    assert [q.name for q in model.quirks if q.kind == "non_psd_inertia"] == ["base_link", "LHipPitch_link",
+                                                                             "RHipPitch_link"]
+    ref = Reference(model, path)
+    rng = np.random.default_rng(15)
+    worst = [0.0, 0.0]
+    for _ in range(5):
+        q, v, a = manipdyn.random_configuration(model, rng=rng), rng.normal(0, 2, model.nv), rng.normal(0, 5, model.nv)
+        pq = ref.to_pin_q(q)
+        M = P.crba(ref.pm, ref.pd, pq)
+        M = np.triu(M) + np.triu(M, 1).T
+        worst[0] = max(worst[0], error(mass_matrix(model, q), M))
+        worst[1] = max(worst[1], error(manipdyn.rnea(model, q, v, a), P.rnea(ref.pm, ref.pd, pq, v, a)))
+    assert max(worst) < 1e-14, worst                            # measured M 8.7e-17, τ 3.5e-16
+
+
+@pytest.mark.parametrize("value", ["yes", "Keep", "", None, True])
+def test_bad_non_psd_inertia_policy_is_an_input_error_naming_the_accepted_values(value, tmp_path):
+    path = tmp_path / "r.urdf"
+    path.write_text(CHAIN("1.0"))
+    for load in (lambda **kw: load_urdf_string(CHAIN("1.0"), **kw), lambda **kw: load_urdf(path, **kw)):
+        with pytest.raises(InputError, match=re.escape(f"non_psd_inertia={value!r}; accepted values: 'refuse'")
+                           + ".*'keep'"):
+            load(non_psd_inertia=value)
+
+
+# ---- <inertial> with <mass> but no <inertia>: a point mass (Pinocchio 4.1, Drake) ------------------------------
+
+POINT = robot({"base": "", "a": inertial(1.0),
+               "b": '<inertial><origin xyz="0.1 0.2 0.05" rpy="0.3 -0.2 0.1"/><mass value="1.5"/></inertial>',
+               "c": '<inertial><origin xyz="0 0.05 0.2"/><mass value="0.7"/></inertial>',
+               "d": '<inertial><mass value="0"/></inertial>'},
+              joint("j1", "base", "a") + joint("j2", "a", "b", xyz="0.3 0 0", axis="0 1 0")
+              + joint("j3", "b", "c", xyz="0 0.2 0.1", axis="1 0 0") + joint("j4", "c", "d", xyz="0 0 0.3"))
+
+
+def test_mass_without_inertia_is_a_point_mass_as_in_pinocchio():
+    with pytest.warns(InertiaWarning, match=r"point_mass \(3\): link 'b': <mass value=1.5> without <inertia>"):
+        model = load_urdf_string(POINT)
+    assert {q.name for q in model.quirks if q.kind == "point_mass"} == {"b", "c", "d"}
+    assert not any(q.kind == "zero_mass_inertia" for q in model.quirks)     # mass 0, no inertia: nothing kept
+    assert model.mass.tolist() == [1.0, 1.5, 0.7, 0.0]
+    assert np.max(np.abs(model.inertia[1:])) < 1e-31            # no rotational inertia: measured 1.4e-33 (round-off)
+    assert error(model.com[1], [0.1, 0.2, 0.05]) < 1e-15       # at <origin xyz> (rpy turns nothing): measured 2.8e-17
+    worst = against_pinocchio(model, POINT, seed=13)
+    assert max(worst) < 1e-14, worst                            # measured M 1.1e-16, τ 5.1e-16
+    with pytest.raises(URDFError, match=r"link 'b': <inertia> needs all of"):      # a partial <inertia>: refused
+        load_quiet(POINT.replace('<mass value="1.5"/>', '<mass value="1.5"/><inertia ixx="1" iyy="1" izz="1"/>'))
+    with pytest.raises(URDFError, match=r"link 'c': <inertial> without <mass"):     # as before: no <mass>
+        load_quiet(POINT.replace('<mass value="0.7"/>', '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" '
+                                                        'iyz="0"/>'))
+
+
+# ---- the XML declaration's version ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("declaration, quirk", [
+    ('<?xml version="0.0"?>', True), ("<?xml version='2.5' encoding='UTF-8'?>", True),
+    ('\ufeff<?xml version = "0.0" standalone="yes"?>', True), ('<?xml version="abc"?>', True),
+    ('<?xml version="1.0"?>', False), ('<?xml version="1.1"?>', False)])
+def test_xml_declaration_version_is_ignored_as_pinocchio_does(declaration, quirk):
+    text = declaration + CHAIN("1.0", (0.1, 0.2, 0.25))
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        model = load_urdf_string(text)
+    assert (("xml_version", "<?xml?>") in kinds(model)) == quirk
+    assert sum("xml_version" in str(w.message) for w in rec) == quirk
+    worst = against_pinocchio(model, text.encode("utf-8").decode("utf-8-sig"), seed=14)
+    assert max(worst) < 1e-14, worst                            # measured M 1.1e-16, τ 2.9e-16 (all six)
+
+
+@pytest.mark.parametrize("declaration, words", [
+    ('<?xml version=?>', "malformed XML"), ('<?xml version=""?>', "malformed XML"),
+    ('<?xml encoding="UTF-8"?>', "malformed XML"), ('<?xml version="0.0" standalone="maybe"?>', "malformed XML"),
+    ('<?xml version="0.0" encoding="bogus"?>', "malformed XML"), (' <?xml version="0.0"?>', "malformed XML"),
+    ('<?xml version="0.0"?><!DOCTYPE robot>', "DOCTYPE/ENTITY declarations are refused"),
+    ('<?xml version="0.0"?><!DOCTYPE r [<!ENTITY a "aaaa">]>', "DOCTYPE/ENTITY declarations are refused")])
+def test_other_malformed_declarations_stay_refused(declaration, words):
+    with pytest.raises(URDFError, match=f"bad.urdf: {words}"):
+        load_quiet(declaration + CHAIN("1.0"), source="bad.urdf")
 
 
 # ---- <robot version> and unknown elements ----------------------------------------------------------------
