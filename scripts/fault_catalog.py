@@ -261,6 +261,16 @@ FAULTS = (
     Fault("rnea-lanes-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
           "return shift_code(code, s0, nb, 1, nv)", "return code",
           ("tests/batch/test_lanes.py",), "a bad state in a later lane block is named by its index within the block"),
+    Fault("loader-point-mass-at-link-origin", "loader", "manipdyn/io/urdf.py",
+          "        return m, p + R @ To[:3, 3], np.zeros((3, 3))", "        return m, p.copy(), np.zeros((3, 3))",
+          ("tests/unit/test_quirks.py",), "a <mass> without <inertia> sits at the link's origin, not at the "
+          "<inertial> origin"),
+    Fault("loader-xml-version-not-read-as-1", "loader", "manipdyn/io/urdf.py",
+          'data = data[:m.start(2)] + b"1.0" + data[m.end(2):]', "data = data",
+          ("tests/unit/test_quirks.py",), "<?xml version=\"0.0\"?> is refused as malformed XML again"),
+    Fault("loader-non-psd-keep-refuses", "loader", "manipdyn/io/urdf.py",
+          'if len(bad) and policy != "keep":', "if len(bad):",
+          ("tests/unit/test_quirks.py",), "non_psd_inertia='keep' still refuses a non-PSD inertia"),
     Fault("rnea-lanes-fext-lever-reversed", "rnea", "manipdyn/dynamics/rnea.py",
           "add(get3(W, 3, l, LANES), cross(p, fe))", "add(get3(W, 3, l, LANES), cross(fe, p))",
           ("tests/batch/test_lanes.py", _RNEA), "the lane kernel takes a wrench's moment about the body's origin as "
