@@ -2,7 +2,7 @@
 (the ``[gpu]`` extra), one thread per state.
 
     import manipdyn.gpu as gpu
-    tau = gpu.rnea(model, q, v, a)     # q (N, nq), v, a (N, nv)
+    tau = gpu.rnea(model, q, v, a)     # q (N, nq), v, a (N, nv); f_ext= {frame: (force, moment)} as on the CPU
     h = gpu.nonlinear_effects(model, q, v);  g = gpu.gravity_torques(model, q)
     M = gpu.mass_matrix(model, q);  qdd = gpu.aba(model, q, v, tau)
     R, p = gpu.frame_placement(model, q, "tool0");  J = gpu.frame_jacobian(model, q, "tool0")
@@ -30,18 +30,19 @@ import numpy as np
 
 from .dynamics.aba import (_A, _V, ARTICULATED, acceleration_lane, articulated_lane, articulated_model, bias_lane,
                            bias_up_lane, handed_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane)
-from .dynamics.core import (gather_lane, inertial_model, motion_model, placement_lane, placement_model, scatter_lane,
-                            unpack)
+from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, placement_lane,
+                            placement_model, scatter_lane, unpack)
 from .dynamics.crba import (COMPOSITE, column_lane, column_model, column_up_lane, merge_lane, merge_weights,
                             own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
-from .dynamics.rnea import _F, _W, RECORD, inertial_lane, inward_lane, motion_lane
+from .dynamics.rnea import _F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane
+from .dynamics.state import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
 from .joints import REVOLUTE
 from .model import Model
-from .spatial import SINCOS_MAX
+from .spatial import SINCOS_MAX, mul3t
 
 try:                          # numba-cuda (the [gpu] extra); a kernel's ``cuda`` must be this module's global (the
     from numba import cuda    # simulator swaps it for its own while a kernel runs)
@@ -65,8 +66,11 @@ def _cuda():
 # an angle beyond SINCOS_MAX, left uncomputed), runs the lane steps with L = N, writes its result and flags a
 # non-finite one (flags[1]) or, in the ABA, a singular articulated inertia (flags[2]).
 
-def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, with_a):
-    """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0."""
+def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare, Z, TB, tau, flags, with_v, with_a):
+    """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0.
+    External wrenches (``_wrenches``): wrench k, rows 6k … 6k + 5 of X (rows N long), on body xb[k] about xp[k]; in
+    world axes (world) it is turned into the body by the placements of the bodies paths[poff[k]:poff[k + 1]], from
+    the base out (as ``rnea.external_lanes``)."""
     s = cuda.grid(1)
     N, nb = tau.shape[0], I.shape[1]
     if s >= N:
@@ -96,6 +100,14 @@ def _rnea_threads(I, F, Q, V, A, rec, base, spare, Z, TB, tau, flags, with_v, wi
         placement_lane(placement_model(i, mdl), B, Z, s, N)
         motion_lane(motion_model(i, mdl), B, par, Z, s, N)
         inertial_lane(inertial_model(i, mdl), B, s, N)
+    for k in range(xb.shape[0]):                          # external wrenches
+        fe, ne = get3(X, 6 * k, s, N), get3(X, 6 * k + 3, s, N)
+        if world:
+            for t in range(poff[k], poff[k + 1]):         # x ← R_jᵀ x, from the base out
+                R = get_rotation(rec[paths[t] * RECORD * N:(paths[t] + 1) * RECORD * N], s, N)
+                fe, ne = mul3t(R, fe), mul3t(R, ne)
+        b = xb[k]
+        external_lane(rec[b * RECORD * N:(b + 1) * RECORD * N], fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), s, N)
     for i in range(nb - 1, -1, -1):                       # inward, Eqs. 15–18
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
@@ -332,25 +344,99 @@ def _flags():
     return _cuda().to_device(np.full(3, _BIG, np.int64))
 
 
-def _run_rnea(model, call, q, v, a):
+def _on_device(x):
+    return hasattr(x, "copy_to_host") or hasattr(x, "__cuda_array_interface__") or \
+        (hasattr(x, "__dlpack__") and not isinstance(x, np.ndarray))
+
+
+def _put_wrench(X, k, f, m, R):
+    """Thread s: rows 6k … 6k + 5 of X (rows N long) ← [R f_s; R m_s] (R, 9 numbers by rows: the frame's axes in
+    the body's, or 1 for world axes)."""
+    s = cuda.grid(1)
+    N = f.shape[0]
+    if s >= N:
+        return
+    for r in range(3):
+        X[(6 * k + r) * N + s] = R[3 * r] * f[s, 0] + R[3 * r + 1] * f[s, 1] + R[3 * r + 2] * f[s, 2]
+        X[(6 * k + 3 + r) * N + s] = R[3 * r] * m[s, 0] + R[3 * r + 1] * m[s, 1] + R[3 * r + 2] * m[s, 2]
+
+
+def _wrenches(model, f_ext, f_ext_frame, N, call):
+    """f_ext = {link or frame name: (force, moment)} (each (N, 3) on the device, or (3,) or (N, 3) on the host) laid
+    out for ``_rnea_threads`` on the device: X (6K·N), bodies (K,), points (K, 3), the bodies' paths from the base
+    (flat) and their offsets (K + 1,); and [(name, device array (N, 3))] of the forces and moments, for the CPU's
+    error on a flagged row. Frames of the fixed base are dropped (they change no torque)."""
+    if f_ext_frame not in ("local", "world"):
+        raise InputError(f"{call}: f_ext_frame must be 'local' or 'world', not {f_ext_frame!r}")
+    if f_ext is not None and not isinstance(f_ext, dict):
+        raise InputError(f"{call}: f_ext must be None or a dict {{link or frame name: (force, moment)}}, "
+                         f"not {type(f_ext).__name__}")
+    c, rows = _cuda(), []
+    for name, pair in (f_ext or {}).items():
+        fr = frame_of(model, name)
+        if isinstance(pair, (str, bytes, dict)) or not hasattr(pair, "__len__") or len(pair) != 2:
+            raise InputError(f"{call}: f_ext[{name!r}] must be a pair (force, moment)")
+        d = []
+        for what, w in zip(("force", "moment"), pair):
+            label = f"f_ext[{name!r}] {what}"
+            if _on_device(w):
+                w = to_device(w, label, 3, call)
+                if w.shape[0] != N:
+                    raise InputError(f"{call}: {label} has {w.shape[0]} rows, q has {N}")
+            else:
+                w = as_real(label, w)
+                if w.shape not in ((3,), (N, 3)):
+                    raise InputError(f"{call}: {label} has shape {w.shape}; expected (3,) or ({N}, 3)")
+                check_finite(label, w)
+                w = c.to_device(np.ascontiguousarray(np.broadcast_to(w, (N, 3))))
+            d.append(w)
+        if fr.body >= 0:
+            rows.append((name, fr, d[0], d[1]))
+    K, parent = len(rows), model.kernel.arrays[0][0]
+    X = c.device_array((max(6 * K * N, 1),))
+    paths, poff = [], [0]
+    for k, (name, fr, f, m) in enumerate(rows):
+        R = np.eye(3) if f_ext_frame == "world" else fr.R
+        _launch("put_wrench", _put_wrench, N, X, k, f, m, c.to_device(np.ascontiguousarray(R, float).ravel()))
+        path, j = [], fr.body
+        while j >= 0:
+            path.append(j)
+            j = int(parent[j])
+        paths += path[::-1]
+        poff.append(len(paths))
+    xb = np.array([fr.body for _, fr, _, _ in rows], np.int64)
+    xp = np.array([fr.p for _, fr, _, _ in rows], float).reshape(K, 3)
+    extra = [(f"f_ext[{name!r}] {what}", x) for name, _, f, m in rows for what, x in (("force", f), ("moment", m))]
+    return (X, c.to_device(xb), c.to_device(xp), c.to_device(np.array(paths or [0], np.int64)),
+            c.to_device(np.array(poff, np.int64)), f_ext_frame == "world"), extra, [name for name, *_ in rows]
+
+
+def _run_rnea(model, call, q, v, a, f_ext=None, f_ext_frame="local"):
     import manipdyn as md
     I, F = _model(model, call)
     states, N = _states(model, call, (("q", q), ("v", v), ("a", a)))
     nb, Q = model.njoints, states[0][1]
     V, A = (dict(states).get(n, Q) for n in ("v", "a"))
+    ext, extra, names = _wrenches(model, f_ext, f_ext_frame, N, call)
     tau, flags = _cuda().device_array((N, nb)), _flags()
-    _launch("rnea", _rnea_threads, N, _cuda().to_device(I), _cuda().to_device(F), Q, V, A,
+    _launch("rnea", _rnea_threads, N, _cuda().to_device(I), _cuda().to_device(F), Q, V, A, *ext,
             _scratch("rec", (nb * RECORD * N,)), _scratch("base", (9 * N,)), _scratch("spare", (6 * N,)),
             _scratch("Z", (3 * nb * N,)), _scratch("T", (nb * N,)), tau, flags, v is not None, a is not None)
     if N and (flags.copy_to_host() < _BIG).any():
-        _raise(model, call, flags, states, lambda *x: getattr(md, call)(model, *x))
+        n = len(states)
+
+        def cpu(*x):       # the row's states, then its wrenches' forces and moments (``_wrenches``' extra)
+            w = {name: (x[n + 2 * k], x[n + 2 * k + 1]) for k, name in enumerate(names)}
+            return getattr(md, call)(model, *x[:n], **(dict(f_ext=w, f_ext_frame=f_ext_frame) if w else {}))
+        _raise(model, call, flags, states + extra, cpu)
     return tau
 
 
-def rnea(model, q, v, a):
+def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
     """τ (N, nv) on the GPU for device (or numpy) arrays q (N, nq), v, a (N, nv): ``manipdyn.rnea``'s numbers
-    (tests/gpu/), a device array."""
-    return _run_rnea(model, "rnea", q, v, a)
+    (tests/gpu/), a device array. f_ext = {link or frame name: (force, moment)}, as ``manipdyn.rnea`` takes it:
+    each (N, 3) on the device, or (3,) or (N, 3) on the host; f_ext_frame "local" (the frame's axes) or "world"."""
+    return _run_rnea(model, "rnea", q, v, a, f_ext, f_ext_frame)
 
 
 def nonlinear_effects(model, q, v):
@@ -451,7 +537,8 @@ def ptx(name, cc=(9, 0)):
     i1, c3, a1 = types.Array(types.int64, 1, "C"), types.Array(types.float64, 3, "C"), types.Array(types.float64, 1, "A")
     sigs = {"frame": (_frame_threads, (i2, f3, a2, types.int64, i1, types.int64, c2, a1, c1, c1, c1, c1, c1, c3, c2,
                                        c3, types.boolean, types.boolean, flags)),
-            "rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, c1, c1, c1, c1, c2, flags, types.boolean, types.boolean)),
+            "rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, i1, c2, i1, i1, types.boolean, c1, c1, c1, c1, c1, c2,
+                                     flags, types.boolean, types.boolean)),
             "crba": (_crba_threads, (i2, f3, a2, c2, c1, c1, c1, c1, c1, f3, flags)),
             "aba": (_aba_threads, (i2, f3, a2, a2, a2, types.float64, c1, c1, c1, c1, c2, flags))}
     func, sig = sigs[name]

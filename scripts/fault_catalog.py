@@ -271,10 +271,17 @@ FAULTS = (
     Fault("loader-non-psd-keep-refuses", "loader", "manipdyn/io/urdf.py",
           'if len(bad) and policy != "keep":', "if len(bad):",
           ("tests/unit/test_quirks.py",), "non_psd_inertia='keep' still refuses a non-PSD inertia"),
+    Fault("gpu-fext-world-path-reversed", "rnea", "manipdyn/gpu.py",
+          "for t in range(poff[k], poff[k + 1]):", "for t in range(poff[k + 1] - 1, poff[k] - 1, -1):",
+          ("tests/gpu/test_gpu.py",), "the GPU turns a world wrench into the body from the body in, not from the base out"),
+    Fault("gpu-fext-frame-axes-transposed", "rnea", "manipdyn/gpu.py",
+          "X[(6 * k + r) * N + s] = R[3 * r] * f[s, 0] + R[3 * r + 1] * f[s, 1] + R[3 * r + 2] * f[s, 2]",
+          "X[(6 * k + r) * N + s] = R[r] * f[s, 0] + R[r + 3] * f[s, 1] + R[r + 6] * f[s, 2]",
+          ("tests/gpu/test_gpu.py",), "the GPU turns a local force from the frame's axes with Rᵀ instead of R"),
     Fault("rnea-lanes-fext-lever-reversed", "rnea", "manipdyn/dynamics/rnea.py",
-          "add(get3(W, 3, l, LANES), cross(p, fe))", "add(get3(W, 3, l, LANES), cross(fe, p))",
-          ("tests/batch/test_lanes.py", _RNEA), "the lane kernel takes a wrench's moment about the body's origin as "
-          "n + f × p instead of n + p × f"),
+          "add(ne, cross(p, fe))", "add(ne, cross(fe, p))",
+          ("tests/batch/test_lanes.py", _RNEA), "the lane step (CPU and GPU) takes a wrench's moment about the body's "
+          "origin as n + f × p instead of n + p × f"),
     Fault("rnea-lanes-fext-world-path-reversed", "rnea", "manipdyn/dynamics/rnea.py",
           "for t in range(m - 1, -1, -1):                  # from the base out", "for t in range(m):  # from b in",
           ("tests/batch/test_lanes.py", _RNEA), "the lane kernel turns a world wrench into the body with "

@@ -316,9 +316,15 @@ def external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path):
                     set3(W, 3, l, LANES, mul3t(R, get3(W, 3, l, LANES)))
         B, p = lane_record(even, odd, depth, b, RECORD), (xp[k, 0], xp[k, 1], xp[k, 2])
         for l in range(LANES):
-            fe = get3(W, 0, l, LANES)
-            set3(B, _F, l, LANES, sub(get3(B, _F, l, LANES), fe))
-            set3(B, _F + 3, l, LANES, sub(get3(B, _F + 3, l, LANES), add(get3(W, 3, l, LANES), cross(p, fe))))
+            external_lane(B, get3(W, 0, l, LANES), get3(W, 3, l, LANES), p, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def external_lane(B, fe, ne, p, l, L):
+    """f' −= f_e, n' −= n_e + p × f_e (rows 21–26 of a body's record B at lane l): the wrench (f_e, n_e) the
+    environment applies on the body about its point p, all in body axes (as ``external`` for one state)."""
+    set3(B, _F, l, L, sub(get3(B, _F, l, L), fe))
+    set3(B, _F + 3, l, L, sub(get3(B, _F + 3, l, L), add(ne, cross(p, fe))))
 
 
 @njit(cache=True, fastmath=CONTRACT)

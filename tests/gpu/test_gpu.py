@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import AAU, ROOT, assert_close
+from conftest import AAU, ROOT, assert_close, err
 
 import manipdyn as md
 from manipdyn.validation import random_states
@@ -20,15 +20,16 @@ pytest.importorskip("numba.cuda", reason="the [gpu] extra (numba-cuda) is not in
 PROBE = r"""
 import json, sys, warnings
 import numpy as np
-sys.path.insert(0, {tests!r}); sys.path.insert(0, {batch!r})
+sys.path.insert(0, {tests!r}); sys.path.insert(0, {batch!r}); sys.path.insert(0, {gpu!r})
 import manipdyn as md
 from manipdyn import _jit, gpu
 from numba import cuda
 from manipdyn.validation import random_states
 from test_lanes import _tree
 warnings.simplefilter("ignore")
+from test_gpu import wrenches
 out = dict(nojit=_jit.NOJIT, sim=cuda.simulator_enabled if hasattr(cuda, "simulator_enabled") else None)
-for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", md.load_urdf_string(_tree()))):
+for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", md.load_urdf_string(_tree(tool=True)))):
     for N in (1, 7, 40):
         Q, V, A = random_states(model, N, np.random.default_rng(N))
         dq = cuda.to_device(Q)                      # a device array in, as a user's would be
@@ -43,6 +44,11 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", md.load_urdf_st
             gravity_torques=gpu.gravity_torques(model, Q).copy_to_host().tolist(),
             mass_matrix=gpu.mass_matrix(model, dq).copy_to_host().tolist(),
             aba=gpu.aba(model, Q, V, A).copy_to_host().tolist())
+        fx = wrenches(model, N)
+        fx_gpu = {{k: (cuda.to_device(f) if k == tip else f, m) for k, (f, m) in fx.items()}}   # a device force too
+        for frame in ("local", "world"):
+            out[f"{{name}}/{{N}}"]["rnea_f_ext_" + frame] = gpu.rnea(model, dq, V, A, f_ext=fx_gpu,
+                                                                    f_ext_frame=frame).copy_to_host().tolist()
 model = md.load_urdf({aau!r})
 Q, V, A = random_states(model, 9, np.random.default_rng(3))
 errors = {{}}
@@ -63,6 +69,12 @@ fails("frame_name", lambda: gpu.frame_placement(model, Q, "no_such_link"))
 fails("frame_nan", lambda: gpu.frame_jacobian(model, bad, model.body_names[-1]))
 fails("rows", lambda: gpu.aba(model, Q, V[:4], A))
 fails("float32", lambda: gpu.rnea(model, cuda.to_device(Q.astype(np.float32)), V, A))
+fx = wrenches(model, 9)
+f = fx[model.body_names[-1]][0].copy(); f[3, 1] = np.nan
+fails("f_ext_nan", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]: (cuda.to_device(f), np.zeros(3))}}))
+fails("f_ext_name", lambda: gpu.rnea(model, Q, V, A, f_ext={{"no_such_frame": (np.zeros(3), np.zeros(3))}}))
+fails("f_ext_rows", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]: (cuda.to_device(f[:4]),
+                                                                                    np.zeros(3))}}))
 fails("free_flyer", lambda: gpu.rnea(md.load_urdf({aau!r}, root_joint="free_flyer"), np.zeros((2, 12)),
                                      np.zeros((2, 11)), np.zeros((2, 11))))
 out["errors"] = errors
@@ -70,11 +82,25 @@ print(json.dumps(out))
 """
 
 
+def wrenches(model, N):
+    """f_ext for the probe: on the tip body, a mid body (a (3,) moment, the same for every state), the "tool" frame
+    (offset from its body and turned: R and p × f count) and a frame of the fixed base (dropped: it changes no
+    torque); rows from a seeded generator, so the probe and the test agree."""
+    rng = np.random.default_rng(100 + N)
+    tip, mid = model.body_names[-1], model.body_names[len(model.body_names) // 2]
+    assert np.abs(model.frames["tool"].R - np.eye(3)).max() > 0.5 and np.abs(model.frames["tool"].p).max() > 0.05
+    return {tip: (rng.normal(0, 10, (N, 3)), rng.normal(0, 2, (N, 3))), mid: (rng.normal(0, 10, (N, 3)),
+                                                                             rng.normal(0, 2, 3)),
+            "tool": (rng.normal(0, 10, (N, 3)), rng.normal(0, 2, (N, 3))),
+            model.root_link: (rng.normal(0, 10, (N, 3)), rng.normal(0, 2, (N, 3)))}
+
+
 @pytest.fixture(scope="module")
 def probe():
     env = {k: x for k, x in os.environ.items() if not k.startswith("MANIPDYN_")}
     env.update(PYTHONPATH=str(ROOT), MANIPDYN_NOJIT="1", NUMBA_ENABLE_CUDASIM="1")
-    code = PROBE.format(tests=str(ROOT / "tests"), batch=str(ROOT / "tests" / "batch"), aau=str(AAU))
+    code = PROBE.format(tests=str(ROOT / "tests"), batch=str(ROOT / "tests" / "batch"),
+                        gpu=str(ROOT / "tests" / "gpu"), aau=str(AAU))
     run = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
                          timeout=900, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
@@ -90,7 +116,7 @@ def test_the_probe_ran_the_simulator_uncompiled(probe):
 def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     sys.path.insert(0, str(ROOT / "tests" / "batch"))
     from test_lanes import _tree
-    model = md.load_urdf(AAU) if name == "aau_arm" else md.load_urdf_string(_tree())
+    model = md.load_urdf(AAU) if name == "aau_arm" else md.load_urdf_string(_tree(tool=True))
     Q, V, A = random_states(model, N, np.random.default_rng(N))
     got = {k: np.array(x) for k, x in probe[f"{name}/{N}"].items()}
     assert_close(got["rnea"], md.rnea(model, Q, V, A), 1e-14, "rnea")                        # measured ≤ 2e-16
@@ -105,6 +131,10 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     assert_close(got["frame_p"], p, 1e-14, "p")
     assert_close(got["frame_J"], md.frame_jacobian(model, Q, tip), 1e-14, "J")
     assert_close(got["frame_J_local"], md.frame_jacobian(model, Q, mid, reference="local"), 1e-14, "J local")
+    for frame in ("local", "world"):
+        tau = md.rnea(model, Q, V, A, f_ext=wrenches(model, N), f_ext_frame=frame)
+        assert_close(got["rnea_f_ext_" + frame], tau, 1e-14, f"rnea f_ext {frame}")      # measured ≤ 9.4e-16
+        assert err(got["rnea_f_ext_" + frame], got["rnea"]) > 1e-3                       # the wrenches count
 
 
 @pytest.mark.parametrize("key, kind, words", [
@@ -116,6 +146,9 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     ("frame_nan", "InputError", ["frame_jacobian on the GPU, row 5", "nan"]),
     ("rows", "InputError", ["v has 4 rows, q has 9"]),
     ("float32", "InputError", ["float64", "float32"]),
+    ("f_ext_nan", "InputError", ["rnea on the GPU, row 3", "f_ext", "force"]),
+    ("f_ext_name", "InputError", ["no_such_frame"]),
+    ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"]),
     ("free_flyer", "InputError", ["one velocity each", "root_joint"])])
 def test_gpu_errors_name_the_row_and_the_entry(probe, key, kind, words):
     got = probe["errors"][key]
