@@ -1,0 +1,44 @@
+"""Write docs/mjcf.md's table: each of gymnasium's MuJoCo assets loaded by manipdyn.load_mjcf and compared with
+MuJoCo (tests/crosscheck/test_mjcf_gymnasium.py holds the table to the files). Run from the repository root:
+``PYTHONPATH=. python scripts/mjcf_table.py``."""
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "crosscheck")]
+
+import gymnasium  # noqa: E402
+import manipdyn as md  # noqa: E402
+import mujoco  # noqa: E402
+from test_mjcf_gymnasium import ASSETS, outcome  # noqa: E402
+
+START, END = "<!-- table: scripts/mjcf_table.py -->", "<!-- end of table -->"
+
+
+def table() -> str:
+    rows = ["| file | loads? | nq, nv | max error vs MuJoCo (M, τ) | quirks, or the reason refused |",
+            "|---|---|---|---|---|"]
+    for path in ASSETS:
+        kind, value = outcome(path)
+        if kind == "loads":
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model = md.load_mjcf(path)
+            kinds = sorted({q.kind for q in model.quirks})
+            rows.append(f"| {path.name} | yes | {model.nq}, {model.nv} | {value:.1e} | {', '.join(kinds) or '—'} |")
+        else:
+            rows.append(f"| {path.name} | no | | | {value.replace('|', '/')} |")
+    return (f"gymnasium {gymnasium.__version__}, MuJoCo {mujoco.__version__}, 5 random states per file:\n\n"
+            + "\n".join(rows))
+
+
+if __name__ == "__main__":
+    doc = ROOT / "docs" / "mjcf.md"
+    text = doc.read_text()
+    head, rest = text.split(START)
+    tail = rest.split(END)[1]
+    doc.write_text(f"{head}{START}\n{table()}\n{END}{tail}")
+    print(f"wrote {doc}")
