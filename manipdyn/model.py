@@ -69,7 +69,8 @@ QUIRK_KINDS = {
     "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
                  "qpos and q = 0 is not the pose drawn in the file",
     "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
-                     "stiffness or damping); MuJoCo's mj_rne leaves them out too",
+                     "stiffness or damping, <option> fluid density, viscosity or wind); MuJoCo's mj_rne leaves them out "
+                     "too",
 }
 
 

@@ -14,13 +14,26 @@ import gymnasium  # noqa: E402
 import manipdyn as md  # noqa: E402
 import mujoco  # noqa: E402
 from test_mjcf_gymnasium import ASSETS, outcome  # noqa: E402
+from test_mjcf_import import pin_errors  # noqa: E402
 
 START, END = "<!-- table: scripts/mjcf_table.py -->", "<!-- end of table -->"
 
 
+def pinocchio(model, path) -> str:
+    """Pinocchio 4.1's buildModelFromMJCF of the file against ours: the error, or why there is none."""
+    import pinocchio as pin
+    try:
+        pm = pin.buildModelFromMJCF(str(path))
+    except Exception as exc:  # noqa: BLE001 - any failure of the third-party reader is reported as such
+        return f"does not load ({type(exc).__name__})"
+    if (pm.nq, pm.nv) != (model.nq, model.nv):
+        return f"nq, nv = {pm.nq}, {pm.nv}"
+    return f"{pin_errors(model, path):.1e}"
+
+
 def table() -> str:
-    rows = ["| file | loads? | nq, nv | max error vs MuJoCo (M, τ) | quirks, or the reason refused |",
-            "|---|---|---|---|---|"]
+    rows = ["| file | loads? | nq, nv | max error vs MuJoCo (M, τ) | vs Pinocchio | quirks, or the reason refused |",
+            "|---|---|---|---|---|---|"]
     for path in ASSETS:
         kind, value = outcome(path)
         if kind == "loads":
@@ -28,9 +41,10 @@ def table() -> str:
                 warnings.simplefilter("ignore")
                 model = md.load_mjcf(path)
             kinds = sorted({q.kind for q in model.quirks})
-            rows.append(f"| {path.name} | yes | {model.nq}, {model.nv} | {value:.1e} | {', '.join(kinds) or '—'} |")
+            rows.append(f"| {path.name} | yes | {model.nq}, {model.nv} | {value:.1e} | {pinocchio(model, path)} | "
+                        f"{', '.join(kinds) or '—'} |")
         else:
-            rows.append(f"| {path.name} | no | | | {value.replace('|', '/')} |")
+            rows.append(f"| {path.name} | no | | | | {value.replace('|', '/')} |")
     return (f"gymnasium {gymnasium.__version__}, MuJoCo {mujoco.__version__}, 5 random states per file:\n\n"
             + "\n".join(rows))
 

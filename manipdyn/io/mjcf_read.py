@@ -3,10 +3,13 @@
 What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's grammar, ``urdf._NUMBER``):
 
 - ``<compiler angle="degree|radian" eulerseq inertiafromgeom="true|false|auto" autolimits inertiagrouprange>``
-  (every ``<compiler>`` element, in file order); ``<option gravity>`` (unless ``gravity=`` is given).
+  (every ``<compiler>`` element, in file order); ``<option gravity>`` and ``<flag gravity="disable">`` (unless
+  ``gravity=`` is given).
 - ``<default>`` classes, nested; an element's attributes come from itself, else its ``class=``, else the nearest
   enclosing body's ``childclass=``, else the top-level class "main" — each class holding its ancestors' values
   (joint, geom and site attributes; others are not read).
+- A free joint's body pose in the file is MuJoCo's ``qpos0`` only: the model's free flyer sits at the world origin
+  (R0 = 1, p0 = 0) and q holds the body's pose, so ``neutral(model)`` is the identity pose, not the file's.
 - The ``<worldbody>`` tree (several ``<worldbody>`` elements are appended, as MuJoCo does), walked iteratively
   in file order, depth-first: MuJoCo's and Pinocchio's ``buildModelFromMJCF`` joint order, which is q order.
   A body frame is ``pos`` + at most one of ``quat`` (w x y z, normalised), ``euler`` (``eulerseq``: lower case
@@ -36,7 +39,8 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
 
 Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``armature``, ``damping``, ``frictionloss``,
 ``stiffness``, ``springref`` ("joint_dynamics": not applied yet; MuJoCo adds armature to M); a body's
-``gravcomp`` and a tendon's ``stiffness``/``damping`` ("passive_force": MuJoCo's mj_rne leaves them out too);
+``gravcomp``, a tendon's ``stiffness``/``damping`` and ``<option density viscosity wind>`` (fluid forces)
+("passive_force": MuJoCo's mj_rne leaves them out too);
 top-level elements not known ("unknown_element"; an error with strict=True).
 
 Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, ``<contact>``, ``<actuator>``,
@@ -232,6 +236,7 @@ class _Reader:
         self.compiler()
         self.defaults()
         self.refuse_top()
+        self.fluid()
 
     # -- numbers ---------------------------------------------------------------------------------------------
     def nums(self, e, key, counts, where, text=None):
@@ -305,12 +310,24 @@ class _Reader:
                                 f"not supported")
 
     def gravity(self):
+        """<option gravity> (MuJoCo's default [0, 0, −9.81]); zero with <option><flag gravity="disable">."""
         g = np.array([0.0, 0.0, -9.81])
         for e in self.xml.findall("option"):
             x = self.nums(e, "gravity", (3,), "option")
             if x is not None:
                 g = self.bounded(x, MAX_LENGTH, "gravity", e, "gravity", "option")
+            if any(f.get("gravity") == "disable" for f in e.findall("flag")):
+                g = np.zeros(3)
         return check_gravity(g, self.source)
+
+    def fluid(self):
+        """<option density viscosity wind>: MuJoCo's fluid forces (passive, not in mj_rne): a quirk when nonzero."""
+        for e in self.xml.findall("option"):
+            for key, n in (("density", 1), ("viscosity", 1), ("wind", 3)):
+                x = self.nums(e, key, (n,), "option")
+                if x is not None and np.any(x != 0):
+                    self.quirks.append(Quirk("passive_force", f"option {key}", f"<option {key}={_show(e.get(key))}>: "
+                                             f"fluid forces, not applied"))
 
     def defaults(self):
         """classes: name -> {tag: {attr: text}} with every ancestor class's values."""

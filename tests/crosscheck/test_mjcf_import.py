@@ -204,7 +204,7 @@ DEFAULTS = """<mujoco model="defaults">
 <worldbody>
  <body name="base" pos="0 0 0.5"><geom type="cylinder" size="0.2 0.1"/>
   <body name="upper" childclass="arm" pos="0 0 0.2"><joint name="shoulder"/><geom pos="0 0 0.1"/>
-   <body name="lower" pos="0 0 0.3"><joint name="elbow" class="main"/><geom class="main" pos="0 0 0.1"/>
+   <body name="lower" pos="0 0 0.3"><joint name="elbow" class="main"/><geom pos="0 0 0.1"/>
     <body name="hand" childclass="wrist" pos="0 0 0.3"><joint name="wrist" axis="0 0 1"/><geom/>
       <geom class="arm" pos="0.1 0 0"/></body></body></body></body>
 </worldbody></mujoco>"""
@@ -341,6 +341,16 @@ def test_quirks_name_each_joint_and_value():
     assert {x.name for x in model.quirks if x.kind == "joint_ref"} == {"ry", "hip", "knee"}
 
 
+def test_option_gravity_flag_and_fluid_forces():
+    text = FREE.replace('<option gravity="0.5 -1 -9"/>', '<option gravity="0.5 -1 -9" density="1.2" viscosity="1e-5">'
+                        '<flag gravity="disable"/></option>')
+    with pytest.warns(md.QuirkWarning, match="passive_force"):
+        ours = md.load_mjcf_string(text)
+    assert not ours.gravity.any()
+    assert {q.name for q in ours.quirks if q.kind == "passive_force"} == {"option density", "option viscosity"}
+    assert mujoco_errors(ours, mujoco.MjModel.from_xml_string(text)) <= MJ       # measured 4.4e-16
+
+
 def test_inertiafromgeom_false_and_true():
     base = ('<mujoco><compiler inertiafromgeom="{}"/><worldbody><body><joint/>'
             '<inertial pos="0.1 0 0" mass="2" diaginertia="0.1 0.1 0.1"/><geom type="sphere" size="0.2"/>'
@@ -349,6 +359,13 @@ def test_inertiafromgeom_false_and_true():
         text = base.format(mode)
         ours, m = quiet(md.load_mjcf_string, text), mujoco.MjModel.from_xml_string(text)
         assert err([ours.mass[0]], [m.body_mass[1]]) <= MASS and err(ours.com[0], m.body_ipos[1]) <= MASS
+
+
+def test_settotalmass_scales_every_body():
+    text = PRIMITIVES.replace('<compiler angle="radian"/>', '<compiler angle="radian" settotalmass="7.5"/>')
+    ours, m = quiet(md.load_mjcf_string, text), mujoco.MjModel.from_xml_string(text)
+    assert err(ours.mass, m.body_mass[1:]) <= MASS and abs(ours.mass.sum() - 7.5) <= 1e-14   # measured 2.2e-17, 8.9e-16
+    assert mujoco_errors(ours, m) <= MJ
 
 
 def test_load_model_chooses_the_reader_by_content(tmp_path):
