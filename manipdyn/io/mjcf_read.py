@@ -30,6 +30,8 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   ``<inertial>``): sphere, capsule, cylinder, box, ellipsoid, solid, density 1000 kg/m³ unless the geom's
   (or its class's) ``density``, a geom's ``mass`` overriding it; only geoms of groups within
   ``inertiagrouprange``. The formulas are MuJoCo's (checked against ``model.body_mass``, ``body_inertia``).
+- ``<frame pos orientation childclass>`` (nested too): its bodies, joints, inertial, geoms and sites are placed
+  through it, as MuJoCo does (a frame is not a body: nothing of it remains in the model).
 - Sites, and every named body, become frames of the model (``Model.frames``; ``frame_placement`` of a body's
   name is MuJoCo's ``xpos``/``xmat``). Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``,
   ``site<id>`` with MuJoCo's ids. The world is the fixed base, named "world".
@@ -50,7 +52,7 @@ and lights, a geom's contact and visual attributes, geoms that do not give mass,
 Refused (MJCFError naming the file, the element and what is not supported): ``ball`` joints ("ball joint: not
 supported yet"), a free joint below the root or beside another joint, ``<equality>`` (closures: a later stage), tendons with ``armature``, ``mesh``, ``hfield``,
 ``plane`` and ``sdf`` geoms that would give mass, ``shellinertia``, ``fromto`` on boxes and ellipsoids,
-``<frame>``, ``<composite>``, ``<flexcomp>``, ``<replicate>``, ``<attach>``, ``<plugin>`` in a body,
+``<composite>``, ``<flexcomp>``, ``<replicate>``, ``<attach>``, ``<plugin>`` in a body,
 ``<compiler>`` options that change masses (``boundmass``, ``boundinertia``,
 ``balanceinertia="true"``) or frames (``coordinate="global"``); several orientations on one element.
 
@@ -86,7 +88,7 @@ DEFAULT_DENSITY = 1000.0   # MuJoCo's geom density
 
 _ORIENT = ("quat", "euler", "axisangle", "xyaxes", "zaxis")
 _BODY_CHILDREN = {"inertial", "joint", "freejoint", "geom", "site", "body", "camera", "light"}
-_REFUSED_BODY_CHILDREN = {"frame", "composite", "flexcomp", "replicate", "attach", "plugin"}
+_REFUSED_BODY_CHILDREN = {"composite", "flexcomp", "replicate", "attach", "plugin"}
 _TOP = {"compiler", "option", "size", "visual", "statistic", "default", "extension", "custom", "asset",
         "worldbody", "contact", "equality", "deformable", "tendon", "actuator", "sensor", "keyframe"}
 _MASS_GEOMS = ("sphere", "capsule", "cylinder", "box", "ellipsoid")
@@ -436,44 +438,42 @@ class _Reader:
         self.ids = {"body": 0, "joint": 0, "site": 0}            # MuJoCo's ids: depth-first, file order
         stack = []
         for wb in self.xml.findall("worldbody"):
-            for c in wb:
-                if isinstance(c.tag, str) and c.tag in ("joint", "freejoint", "inertial"):
+            items = self.expand(wb, "main", "<worldbody>")
+            for c, *_ in items:
+                if c.tag in ("joint", "freejoint", "inertial"):
                     raise MJCFError(f"{src}: <worldbody> holds a <{c.tag}>: the world cannot move")
-            self.sites(wb, -1, np.eye(3), np.zeros(3), "main", frames)
-        for wb in reversed(self.xml.findall("worldbody")):
-            stack += [(c, -1, np.eye(3), np.zeros(3), "main") for c in reversed(wb) if c.tag == "body"]
+            self.sites(items, -1, np.eye(3), np.zeros(3), frames)
+            stack += [(c, -1, Rf, pf, cf) for c, Rf, pf, cf, _ in items if c.tag == "body"]
+        stack.reverse()
         while stack:
             e, b, Rp, pp, cc = stack.pop()
             self.tick()
             self.ids["body"] += 1
             name = self.unique(e.get("name") or f"body{self.ids['body']}", "body")
             where = f"body {name!r}"
-            for c in e:
-                if isinstance(c.tag, str) and c.tag not in _BODY_CHILDREN:
-                    why = "not supported yet" if c.tag in _REFUSED_BODY_CHILDREN else "not an MJCF body element"
-                    raise MJCFError(f"{src}: {where}: <{c.tag}>: {why}")
             cc_here = e.get("childclass", cc)
             if cc_here not in self.classes:
                 raise MJCFError(f"{src}: {where}: childclass={_show(cc_here)}: no such default class")
+            items = self.expand(e, cc_here, where)
             Rb, pb = self.frame(e, None, where)
             R, p = Rp @ Rb, pp + Rp @ pb                        # the MJCF body's frame in our body b
-            jels = [c for c in e if c.tag in ("joint", "freejoint")]
+            jels = [(c, Rf, pf) for c, Rf, pf, *_ in items if c.tag in ("joint", "freejoint")]
             if not jels:                                        # welded to its parent: merged
                 merged[joints[b]["body"] if b >= 0 else "world"].append(name)
             anchor = None
-            for k, j in enumerate(jels):
-                b, R, p, anchor = self.joint(j, k, len(jels), name, cc_here, joints, b, R, p, anchor)
+            for k, (j, Rf, pf) in enumerate(jels):
+                b, R, p, anchor = self.joint(j, Rf, pf, k, len(jels), name, cc_here, joints, b, R, p, anchor)
                 parts[b], merged[joints[b]["body"]] = [], []
                 if joints[b]["body"] != name:                   # a massless body between two joints
                     frames[joints[b]["body"]] = Frame(joints[b]["body"], b, np.eye(3), np.zeros(3))
             frames[name] = Frame(name, b, R, p)
-            m, c, Ic = self.body_inertia(e, cc_here, where)
+            m, c, Ic = self.body_inertia(e, items, where)
             parts[b].append((m, p + R @ c, R @ Ic @ R.T))
             g = e.get("gravcomp")
             if g is not None and self.nums(e, "gravcomp", (1,), where)[0] != 0:
                 self.quirks.append(Quirk("passive_force", name, f"gravcomp {e.get('gravcomp')}: not applied"))
-            self.sites(e, b, R, p, cc_here, frames)
-            stack += [(c, b, R, p, cc_here) for c in reversed(e) if c.tag == "body"]
+            self.sites(items, b, R, p, frames)
+            stack += [(c, b, R @ Rf, p + R @ pf, cf) for c, Rf, pf, cf, _ in reversed(items) if c.tag == "body"]
         if self.total is not None:                              # <compiler settotalmass>: every body scaled
             m_all = sum(m for ps in parts.values() for m, _, _ in ps)
             if m_all <= 0:
@@ -482,9 +482,32 @@ class _Reader:
             parts = {b: [(k * m, c, k * I) for m, c, I in ps] for b, ps in parts.items()}
         return self.assemble(joints, parts, frames, merged, gravity, non_psd_inertia)
 
-    def sites(self, e, b, R, p, cc, frames):
-        """The <site> children of e as frames of our body b, in which e's frame is (R, p)."""
-        for s in e:
+    def expand(self, e, cc, where):
+        """The children of a body (or the world) with <frame> elements flattened, in file order: [(element, R, p,
+        class in force, inside a frame?)], (R, p) the element's frame-of-reference in the body's frame (the
+        product of the enclosing frames' pos + orientation; identity outside frames). Iterative."""
+        out, stack = [], [(c, np.eye(3), np.zeros(3), cc, False) for c in reversed(e)]
+        while stack:
+            c, Rf, pf, cf, framed = stack.pop()
+            if not isinstance(c.tag, str):
+                continue
+            if c.tag not in _BODY_CHILDREN | {"frame"}:
+                why = "not supported yet" if c.tag in _REFUSED_BODY_CHILDREN else "not an MJCF body element"
+                raise MJCFError(f"{self.source}: {where}: <{c.tag}>: {why}")
+            if c.tag != "frame":
+                out.append((c, Rf, pf, cf, framed))
+                continue
+            self.tick()
+            cn = c.get("childclass", cf)
+            if cn not in self.classes:
+                raise MJCFError(f"{self.source}: {where}: <frame childclass={_show(cn)}>: no such default class")
+            R2, p2 = self.frame(c, None, f"{where}: <frame name={c.get('name')!r}>")
+            stack += [(x, Rf @ R2, pf + Rf @ p2, cn, True) for x in reversed(c)]
+        return out
+
+    def sites(self, items, b, R, p, frames):
+        """The <site> items (expand's rows) as frames of our body b, in which their body's frame is (R, p)."""
+        for s, Rf, pf, cc, _ in items:
             if s.tag != "site":
                 continue
             self.tick()
@@ -492,11 +515,12 @@ class _Reader:
             name = self.unique(s.get("name") or f"site{self.ids['site'] - 1}", "site")
             cls = self.cls(s, cc)
             Rs, ps = self.fromto(s, cls, f"site {name!r}", *self.frame(s, cls, f"site {name!r}"))
-            frames[name] = Frame(name, b, R @ Rs, p + R @ ps)
+            frames[name] = Frame(name, b, R @ Rf @ Rs, p + R @ (pf + Rf @ ps))
 
-    def joint(self, j, k, n, body, cls, joints, b, R, p, anchor):
-        """Joint k of n in MJCF body ``body`` whose frame is (R, p) in our body b: appends it to ``joints``;
-        returns (its body, the MJCF body's frame in it, its anchor)."""
+    def joint(self, j, Rf, pf, k, n, body, cls, joints, b, R, p, anchor):
+        """Joint k of n in MJCF body ``body`` whose frame is (R, p) in our body b, the joint placed through (Rf, pf)
+        (its <frame>s; identity outside) in the body: appends it to ``joints``; returns (its body, the MJCF body's
+        frame in it, its anchor in the MJCF body's frame)."""
         src = self.source
         self.tick()
         self.ids["joint"] += 1
@@ -523,7 +547,7 @@ class _Reader:
         if not np.any(u):
             raise MJCFError(f"{src}: {jw}: <joint axis={_show(self.attr(j, 'axis', jcls))}> has no direction")
         u = u / np.max(np.abs(u))
-        u = u / np.linalg.norm(u)
+        a, u = pf + Rf @ a, Rf @ (u / np.linalg.norm(u))        # through the enclosing <frame>s, if any
         self.joint_quirks(j, jcls, jname, jw, kind)
         lim, cont = self.limits(j, jcls, jw, kind)
         # mj_kinematics: each joint turns the body about its anchor, in the frame the previous joints left
@@ -582,15 +606,19 @@ class _Reader:
         return (float(lo), float(hi)), False
 
     # -- mass ------------------------------------------------------------------------------------------------
-    def body_inertia(self, e, cc, where):
-        """(m, c, I about c) of one MJCF body in its own frame."""
-        inertial = e.find("inertial")
-        geoms = [g for g in e if g.tag == "geom"]
+    def body_inertia(self, e, items, where):
+        """(m, c, I about c) of one MJCF body in its own frame (items: its children, expand's rows)."""
+        ins = [(x, Rf, pf) for x, Rf, pf, *_ in items if x.tag == "inertial"]
+        if len(ins) > 1:
+            raise MJCFError(f"{self.source}: {where}: several <inertial> elements")
+        inertial, Ri, pi = ins[0] if ins else (None, None, None)
+        geoms = [(g, Rf, pf, cc) for g, Rf, pf, cc, _ in items if g.tag == "geom"]
         for _ in geoms:
             self.tick()
         use = self.fromgeom == "true" or (self.fromgeom == "auto" and inertial is None)
         if use:
-            parts = [x for g in geoms for x in self.geom_inertia(g, self.cls(g, cc), where)]
+            parts = [(m, pf + Rf @ c, Rf @ I @ Rf.T) for g, Rf, pf, cc in geoms
+                     for m, c, I in self.geom_inertia(g, self.cls(g, cc), where)]
             return combine_inertias(parts) if parts else (0.0, np.zeros(3), np.zeros((3, 3)))
         if inertial is None:
             return 0.0, np.zeros(3), np.zeros((3, 3))
@@ -604,6 +632,8 @@ class _Reader:
         self.bounded(np.array([m]), MAX_MASS, "mass (kg)", inertial, "mass", w)
         if inertial.get("fullinertia") is not None and any(inertial.get(k) is not None for k in _ORIENT):
             raise MJCFError(f"{self.source}: {w}: fullinertia with an orientation (MuJoCo refuses it too)")
+        if inertial.get("pos") is None:
+            raise MJCFError(f"{self.source}: {w} has no pos attribute (MuJoCo requires it)")
         R, c = self.frame(inertial, None, w)
         diag, full = (self.nums(inertial, k, (n,), w) for k, n in (("diaginertia", 3), ("fullinertia", 6)))
         if (diag is None) == (full is None):
@@ -619,7 +649,7 @@ class _Reader:
             I = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
         if m == 0 and self.zmi == "drop":
             return 0.0, np.zeros(3), np.zeros((3, 3))
-        return m, c, 0.5 * (I + I.T)
+        return m, pi + Ri @ c, Ri @ (0.5 * (I + I.T)) @ Ri.T
 
     def geom_inertia(self, g, cls, where):
         """[(m, c, I_c)] of one geom in the body frame ([] when it gives no mass), MuJoCo's solid formulas."""

@@ -59,8 +59,8 @@ def test_numbers_outside_the_grammar_name_the_element(value):
     ("pos", '<body name="c" pos="1 2"><joint/></body>'),
     ("quat", '<body name="c" quat="1 0 0"><joint/></body>'),
     ("axis", None),
-    ("diaginertia", '<body name="c"><joint/><inertial mass="1" diaginertia="1 1"/></body>'),
-    ("fullinertia", '<body name="c"><joint/><inertial mass="1" fullinertia="1 1 1 0 0"/></body>'),
+    ("diaginertia", '<body name="c"><joint/><inertial pos="0 0 0" mass="1" diaginertia="1 1"/></body>'),
+    ("fullinertia", '<body name="c"><joint/><inertial pos="0 0 0" mass="1" fullinertia="1 1 1 0 0"/></body>'),
     ("xyaxes", '<body name="c" xyaxes="1 0 0 0 1"><joint/></body>'),
 ])
 def test_wrong_vector_lengths(where, text):
@@ -73,7 +73,7 @@ def test_wrong_vector_lengths(where, text):
 def test_bounds_and_signs():
     refused(doc(body='<body name="c" pos="1e7 0 0"><joint/></body>'), "body 'c'", "bound")
     refused(doc(geom='<geom type="sphere" size="0.1" mass="1e13"/>'), "bound")
-    refused(doc(body='<body name="c"><joint/><inertial mass="-1" diaginertia="1 1 1"/></body>'), "negative mass")
+    refused(doc(body='<body name="c"><joint/><inertial pos="0 0 0" mass="-1" diaginertia="1 1 1"/></body>'), "negative mass")
     refused(doc(geom='<geom type="sphere" size="0.1" density="1e9"/>'), "density")
     refused(doc(geom='<geom type="box" size="0.1 0.2"/>'), "box", "3 positive size")
     refused(doc(joint='<joint name="j" axis="0 0 0"/>'), "joint 'j'", "no direction")
@@ -95,7 +95,9 @@ def test_unsupported_features_are_named():
             "tendon 't'", "armature")
     refused(doc(top='<asset><mesh name="m" file="m.stl"/></asset>', geom='<geom type="mesh" mesh="m"/>'),
             "mesh inertia is not supported yet")
-    refused(doc(body='<frame pos="1 0 0"><body name="c"/></frame>'), "<frame>", "not supported yet")
+    refused(doc(body='<frame pos="1 0 0"><composite type="grid"/></frame>'), "<composite>", "not supported yet")
+    refused(doc(body='<body name="c"><joint/><inertial mass="1" diaginertia="1 1 1"/></body>'), "no pos attribute")
+    refused(doc(body='<frame pos="1 0 0"><body name="c"><joint class="nope"/></body></frame>'), "no such default")
     refused(doc(body='<composite type="grid"/>'), "<composite>")
     refused(doc(top='<compiler boundmass="0.1"/>'), "boundmass")
     refused(doc(geom='<geom type="box" fromto="0 0 0 1 0 0" size="0.1"/>'), "fromto on a box")
