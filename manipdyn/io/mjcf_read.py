@@ -40,17 +40,19 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   towards ``max_bytes``.
 
 Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``armature``, ``damping``, ``frictionloss``,
-``stiffness``, ``springref`` ("joint_dynamics": not applied yet; MuJoCo adds armature to M); a body's
+``stiffness``, ``springref``, ``springdamper`` ("joint_dynamics": not applied yet; MuJoCo adds armature to M); a body's
 ``gravcomp``, a tendon's ``stiffness``/``damping`` and ``<option density viscosity wind>`` (fluid forces)
 ("passive_force": MuJoCo's mj_rne leaves them out too);
-top-level elements not known ("unknown_element"; an error with strict=True).
+top-level elements not known, and attributes outside MuJoCo's schema on the elements read (``_ATTRS``: body, frame,
+inertial, joint, freejoint, geom, site, compiler, option) ("unknown_element"; an error with strict=True).
 
 Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, ``<contact>``, ``<actuator>``,
 ``<sensor>``, ``<visual>``, ``<statistic>``, ``<size>``, ``<keyframe>``, ``<custom>``, ``<extension>``, cameras
 and lights, a geom's contact and visual attributes, geoms that do not give mass, fixed tendons without armature.
 
 Refused (MJCFError naming the file, the element and what is not supported): ``ball`` joints ("ball joint: not
-supported yet"), a free joint below the root or beside another joint, ``<equality>`` (closures: a later stage), tendons with ``armature``, ``mesh``, ``hfield``,
+supported yet"), a free joint below the root or beside another joint, a free joint's ``align`` (or ``<compiler
+alignfree>``), ``<equality>`` (closures: a later stage), tendons with ``armature``, ``mesh``, ``hfield``,
 ``plane`` and ``sdf`` geoms that would give mass, ``shellinertia``, ``fromto`` on boxes and ellipsoids,
 ``<composite>``, ``<flexcomp>``, ``<replicate>``, ``<attach>``, ``<plugin>`` in a body,
 ``<compiler>`` options that change masses (``boundmass``, ``boundinertia``,
@@ -93,6 +95,32 @@ _TOP = {"compiler", "option", "size", "visual", "statistic", "default", "extensi
         "worldbody", "contact", "equality", "deformable", "tendon", "actuator", "sensor", "keyframe"}
 _MASS_GEOMS = ("sphere", "capsule", "cylinder", "box", "ellipsoid")
 _DYNAMICS = ("armature", "damping", "frictionloss", "stiffness", "springref")
+
+# The attributes of MuJoCo 3-4's schema on the elements the reader interprets (MJCF XML reference); any other is
+# reported as an "unknown_element" quirk (MuJoCo refuses the file; an error with strict=True).
+_O = ("pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
+_ATTRS = {
+    "body": {"name", "childclass", "mocap", "gravcomp", "user", "sleep", *_O},
+    "frame": {"name", "childclass", *_O},
+    "inertial": {"mass", "diaginertia", "fullinertia", *_O},
+    "joint": {"name", "class", "type", "group", "pos", "axis", "springdamper", "limited", "actuatorfrclimited",
+              "solreflimit", "solimplimit", "solreffriction", "solimpfriction", "stiffness", "range",
+              "actuatorfrcrange", "actuatorgravcomp", "margin", "ref", "springref", "armature", "damping",
+              "frictionloss", "user"},
+    "freejoint": {"name", "group", "align"},
+    "geom": {"name", "class", "type", "contype", "conaffinity", "condim", "group", "priority", "size", "material",
+             "rgba", "friction", "mass", "density", "shellinertia", "solmix", "solref", "solimp", "margin", "gap",
+             "fromto", "hfield", "mesh", "fitscale", "fluidshape", "fluidcoef", "user", *_O},
+    "site": {"name", "class", "type", "group", "material", "size", "fromto", "rgba", "user", *_O},
+    "compiler": {"autolimits", "boundmass", "boundinertia", "settotalmass", "balanceinertia", "strippath",
+                 "coordinate", "angle", "fitaabb", "eulerseq", "meshdir", "texturedir", "assetdir", "discardvisual",
+                 "usethread", "fusestatic", "inertiafromgeom", "inertiagrouprange", "saveinertial", "alignfree",
+                 "exactmeshinertia", "maxhullvert"},
+    "option": {"timestep", "apirate", "impratio", "tolerance", "ls_tolerance", "noslip_tolerance", "ccd_tolerance",
+               "sleep_tolerance", "gravity", "wind", "magnetic", "density", "viscosity", "o_margin", "o_solref",
+               "o_solimp", "o_friction", "integrator", "cone", "jacobian", "solver", "iterations", "ls_iterations",
+               "noslip_iterations", "ccd_iterations", "sdf_iterations", "sdf_initpoints", "actuatorgroupdisable"},
+}
 
 
 def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=None, tips=None, prune=False,
@@ -235,10 +263,24 @@ class _Reader:
                     raise MJCFError(f"{source}: <{e.tag}> under <mujoco> is not an MJCF element manipdyn reads "
                                     f"(strict=True)")
                 quirks.append(Quirk("unknown_element", f"<{e.tag}>", f"<{e.tag}> under <mujoco>: not read"))
+        for e in xml:
+            if isinstance(e.tag, str) and e.tag in ("compiler", "option"):
+                self.known(e, f"<{e.tag}>")
         self.compiler()
         self.defaults()
         self.refuse_top()
         self.fluid()
+
+    def known(self, e, where):
+        """Attributes of e outside MuJoCo's schema: an "unknown_element" quirk each (an error with strict=True)."""
+        if e.tag not in _ATTRS:                                 # cameras, lights: not read at all
+            return
+        for key in e.keys():
+            if key not in _ATTRS[e.tag]:
+                detail = f"{where}: <{e.tag} {key}={_show(e.get(key))}>: not an MJCF attribute manipdyn knows; not read"
+                if self.strict:
+                    raise MJCFError(f"{self.source}: {detail} (strict=True)")
+                self.quirks.append(Quirk("unknown_element", f"<{e.tag} {key}>", detail))
 
     # -- numbers ---------------------------------------------------------------------------------------------
     def nums(self, e, key, counts, where, text=None):
@@ -295,6 +337,7 @@ class _Reader:
         if self.fromgeom not in ("true", "false", "auto"):
             raise MJCFError(f"{src}: <compiler inertiafromgeom={_show(self.fromgeom)}>: expected true, false or auto")
         self.autolimits = c.get("autolimits", "true") == "true"
+        self.alignfree = c.get("alignfree", "false")
         e = next(iter(self.xml.findall("compiler")), None)
         rng = [0, 5]
         if "inertiagrouprange" in c:
@@ -455,6 +498,11 @@ class _Reader:
             if cc_here not in self.classes:
                 raise MJCFError(f"{src}: {where}: childclass={_show(cc_here)}: no such default class")
             items = self.expand(e, cc_here, where)
+            self.known(e, where)
+            for c, *_ in items:
+                self.known(c, f"{where}: <{c.tag} name={c.get('name')!r}>" if c.get("name") else f"{where}: <{c.tag}>")
+            if e.get("mocap") not in (None, "false") and b != -1:
+                raise MJCFError(f"{src}: {where}: mocap body below another body (MuJoCo refuses it too)")
             Rb, pb = self.frame(e, None, where)
             R, p = Rp @ Rb, pp + Rp @ pb                        # the MJCF body's frame in our body b
             jels = [(c, Rf, pf) for c, Rf, pf, *_ in items if c.tag in ("joint", "freejoint")]
@@ -501,6 +549,7 @@ class _Reader:
             cn = c.get("childclass", cf)
             if cn not in self.classes:
                 raise MJCFError(f"{self.source}: {where}: <frame childclass={_show(cn)}>: no such default class")
+            self.known(c, f"{where}: <frame name={c.get('name')!r}>")
             R2, p2 = self.frame(c, None, f"{where}: <frame name={c.get('name')!r}>")
             stack += [(x, Rf @ R2, pf + Rf @ p2, cn, True) for x in reversed(c)]
         return out
@@ -535,10 +584,13 @@ class _Reader:
             raise MJCFError(f"{src}: {jw}: ball joint: not supported yet")
         if kind not in ("hinge", "slide", "free"):
             raise MJCFError(f"{src}: {jw}: type {_show(kind)}: unknown joint type (hinge, slide, ball, free)")
+        if kind == "free" and (j.get("align") or self.alignfree) in ("true",):
+            raise MJCFError(f"{src}: {jw}: align / <compiler alignfree> (the free body's frame moved to its inertial "
+                            f"frame): not supported yet")
         if kind == "free":                                  # q holds the body's pose in the world
             if joints or b != -1 or n > 1:
-                raise MJCFError(f"{src}: {jw}: a free joint is supported as the first joint of the tree only, "
-                                f"alone in a top-level body (the model's one free flyer)")
+                raise MJCFError(f"{src}: {jw}: a free joint that is not the tree's first joint, alone in a top-level "
+                                f"body: not supported yet (the model has one free flyer, joint 0)")
             joints.append(dict(name=jname, body=body, kind=FREEFLYER, parent=-1, R0=np.eye(3), p0=np.zeros(3),
                                axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False))
             return 0, np.eye(3), np.zeros(3), np.zeros(3)
@@ -587,6 +639,9 @@ class _Reader:
             x = self.num(j, key, jcls, jw)
             if x is not None and x[0] != 0:
                 found.append(f"{key} {x[0]:g}")
+        sd = self.num(j, "springdamper", jcls, jw, (2,))
+        if sd is not None and np.any(sd != 0):
+            found.append(f"springdamper {sd[0]:g} {sd[1]:g}")
         if found:
             self.quirks.append(Quirk("joint_dynamics", jname, ", ".join(found) + ": read, not applied yet"))
 

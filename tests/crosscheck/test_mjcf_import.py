@@ -13,7 +13,7 @@ Measured (this VM, MuJoCo 4.0, Pinocchio 4.1), §3 error measure:
   masses, CoMs and inertias of each primitive and orientation against MuJoCo's body_* arrays ≤ 1.9e-15 —
   MASS = 5e-14; sites and bodies against site_xpos/site_xmat, xpos/xmat ≤ 5.6e-16 — SITE = 1e-14;
 - Pinocchio's buildModelFromMJCF on the exports and on snippets it reads as MuJoCo does: ≤ 8.9e-16 — PIN = 5e-14;
-- gymnasium's MuJoCo assets: tests/crosscheck/test_mjcf_gymnasium.py, docs/mjcf.md.
+- third-party files (gymnasium's MuJoCo assets, pybullet_data/mjcf): tests/crosscheck/test_mjcf_third_party.py, docs/mjcf.md.
 """
 from __future__ import annotations
 
@@ -68,6 +68,8 @@ def mujoco_errors(model, m, n=5, seed=0):
     and M rows for the linear dofs in world axes (τ_mj = Tᵀ τ, M_mj = Tᵀ M T with v = T v_mj)."""
     names = [m.joint(j).name or f"joint{j}" for j in range(m.njnt)]         # the reader's names of unnamed ones
     assert names == list(model.joint_names), (names, model.joint_names)
+    if not model.nv:
+        return 0.0
     d, rng, worst = mujoco.MjData(m), np.random.default_rng(seed), 0.0
     iv = np.concatenate([np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + model.nvs[j]) for j in range(m.njnt)]) \
         if m.njnt else np.zeros(0, int)
@@ -349,11 +351,12 @@ def test_sites_and_bodies_are_frames_at_mujocos_placements(name):
 
 def test_quirks_name_each_joint_and_value():
     text = MULTI.replace('name="hip" axis', 'name="hip" armature="0.1" damping="2" frictionloss="0.3" axis') \
-        .replace('name="arm" axis', 'name="arm" stiffness="5" springref="0.2" axis')
+        .replace('name="arm" axis', 'name="arm" stiffness="5" springref="0.2" axis') \
+        .replace('name="x" type', 'name="x" springdamper="0.5 1" type')
     with pytest.warns(md.QuirkWarning, match="joint_dynamics"):
         model = md.load_mjcf_string(text)
     q = {x.name: x.detail for x in model.quirks if x.kind == "joint_dynamics"}
-    assert set(q) == {"hip", "arm"}
+    assert set(q) == {"hip", "arm", "x"} and "springdamper 0.5 1" in q["x"]
     assert "armature 0.1" in q["hip"] and "damping 2" in q["hip"] and "frictionloss 0.3" in q["hip"]
     assert "stiffness 5" in q["arm"] and "springref 0.2" in q["arm"]
     assert {x.name for x in model.quirks if x.kind == "joint_ref"} == {"ry", "hip", "knee"}

@@ -114,6 +114,16 @@ def test_unknown_top_level_elements_are_quirks_or_errors_with_strict():
     refused(doc(top="<gadget/>"), "<gadget>", "strict", strict=True)
 
 
+def test_attributes_outside_mujocos_schema_are_quirks_or_errors_with_strict():
+    text = doc(joint='<joint name="j" axis="0 1 0" dampng="3"/>', top='<option collision="all"/>')
+    with pytest.warns(md.QuirkWarning, match="unknown_element"):
+        m = load_mjcf_string(text)
+    assert {q.name for q in m.quirks if q.kind == "unknown_element"} == {"<joint dampng>", "<option collision>"}
+    refused(text, "<option collision='all'>", "strict", strict=True)
+    refused(doc(joint='<freejoint name="f" align="true"/>'), "joint 'f'", "align")
+    refused(doc(top='<compiler alignfree="true"/>', joint='<freejoint name="f"/>'), "joint 'f'", "alignfree")
+
+
 def test_counts_are_bounded(monkeypatch):
     monkeypatch.setattr(mjcf_read, "MAX_BODIES", 5)
     refused(doc(body="".join(f'<site name="s{k}"/>' for k in range(6))), "more than 5")
