@@ -702,6 +702,10 @@ class _Reader:
         else:
             xx, yy, zz, xy, xz, yz = full
             I = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+        if m == 0 and np.any(I):
+            self.quirks.append(Quirk("zero_mass_inertia", where.split(" ", 1)[1].strip("'"), "mass 0, inertia "
+                                     f"{np.round(I, 12).tolist()}: " + ("kept (Pinocchio's behaviour)" if self.zmi == "keep"
+                                                                       else "dropped (zero_mass_inertia='drop')")))
         if m == 0 and self.zmi == "drop":
             return 0.0, np.zeros(3), np.zeros((3, 3))
         return m, pi + Ri @ c, Ri @ (0.5 * (I + I.T)) @ Ri.T
@@ -761,7 +765,7 @@ class _Reader:
         bad = _triangle([I for _, _, I in inertias], [j["body"] for j in joints], src, self.strict)
         self.quirks += [Quirk("triangle", n, msg) for n, msg in bad]
         order = list(QUIRK_KINDS)
-        name = self.xml.get("model") or os.path.splitext(os.path.basename(src))[0] or "mjcf"
+        name = self.xml.get("model") or ("mjcf" if src.startswith("<") else os.path.splitext(os.path.basename(src))[0])
         lim = np.array([j["lim"] for j in joints], float).reshape(nb, 2)
         return Model(
             name=name, root_link="world", joint_names=tuple(j["name"] for j in joints),

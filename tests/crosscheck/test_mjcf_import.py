@@ -389,6 +389,33 @@ def test_settotalmass_scales_every_body():
     assert mujoco_errors(ours, m) <= MJ
 
 
+def test_joint_limits_in_radians_and_metres():
+    ours, m = quiet(md.load_mjcf_string, FREE), mujoco.MjModel.from_xml_string(FREE)
+    for j in range(1, m.njnt):
+        i = ours.joint_index(m.joint(j).name)
+        lo, hi = (m.jnt_range[j] if m.jnt_limited[j] else (-np.inf, np.inf))
+        assert (ours.lower[i], ours.upper[i]) == pytest.approx((lo, hi), rel=1e-15)
+        assert ours.continuous[i] == (not m.jnt_limited[j] and m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE)
+
+
+def test_load_keywords(tmp_path):
+    path = _write(tmp_path, "defaults", DEFAULTS)
+    assert np.array_equal(quiet(md.load_mjcf, path, gravity=(0, 0, -1)).gravity, [0, 0, -1])
+    locked = quiet(md.load_mjcf, path, locked={"elbow": 0.3})
+    full = quiet(md.load_mjcf, path)
+    q = np.array([0.2, 0.3, -0.1])
+    assert locked.joint_names == ("shoulder", "wrist")
+    assert err(md.mass_matrix(locked, q[[0, 2]]), md.mass_matrix(full, q)[np.ix_([0, 2], [0, 2])]) <= 1e-15
+    zero = DEFAULTS.replace('<geom/>', '<geom/><inertial pos="0 0 0" mass="0" diaginertia="0.1 0.1 0.1"/>')
+    kept, dropped = (quiet(md.load_mjcf_string, zero, zero_mass_inertia=k) for k in ("keep", "drop"))
+    assert kept.inertia[2].trace() == pytest.approx(0.3) and not dropped.inertia[2].any()
+    assert ("zero_mass_inertia", "hand") in {(x.kind, x.name) for x in kept.quirks}
+    bad = DEFAULTS.replace('<geom/>', '<geom/><inertial pos="0 0 0" mass="1" fullinertia="1 1 1 2 0 0"/>')
+    with pytest.raises(md.ModelError, match="not positive semi-definite"):
+        quiet(md.load_mjcf_string, bad)
+    assert "non_psd_inertia" in {x.kind for x in quiet(md.load_mjcf_string, bad, non_psd_inertia="keep").quirks}
+
+
 def test_load_model_chooses_the_reader_by_content(tmp_path):
     mj = _write(tmp_path, "arm.urdf", DEFAULTS)                 # MJCF behind a .urdf name
     ur = tmp_path / "arm.xml"
