@@ -185,7 +185,7 @@ def _confined(name, base_dir, source):
         raise MJCFError(f"{source}: <include file={_show(name or '')}>: includes need a folder (load_mjcf of a file, "
                         f"or base_dir= for text)")
     if not name or "\x00" in name or os.path.isabs(name) or name.startswith(("/", "\\")) or ":" in name:
-        raise MJCFError(f"{source}: <include file={_show(name or '')}>: an absolute or empty path is refused "
+        raise MJCFError(f"{source}: <include file={_show(name or '')}>: an absolute, URL or empty path is refused "
                         f"(includes are relative to the model's folder)")
     base = os.path.realpath(base_dir)
     real = os.path.realpath(os.path.join(base, name))
@@ -513,6 +513,7 @@ class _Reader:
                 b, R, p, anchor = self.joint(j, Rf, pf, k, len(jels), name, cc_here, joints, b, R, p, anchor)
                 parts[b], merged[joints[b]["body"]] = [], []
                 if joints[b]["body"] != name:                   # a massless body between two joints
+                    self.unique(joints[b]["body"], "body between two joints")
                     frames[joints[b]["body"]] = Frame(joints[b]["body"], b, np.eye(3), np.zeros(3))
             frames[name] = Frame(name, b, R, p)
             m, c, Ic = self.body_inertia(e, items, where)

@@ -105,6 +105,7 @@ def test_unsupported_features_are_named():
     refused(doc(body='<body name="c"><joint class="nope"/></body>'), "no such default class")
     refused(doc(body='<body name="b"><joint/></body>'), "'b'", "used twice")
     refused(doc(body='<site name="b"/>'), "'b'", "used twice")
+    refused(doc(joint='<joint name="j"/><joint name="k"/>', body='<body name="b:j"/>'), "'b:j'", "used twice")
 
 
 def test_unknown_top_level_elements_are_quirks_or_errors_with_strict():
@@ -159,7 +160,8 @@ def test_an_include_inside_the_folder_loads(tmp_path):
     ("../outside.xml", ("outside the model's folder",)),
     ("sub/../../outside.xml", ("outside the model's folder",)),
     ("/etc/hostname", ("absolute",)),
-    ("", ("absolute or empty",)),
+    ("", ("absolute, URL or empty",)),
+    ("http://example.com/x.xml", ("absolute, URL or empty",)),
     ("missing.xml", ("no such file",)),
 ])
 def test_includes_that_escape_or_miss_are_refused(tmp_path, include, words):
