@@ -9,9 +9,10 @@ Measured (this VM, MuJoCo 4.0, Pinocchio 4.1), §3 error measure:
 - round trip (aau_arm, ur5, panda, kinova, baxter, a random tree, solo12 with a free flyer): ≤ 2.2e-15 (the random
   tree; solo12 0: the text carries every number exactly) — RT = 5e-14;
 - MuJoCo, hand-written snippets (defaults, the five orientations, eulerseq, fullinertia, every primitive's inertia,
-  several joints per body, ref, a free joint, sites, <frame>) and the exports: M and τ ≤ 2.0e-15 — MJ = 1e-13;
+  several joints per body, ref, a free joint, sites, <frame>) and the exports: M and τ ≤ 2.0e-15; 12 random MJCF
+  trees drawing every feature at random (random_mjcf): ≤ 4.9e-15 — MJ = 1e-13;
   masses, CoMs and inertias of each primitive and orientation against MuJoCo's body_* arrays ≤ 1.9e-15 —
-  MASS = 5e-14; sites and bodies against site_xpos/site_xmat, xpos/xmat ≤ 5.6e-16 — SITE = 1e-14;
+  MASS = 5e-14; sites and bodies against site_xpos/site_xmat, xpos/xmat ≤ 1.3e-15 (random trees) — SITE = 5e-14;
 - Pinocchio's buildModelFromMJCF on the exports and on snippets it reads as MuJoCo does: ≤ 8.9e-16 — PIN = 5e-14;
 - third-party files (gymnasium's MuJoCo assets, pybullet_data/mjcf): tests/crosscheck/test_mjcf_third_party.py, docs/mjcf.md.
 """
@@ -31,9 +32,9 @@ from manipdyn.validation.zoo import arm_paths, floating_paths
 mujoco = pytest.importorskip("mujoco")
 
 RT = 5e-14      # measured ≤ 2.2e-15 (round trip, M and τ)
-MJ = 1e-13      # measured ≤ 2.0e-15 (M, τ against MuJoCo)
+MJ = 1e-13      # measured ≤ 4.9e-15 (M, τ against MuJoCo; random_mjcf seed 6)
 MASS = 5e-14    # measured ≤ 1.9e-15 (mass, CoM, inertia against MuJoCo's body arrays)
-SITE = 1e-14    # measured ≤ 5.6e-16 (site and body placements against MuJoCo)
+SITE = 5e-14    # measured ≤ 1.3e-15 (site and body placements against MuJoCo; random_mjcf seed 5)
 PIN = 5e-14     # measured ≤ 8.9e-16 (M, τ against Pinocchio's buildModelFromMJCF)
 
 
@@ -439,3 +440,90 @@ def test_includes_inside_the_folder(tmp_path):
     m = mujoco.MjModel.from_xml_path(str(main))
     assert ours.joint_names == ("shoulder",)
     assert mujoco_errors(ours, m) <= MJ
+
+
+# ---- random MJCF: every feature drawn at random, MuJoCo the reference -------------------------------------------
+
+def _f(x):
+    return repr(float(x))
+
+
+def _n(rng, k, s=1.0):
+    return " ".join(repr(float(x)) for x in rng.normal(size=k) * s)
+
+
+def _orientation(rng, deg):
+    kind = rng.choice(["none", "quat", "euler", "axisangle", "xyaxes", "zaxis"])
+    ang = lambda: repr(float(rng.uniform(-180, 180) if deg else rng.uniform(-3, 3)))  # noqa: E731
+    return {"none": "", "quat": f'quat="{_n(rng, 4)}"', "euler": f'euler="{ang()} {ang()} {ang()}"',
+            "axisangle": f'axisangle="{_n(rng, 3)} {ang()}"', "xyaxes": f'xyaxes="{_n(rng, 6)}"',
+            "zaxis": f'zaxis="{_n(rng, 3)}"'}[kind]
+
+
+def _geom(rng, deg):
+    kind = rng.choice(["sphere", "capsule", "cylinder", "box", "ellipsoid"])
+    size = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}[kind]
+    size = " ".join(repr(float(x)) for x in rng.uniform(0.02, 0.2, size))
+    mass = f' mass="{_f(rng.uniform(0.1, 3))}"' if rng.random() < 0.3 else ""
+    if kind in ("capsule", "cylinder") and rng.random() < 0.5:
+        return f'<geom type="{kind}" size="{size.split()[0]}" fromto="{_n(rng, 6, 0.2)}"{mass}/>'
+    return f'<geom type="{kind}" size="{size}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}{mass}/>'
+
+
+def random_mjcf(seed, n=7):
+    """An MJCF tree of n bodies drawing each feature at random: angle unit, eulerseq, every orientation form, defaults
+    with childclass, <frame>, 0-3 hinge/slide joints per body with anchors and ref, <inertial> diag or full or the
+    geoms' inertia, sites."""
+    rng = np.random.default_rng(seed)
+    deg = bool(rng.random() < 0.5)
+    seq = "".join(rng.choice(list("xyzXYZ"), 3))
+    out = [f'<mujoco model="random{seed}"><compiler angle="{"degree" if deg else "radian"}" eulerseq="{seq}"/>',
+           f'<default><geom density="{_f(rng.uniform(300, 3000))}"/><default class="c"><joint axis="{_n(rng, 3)}"/>'
+           f'<geom type="box" size="0.05 0.06 0.07"/></default></default><worldbody>']
+    close = []
+    for k in range(n):
+        depth_back = int(rng.integers(0, len(close) + 1)) if k else 0
+        for _ in range(depth_back):
+            out.append(close.pop())
+        cc = ' childclass="c"' if rng.random() < 0.2 else ""
+        if rng.random() < 0.2:
+            out.append(f'<frame pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}>')
+            close.append("</frame>")
+        out.append(f'<body name="b{k}" pos="{_n(rng, 3, 0.3)}" {_orientation(rng, deg)}{cc}>')
+        close.append("</body>")
+        for j in range(int(rng.integers(0 if k else 1, 4))):
+            kind = "slide" if rng.random() < 0.3 else "hinge"
+            ref = f' ref="{_f(rng.uniform(-1, 1))}"' if rng.random() < 0.2 else ""
+            axis = "" if cc and rng.random() < 0.5 else f' axis="{_n(rng, 3)}"'
+            out.append(f'<joint name="j{k}_{j}" type="{kind}" pos="{_n(rng, 3, 0.1)}"{axis}{ref}/>')
+        r = rng.random()
+        if r < 0.3:
+            I = rng.uniform(0.05, 0.1, 3)                                         # the triangle inequality holds
+            out.append(f'<inertial pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)} mass="{_f(rng.uniform(0.5, 3))}" '
+                       f'diaginertia="{_f(I[0])} {_f(I[1])} {_f((I[0] + I[1]) * 0.7)}"/>')
+        elif r < 0.45:
+            Q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+            I = Q @ np.diag(rng.uniform(0.05, 0.1, 3)) @ Q.T                       # principal moments: a triangle
+            out.append(f'<inertial pos="{_n(rng, 3, 0.1)}" mass="{_f(rng.uniform(0.5, 3))}" fullinertia="'
+                       + " ".join(repr(float(x)) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])) + '"/>')
+        out += [_geom(rng, deg) for _ in range(int(rng.integers(1, 3)))]
+        if rng.random() < 0.5:
+            out.append(f'<site name="s{k}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}/>')
+    out += close[::-1] + ["</worldbody></mujoco>"]
+    return "\n".join(out)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_mjcf_against_mujoco(seed):
+    text = random_mjcf(seed)
+    ours, m = quiet(md.load_mjcf_string, text), mujoco.MjModel.from_xml_string(text)
+    e = mujoco_errors(ours, m, seed=seed)
+    d, rng, placed = mujoco.MjData(m), np.random.default_rng(seed), 0.0
+    q, _, _ = random_state(ours, rng)
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    for k in range(m.nsite):
+        R, p = md.frame_placement(ours, q, m.site(k).name)
+        placed = max(placed, err(p, d.site_xpos[k]), err(R, d.site_xmat[k].reshape(3, 3)))
+    print(f"\nrandom MJCF {seed} (nv = {ours.nv}): M, τ {e:.1e}, sites {placed:.1e}")
+    assert e <= MJ and placed <= SITE
