@@ -10,6 +10,11 @@ class URDFError(ManipdynError, ValueError):
     """The URDF (or D-H table) cannot be turned into a model: names the file and the element at fault."""
 
 
+class MJCFError(ManipdynError, ValueError):
+    """The MJCF file cannot be turned into a model (manipdyn.io.mjcf_read): names the file, the element (body,
+    joint, geom, include) and the attribute or feature at fault, or the feature not supported yet."""
+
+
 class ModelError(ManipdynError, ValueError):
     """A model is inconsistent (bad inertia, unknown name, ...): names the link or joint at fault."""
 

@@ -64,6 +64,13 @@ QUIRK_KINDS = {
     "xml_version": "an XML declaration whose version is not 1.x (<?xml version=\"0.0\"?>): read as XML 1.0, as "
                    "urdfdom (Pinocchio), MuJoCo, PyBullet and Drake ignore it",
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
+    "joint_dynamics": "an MJCF joint's armature, damping, frictionloss, stiffness or springref is nonzero: read, not "
+                      "applied yet (M and τ are the rigid bodies' alone; MuJoCo adds armature to M's diagonal)",
+    "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
+                 "qpos and q = 0 is not the pose drawn in the file",
+    "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
+                     "stiffness or damping, <option> fluid density, viscosity or wind); MuJoCo's mj_rne leaves them out "
+                     "too",
 }
 
 

@@ -58,6 +58,7 @@ _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 _REGRESSOR = "tests/crosscheck/test_regressor.py"
 _DERIV = "tests/crosscheck/test_derivatives.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
+_MJCF = "tests/crosscheck/test_mjcf_import.py"
 _MJCF = "tests/crosscheck/test_mjcf_export.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
@@ -643,6 +644,27 @@ FAULTS = (
     Fault("urdfplus-loop-origin-dropped", "loader", "manipdyn/io/urdf.py",
           'org = None if el is None else el.find("origin")', "org = None",
           (_URDFPLUS,), "a URDF+ <loop>'s <predecessor>/<successor> <origin> is ignored (the closure at the link origin)"),
+    # ---------------------------------------------------------------- MJCF reader (io/mjcf_read.py)
+    Fault("mjcf-quaternion-xyzw", "loader", "manipdyn/io/mjcf_read.py",
+          "    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)",
+          "    x, y, z, w = np.asarray(q, float) / np.linalg.norm(q)",
+          (_MJCF,), "an MJCF quat read as (x, y, z, w), not MuJoCo's (w, x, y, z)"),
+    Fault("mjcf-degrees-as-radians", "loader", "manipdyn/io/mjcf_read.py",
+          "        return math.radians(x) if self.deg else float(x)",
+          "        return float(x)",
+          (_MJCF,), "<compiler angle=\"degree\"> (MJCF's default) ignored: angles read as radians"),
+    Fault("mjcf-capsule-hemisphere-offset", "loader", "manipdyn/io/mjcf_read.py",
+          "ms * (0.4 * r * r + h * (3 * r + 2 * h) / 8)",
+          "ms * (0.4 * r * r)",
+          (_MJCF,), "a capsule's hemispheres given their own inertia but not their offset from the centre"),
+    Fault("mjcf-joint-anchor-ignored", "loader", "manipdyn/io/mjcf_read.py",
+          "R0, p0 = (R, p + R @ a) if anchor is None",
+          "R0, p0 = (R, p) if anchor is None",
+          (_MJCF,), "a joint's pos (its anchor in the body) ignored: the joint turns about the body origin"),
+    Fault("mjcf-euler-extrinsic", "loader", "manipdyn/io/mjcf_read.py",
+          "R = R @ Rk if ch.islower() else Rk @ R",
+          "R = Rk @ R if ch.islower() else R @ Rk",
+          (_MJCF,), "eulerseq's lower-case (moving) and upper-case (fixed) axes swapped"),
     # ---------------------------------------------------------------- regressor (dynamics/regressor.py)
     Fault("regressor-first-moment-torque-sign", "regressor", "manipdyn/dynamics/regressor.py",
           "W[1 + k, 3] = e1 * gz - e2 * gy", "W[1 + k, 3] = e2 * gy - e1 * gz",

@@ -1,4 +1,4 @@
-"""URDF -> Model. The only module that reads robot XML.
+"""URDF -> Model, and the hardened XML parse (``_parse_xml``) both robot readers use (``io/mjcf_read.py`` reads MJCF).
 
 The file is parsed once with a hardened parser (no DTD, no entities, no network, a size limit), every
 number manipdyn reads is checked on the raw XML against one grammar and physical bounds, its elements are
@@ -194,14 +194,15 @@ _DECLARED_VERSION = re.compile(rb"(?:\xef\xbb\xbf)?<\?xml[ \t\r\n]+version[ \t\r
 _XML_1 = re.compile(rb"1\.[0-9]+")           # the versions libxml2 reads (XML 1.0 5th edition's VersionNum)
 
 
-def _parse_xml(data: bytes, source: str, quirks=None):
-    """Well-formed XML with a <robot> root; DTDs and entities are refused (no expansion, no network).
+def _parse_xml(data: bytes, source: str, quirks=None, root_tag="robot", error=URDFError):
+    """Well-formed XML with a <robot> root (``root_tag``; None: any root); DTDs and entities are refused (no
+    expansion, no network). Errors are ``error`` (URDFError; the MJCF reader passes MJCFError).
 
     A leading XML declaration whose version is not 1.x is read as XML 1.0 (only its version value is replaced,
     before parsing), with an "xml_version" quirk appended to ``quirks``; any other malformed declaration stays
     malformed XML."""
     if b"<!ENTITY" in data:                   # before parsing: nothing is expanded or fetched
-        raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
+        raise error(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
     m = _DECLARED_VERSION.match(data)
     if m and not _XML_1.fullmatch(m.group(2)):
         version = m.group(2).decode("ascii")
@@ -214,13 +215,13 @@ def _parse_xml(data: bytes, source: str, quirks=None):
     try:
         root = etree.parse(io.BytesIO(data), parser).getroot()
     except etree.XMLSyntaxError as exc:
-        raise URDFError(f"{source}: malformed XML: {exc}") from None
+        raise error(f"{source}: malformed XML: {exc}") from None
     if root is None:
-        raise URDFError(f"{source}: malformed XML: no root element")
+        raise error(f"{source}: malformed XML: no root element")
     if root.getroottree().docinfo.internalDTD is not None:
-        raise URDFError(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
-    if root.tag != "robot":
-        raise URDFError(f"{source}: root element is <{root.tag}>, expected <robot>")
+        raise error(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
+    if root_tag is not None and root.tag != root_tag:
+        raise error(f"{source}: root element is <{root.tag}>, expected <{root_tag}>")
     return root
 
 
