@@ -112,7 +112,7 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         to = spare if j < 0 else rec[(j * RECORD + _F) * N:(j * RECORD + _F + 6) * N]
-        inward_lane(motion_model(i, mdl), B, to, TB, s, N)
+        inward_lane(motion_model(i, mdl), mdl.armature[mdl.iv[i]], B, to, TB, Z, s, N)
     if not scatter_lane(TB, tau, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
 

@@ -23,9 +23,60 @@ from .errors import InputError
 from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES, motion_subspace
 
 __all__ = ["Model", "KernelForm", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
-           "FREEFLYER", "QUAT_TOL"]
+           "FREEFLYER", "QUAT_TOL",
+           "JOINT_DYNAMICS", "FRICTION_EPS", "check_joint_dynamics", "with_joint_dynamics"]
 
+JOINT_DYNAMICS = ("armature", "damping", "friction")   # the per-velocity joint parameters of a Model
+FRICTION_EPS = 1e-3      # rad/s (m/s): the Coulomb friction's regularisation, friction ⊙ tanh(q̇ / FRICTION_EPS)
 QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's q (integrate's output: ~1e-16)
+
+
+def check_joint_dynamics(x, key, nv, where, names=None) -> np.ndarray:
+    """A joint-dynamics array (``JOINT_DYNAMICS``: armature, damping, friction) as a new float array (nv,): None
+    gives zeros; InputError naming ``key``, the joint and the value for a wrong shape, a non-finite or a negative
+    entry."""
+    if x is None:
+        return np.zeros(nv)
+    try:
+        a = np.array(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: {key} must be {nv} real numbers (one per velocity), not {x!r}") from None
+    if a.shape != (nv,):
+        raise InputError(f"{where}: {key} has shape {a.shape}; expected ({nv},), one entry per velocity")
+    bad = np.flatnonzero(~(np.isfinite(a) & (a >= 0.0)))
+    if bad.size:
+        k = int(bad[0])
+        who = f" (joint {names[k]!r})" if names is not None else ""
+        raise InputError(f"{where}: {key}[{k}]{who} = {a[k]!r}: must be finite and >= 0")
+    return a
+
+
+def with_joint_dynamics(model, joint_dynamics, where=None):
+    """The model with some joints' armature, damping and friction set (the loaders' ``joint_dynamics=`` keyword):
+    ``{joint name: {"armature": x, "damping": x, "friction": x}}``, any subset of the keys; x a number (every velocity
+    of the joint) or one per velocity (a free flyer's six). None or {} returns the model. InputError names an
+    unknown joint or key and a bad value (``check_joint_dynamics``)."""
+    if not joint_dynamics:
+        return model
+    where = where or model.source or model.name
+    if not isinstance(joint_dynamics, dict):
+        raise InputError(f"{where}: joint_dynamics must be a dict {{joint name: dict(armature=, damping=, "
+                         f"friction=)}}, not {joint_dynamics!r}")
+    arrays = {key: np.array(getattr(model, key)) for key in JOINT_DYNAMICS}
+    for joint, values in joint_dynamics.items():
+        i = model.joint_index(joint) if isinstance(joint, str) else model.joint_index(repr(joint))
+        if not isinstance(values, dict):
+            raise InputError(f"{where}: joint_dynamics[{joint!r}] must be a dict of {', '.join(JOINT_DYNAMICS)}, "
+                             f"not {values!r}")
+        for key, x in values.items():
+            if key not in JOINT_DYNAMICS:
+                raise InputError(f"{where}: joint_dynamics[{joint!r}]: unknown key {key!r}; known: "
+                                 f"{', '.join(JOINT_DYNAMICS)}")
+            n, a = int(model.nvs[i]), int(model.idx_v[i])
+            x = np.broadcast_to(x, (n,)) if np.ndim(x) == 0 else x
+            arrays[key][a:a + n] = check_joint_dynamics(x, f"joint_dynamics[{joint!r}][{key!r}]", n, where)
+    from dataclasses import replace
+    return replace(model, **arrays)
 
 
 def check_gravity(gravity, where="gravity") -> np.ndarray:
@@ -64,8 +115,8 @@ QUIRK_KINDS = {
     "xml_version": "an XML declaration whose version is not 1.x (<?xml version=\"0.0\"?>): read as XML 1.0, as "
                    "urdfdom (Pinocchio), MuJoCo, PyBullet and Drake ignore it",
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
-    "joint_dynamics": "an MJCF joint's armature, damping, frictionloss, stiffness or springref is nonzero: read, not "
-                      "applied yet (M and τ are the rigid bodies' alone; MuJoCo adds armature to M's diagonal)",
+    "joint_dynamics": "an MJCF joint's stiffness, springref or springdamper is nonzero: read, not applied yet (its "
+                      "armature, damping and frictionloss are applied: Model.armature, damping, friction)",
     "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
                  "qpos and q = 0 is not the pose drawn in the file",
     "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
@@ -156,6 +207,11 @@ class Model:
     locked: dict = field(default_factory=dict)  # joint -> value held fixed by reduce() (not in q): a float,
     #                                             a free flyer's pose (x y z qx qy qz qw) as a tuple
     quirks: tuple = field(default=())       # (Quirk, ...) what the loader noticed, in QUIRK_KINDS order
+    # joint dynamics, one entry per velocity (model.v_names order), ≥ 0, finite; None = zeros (JOINT_DYNAMICS):
+    armature: np.ndarray = None  # (nv,) rotor inertia reflected to the joint, kg m² (kg): M + diag(armature),
+    #                              τ = rnea + armature ⊙ q̈ (Pinocchio's model.armature, MuJoCo's armature)
+    damping: np.ndarray = None   # (nv,) viscous damping, N m s/rad (N s/m): τ_joint −= damping ⊙ q̇
+    friction: np.ndarray = None  # (nv,) Coulomb friction, N m (N): τ_joint −= friction ⊙ tanh(q̇ / FRICTION_EPS)
 
     def __post_init__(self):
         if not (isinstance(self.gravity, np.ndarray) and self.gravity.dtype == np.float64):
@@ -176,6 +232,11 @@ class Model:
                        q_names=_dof_names(self, FREE_COORDS), v_names=_dof_names(self, FREE_RATES))
         for key, value in derived.items():
             object.__setattr__(self, key, value)
+        for key in JOINT_DYNAMICS:                           # (nv,) each, zeros when not given
+            value = check_joint_dynamics(getattr(self, key), key, self.nv, f"model {self.name!r}", self.v_names)
+            value.setflags(write=False)
+            object.__setattr__(self, key, value)
+        object.__setattr__(self, "passive", bool(np.any(self.damping) or np.any(self.friction)))
         object.__setattr__(self, "kernel", KernelForm.of(self))
 
     # -- derived once, in __post_init__ (the model is immutable: nothing is added later) --
@@ -189,6 +250,7 @@ class Model:
     v_names: tuple = field(init=False, repr=False)      # (nv,) the joint's name, or "root_joint.wx" for a free flyer's
     v_joint: np.ndarray = field(init=False, repr=False)  # (nv,) the joint each entry of v belongs to
     kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
+    passive: bool = field(init=False, repr=False)       # a damping or friction entry is nonzero (joint torques)
 
     def __reduce__(self):
         """Pickle the description only (what the constructor takes); the derived data, ``kernel`` included, is
@@ -261,6 +323,10 @@ class Model:
         if self.locked:
             lines.append("locked joints: " + ", ".join(
                 f"{j} = {v:g}" if np.ndim(v) == 0 else f"{j} = {np.round(v, 6).tolist()}" for j, v in self.locked.items()))
+        for key in JOINT_DYNAMICS:
+            if np.any(getattr(self, key)):
+                lines.append(f"{key}: " + ", ".join(f"{n} {x:g}" for n, x in zip(self.v_names, getattr(self, key))
+                                                     if x))
         lines += [f"note: {n}" for n in self.notes]
         for kind in QUIRK_KINDS:
             names = [q.name for q in self.quirks if q.kind == kind]
@@ -380,9 +446,10 @@ class KernelForm:
     v_shape: tuple             # (nv,): one velocity, acceleration or torque
     arrays: tuple              # (I, F), the two below, as the kernels take them
     I: np.ndarray              # (5, nb) int64, rows: parent, kind, idx_q, idx_v, nv_j (joints in q order)
-    F: np.ndarray              # (4 nb + 1 + m, 3, 3) float64, blocks of 3×3: [0, nb) R0; [nb, 2nb) inertia about the
-    #                            CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0]; 4nb: −g in
-    #                            row 0; then S (nv, 6) row by row ([linear; angular], joints.motion_subspace)
+    F: np.ndarray              # (4 nb + 1 + m + ⌈nv/9⌉, 3, 3) float64, blocks of 3×3: [0, nb) R0; [nb, 2nb) inertia
+    #                            about the CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0]; 4nb: −g
+    #                            in row 0; then m = max(2, 2⌈nv/3⌉) blocks holding S (nv, 6) row by row ([linear;
+    #                            angular], joints.motion_subspace); then the armature (nv,) (Model.armature)
     config: tuple              # (kind (nb,), continuous (nb,) bool, idx_q (nb,), idx_v (nb,)): configuration kernels
     joint_index: MappingProxyType  # joint name -> index in q order (O(1) lookups on large models)
     frame_rows: MappingProxyType   # frame name -> (body, X (4, 3) = [R; p]: the frame in its body)
@@ -405,12 +472,13 @@ class KernelForm:
         S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
             else np.zeros((0, 6))
         m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
-        F = np.zeros((4 * nb + 1 + m, 3, 3))
+        F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
         F[:nb], F[nb:2 * nb] = model.R0, model.inertia
         F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = model.axis, model.p0, model.com
         F[3 * nb:4 * nb, 0, 0] = model.mass
         F[4 * nb, 0] = -np.asarray(model.gravity, float)
-        F[4 * nb + 1:].reshape(-1, 6)[:model.nv] = S
+        F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
+        F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature
         config = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
                   np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
         frame_rows, one_state, wrench = {}, {}, {}

@@ -140,6 +140,7 @@ def _rebuild(model, keep, values):
     frames = {n: _move_frame(f, new_of, base) for n, f in model.frames.items()}
     names = [model.joint_names[i] for i in keep]
     sel = np.array(keep, int)
+    dof = np.array([r for i in keep for r in range(model.idx_v[i], model.idx_v[i] + model.nvs[i])], int)
     return dataclasses.replace(
         model, joint_names=tuple(names), body_names=tuple(model.body_names[i] for i in keep),
         parent=np.array(parent, int).reshape(-1), kind=model.kind[sel], continuous=model.continuous[sel],
@@ -147,6 +148,7 @@ def _rebuild(model, keep, values):
         mass=np.array([m for m, _, _ in inert]).reshape(-1), com=np.array([c for _, c, _ in inert]).reshape(-1, 3),
         inertia=np.array([I for _, _, I in inert]).reshape(-1, 3, 3), lower=model.lower[sel],
         upper=model.upper[sel], effort=model.effort[sel], velocity=model.velocity[sel], frames=frames,
+        armature=model.armature[dof], damping=model.damping[dof], friction=model.friction[dof],
         merged={k: tuple(v) for k, v in merged.items()},
         mimic=tuple(m for m in model.mimic if m[0] in names and m[1] in names),
         constraints=tuple(_move_constraint(c, new_of, base) for c in model.constraints),

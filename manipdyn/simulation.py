@@ -21,7 +21,7 @@ import numpy as np
 
 from .configuration import check_quaternions
 from .constraints import constrained_forward_dynamics, project
-from .dynamics.aba import forward_dynamics
+from .dynamics.aba import forward_dynamics, passive_torques
 from .dynamics.state import as_batch, as_real, check_finite, check_scalar
 from .errors import DivergenceError, InputError, NumericalError
 
@@ -78,13 +78,17 @@ def _torque(tau, shape, single, names):
     return checked
 
 
-def accelerations(model, method="aba", stabilization="none", baumgarte=(10.0, 10.0)):
+def accelerations(model, method="aba", stabilization="none", baumgarte=(10.0, 10.0), joint_dynamics=True):
     """q̈ = f(t, q, q̇, τ) for this model: tree forward dynamics by ``method`` ("aba" or "cholesky"), or the
-    closed-chain KKT solve."""
+    closed-chain KKT solve; with joint_dynamics the joints' damping and friction act (τ − ``passive_torques``)."""
     if model.constraints:
         bg = baumgarte if stabilization == "baumgarte" else None
-        return lambda q, v, tau: constrained_forward_dynamics(model, q, v, tau, baumgarte=bg)[0]
-    return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=method)
+
+        def closed(q, v, tau):
+            loss = passive_torques(model, v) if joint_dynamics else None
+            return constrained_forward_dynamics(model, q, v, tau if loss is None else tau - loss, baumgarte=bg)[0]
+        return closed
+    return lambda q, v, tau: forward_dynamics(model, q, v, tau, method=method, joint_dynamics=joint_dynamics)
 
 
 def _step(integrator, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
@@ -141,7 +145,7 @@ MAX_RATE = 1e4      # |q| = 1e6 a double resolves 1e-10, the default rtol; 1e4 r
 
 def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, integrator="rk4", method="aba", rtol=1e-10,
              atol=1e-12, stabilization="none", baumgarte=(10.0, 10.0), max_steps=None, max_position=MAX_POSITION,
-             max_rate=MAX_RATE):
+             max_rate=MAX_RATE, joint_dynamics=True):
     """Integrate the equations of motion from (q0, v0) over t_span = (t0, t1).
 
     tau: None, a constant (nv,) (or (N, nv)) array or a callable tau(t, q, v) (batches: (N, nv) in and out).
@@ -149,6 +153,9 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, integrator="rk4", meth
     "adaptive" (scipy DOP853 at rtol/atol, one state at a time, every internal step returned).
     method: the forward-dynamics route of a tree, as in ``forward_dynamics``: "aba" (default) or "cholesky";
     closed chains always solve the KKT system of ``constrained_forward_dynamics``.
+    joint_dynamics: the model's damping and Coulomb friction act on the joints (τ − damping ⊙ q̇ − friction ⊙
+    tanh(q̇ / ε), ε = model.FRICTION_EPS; ``forward_dynamics``); False leaves them out. Armature is part of M
+    either way.
     Closed chains: stabilization "none", "baumgarte" (alpha, beta) or "projection" (after every step).
 
     The work is bounded: fixed-step runs refuse a dt whose step count (t1 − t0)/dt exceeds ``max_steps``
@@ -178,7 +185,7 @@ def simulate(model, q0, v0, t_span, *, tau=None, dt=1e-3, integrator="rk4", meth
                                                                    ("max_rate", max_rate)))
     max_steps = check_scalar("max_steps", (10**5 if integrator == "adaptive" else 10**7) if max_steps is None
                              else max_steps, positive=True, integer=True)
-    accel, torque = accelerations(model, method, stabilization, baumgarte), _torque(tau, V.shape, single, model.v_names)
+    accel, torque = accelerations(model, method, stabilization, baumgarte, joint_dynamics), _torque(tau, V.shape, single, model.v_names)
     watch = _Watch(model, single, bounds, t0)
     try:
         watch(t0, Q, V)

@@ -58,6 +58,7 @@ _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 _REGRESSOR = "tests/crosscheck/test_regressor.py"
 _DERIV = "tests/crosscheck/test_derivatives.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
+_JD = "tests/crosscheck/test_joint_dynamics.py"
 _MJCF = "tests/crosscheck/test_mjcf_import.py"
 _MJCF = "tests/crosscheck/test_mjcf_export.py"
 
@@ -306,6 +307,34 @@ FAULTS = (
           "c = motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]))",
           "c = motion_cross((jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]), v)",
           ("tests/batch/test_lanes.py",), "the lane ABA's c_i = v_J × v_i instead of v_i × v_J (batches only)"),
+    # joint dynamics (docs/design.md §3): armature in each kernel, one state and lanes; damping and friction signs
+    Fault("crba-armature-dropped", "lagrange", "manipdyn/dynamics/crba.py",
+          "M[r, r] += arrays.armature[r]", "M[r, r] += 0.0 * arrays.armature[r]",
+          (_JD,), "the one-state CRBA forgets the rotors: M without diag(armature)"),
+    Fault("crba-lanes-armature-dropped", "lagrange", "manipdyn/dynamics/crba.py",
+          "+ sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + ar\n",
+          "+ sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + 0.0 * ar\n",
+          (_JD,), "the lane CRBA forgets the rotors (batches only)"),
+    Fault("rnea-armature-times-velocity", "rnea", "manipdyn/dynamics/rnea.py",
+          "rotor(mdl.armature, A[s], tau[s])", "rotor(mdl.armature, V[s], tau[s])",
+          (_JD,), "the one-state RNEA adds armature ⊙ q̇ instead of armature ⊙ q̈"),
+    Fault("rnea-lanes-armature-times-velocity", "rnea", "manipdyn/dynamics/rnea.py",
+          "+ ar * Z[(2 * nb + r) * L + l]", "+ ar * Z[(nb + r) * L + l]",
+          (_JD,), "the lane RNEA adds armature ⊙ q̇ instead of armature ⊙ q̈ (batches only)"),
+    Fault("aba-armature-sign", "aba", "manipdyn/dynamics/aba.py",
+          "L[r, r - a] += armature[r]", "L[r, r - a] -= armature[r]",
+          (_JD,), "the one-state ABA's D_i = Sᵀ Iᵃ S − armature_i"),
+    Fault("aba-lanes-armature-dropped", "aba", "manipdyn/dynamics/aba.py",
+          "+ s[5] * Ua[2] + ar   # + armature", "+ s[5] * Ua[2] + 0.0 * ar   # + armature",
+          (_JD,), "the lane ABA's D_i forgets the armature (batches only)"),
+    Fault("damping-sign", "aba", "manipdyn/dynamics/aba.py",
+          "return full.damping * V + full.friction * np.tanh(V / FRICTION_EPS)",
+          "return -full.damping * V + full.friction * np.tanh(V / FRICTION_EPS)",
+          (_JD,), "viscous damping pushes the joint along its motion (τ + damping ⊙ q̇)"),
+    Fault("friction-sign", "aba", "manipdyn/dynamics/aba.py",
+          "return full.damping * V + full.friction * np.tanh(V / FRICTION_EPS)",
+          "return full.damping * V - full.friction * np.tanh(V / FRICTION_EPS)",
+          (_JD,), "Coulomb friction pushes the joint along its motion (τ + friction ⊙ sign q̇)"),
     Fault("aba-lanes-articulated-inertia-sign", "aba", "manipdyn/dynamics/aba.py",
           "B[(_IA + k) * L + l] -= U[k] * W[k]", "B[(_IA + k) * L + l] += U[k] * W[k]",
           ("tests/batch/test_lanes.py",), "the lane ABA's Iᵃ = I^A + U Uᵀ/D on the linear block's diagonal"),

@@ -92,4 +92,5 @@ def free_flyer_model(text, **kw):
         pinned, root_link="__fixed_world", kind=ff(pinned.kind, FREEFLYER).astype(int),
         continuous=ff(pinned.continuous, False).astype(bool), axis=np.vstack([np.zeros(3), pinned.axis[1:]]),
         lower=ff(pinned.lower, -np.inf), upper=ff(pinned.upper, np.inf),
-        effort=ff(pinned.effort, np.inf), velocity=ff(pinned.velocity, np.inf))
+        effort=ff(pinned.effort, np.inf), velocity=ff(pinned.velocity, np.inf),
+        **{k: np.concatenate([np.zeros(6), getattr(pinned, k)[1:]]) for k in ("armature", "damping", "friction")})

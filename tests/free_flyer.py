@@ -23,7 +23,8 @@ def with_free_flyer(model, mass, com, inertia):
         p0=cat(np.zeros(3), model.p0), mass=cat(mass, model.mass), com=cat(com, model.com),
         inertia=cat(inertia, model.inertia), lower=cat(-np.inf, model.lower), upper=cat(np.inf, model.upper),
         effort=cat(np.inf, model.effort), velocity=cat(np.inf, model.velocity), frames=frames,
-        constraints=closures, actuated=model.actuated)
+        constraints=closures, actuated=model.actuated,
+        **{k: np.concatenate([np.zeros(6), getattr(model, k)]) for k in ("armature", "damping", "friction")})
 
 
 def random_floating_states(model, n, rng):

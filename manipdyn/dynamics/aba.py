@@ -34,6 +34,7 @@ import numpy as np
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
 from ..joints import joint_placement
+from ..model import FRICTION_EPS, MimicModel
 from . import mimic
 from ..spatial import (add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_cross,
                        force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
@@ -87,7 +88,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
-    mg = mdl.mg
+    mg, armature = mdl.mg, mdl.armature
     N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
     Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, Y, t, vJ, a0 = workspace(nb, nv)
     for i in range(nb):
@@ -145,7 +146,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
                 pA[b, a] -= t[a]
 
     def articulated_inertias(tau, qdd):
-        """Pass 2 (inward):  U_i = I^A_i S_i,  D_i = S_iᵀ U_i (= L Lᵀ),  u_i = τ_i − S_iᵀ p^A_i,  and for a
+        """Pass 2 (inward):  U_i = I^A_i S_i,  D_i = S_iᵀ U_i + diag(armature_i) (= L Lᵀ),  u_i = τ_i − S_iᵀ p^A_i,  and for a
         child of a body:  Iᵃ = I^A_i − U_i D_i⁻¹ U_iᵀ,  pᵃ = p^A_i + Iᵃ c_i + U_i D_i⁻¹ u_i,
         I^A_λ += ^λX*_i Iᵃ ⁱX_λ,  p^A_λ += ^λX*_i pᵃ  (with Y = L⁻¹ U_iᵀ: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ L⁻¹ u).
         A one-dof joint's scalar D is used as it is, U (Uᵀ / D): through Y = U / √D the subtraction Iᵃ = I^A − Y Yᵀ,
@@ -164,6 +165,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
                 for k in range(n):                              # D = Sᵀ U;  u = τ − Sᵀ p^A
                     L[r, k] = (S[r, 0] * U[a + k, 0] + S[r, 1] * U[a + k, 1] + S[r, 2] * U[a + k, 2]
                                + S[r, 3] * U[a + k, 3] + S[r, 4] * U[a + k, 4] + S[r, 5] * U[a + k, 5])
+                L[r, r - a] += armature[r]                      # D = Sᵀ I^A S + diag(armature) (Pinocchio's aba)
                 u[r] = tau[r] - (S[r, 0] * pA[i, 0] + S[r, 1] * pA[i, 1] + S[r, 2] * pA[i, 2]
                                  + S[r, 3] * pA[i, 3] + S[r, 4] * pA[i, 4] + S[r, 5] * pA[i, 5])
             if n == 1:                                          # a scalar D_i stays as it is (below)
@@ -382,9 +384,10 @@ def bias_lane(rm, im, B, l, L):
 
 @njit(cache=True, inline="always")
 def articulated_model(i, mdl):
-    """What body i's pass 2 and 3 take from the model: (its row r of S, s as a 6-tuple, nb: Z's rows per state)."""
+    """What body i's pass 2 and 3 take from the model: (its row r of S, s as a 6-tuple, nb: Z's rows per state, the
+    armature of velocity r)."""
     S, r = mdl.S, mdl.iv[i]
-    return r, (S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]), mdl.parent.shape[0]
+    return r, (S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]), mdl.parent.shape[0], mdl.armature[r]
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")      # (x / 0 is ±inf, not a raise: a branch less)
@@ -404,15 +407,15 @@ def articulated_lanes(i, mdl, dmin, B, Z, child):
 
 @njit(cache=True, inline="always")
 def articulated_lane(am, dmin, B, Z, l, L):
-    """At lane l: U_i = I^A_i s, D_i = sᵀ U_i, u_i = τ_i − sᵀ p^A_i (am: ``articulated_model``). Returns 1 if D_i is
-    not > dmin (singular, or NaN), else 0."""
-    r, s, nb = am
+    """At lane l: U_i = I^A_i s, D_i = sᵀ U_i + armature_i, u_i = τ_i − sᵀ p^A_i (am: ``articulated_model``). Returns
+    1 if D_i is not > dmin (singular, or NaN), else 0."""
+    r, s, nb, ar = am
     C, Bm, A = get_sym3(B, _IA, l, L), (get3(B, _IB, l, L), get3(B, _IB + 3, l, L), get3(B, _IB + 6, l, L)), \
         get_sym3(B, _IAA, l, L)
     sl, sa = (s[0], s[1], s[2]), (s[3], s[4], s[5])
     Ul, Ua = add(mul3(C, sl), mul3t(Bm, sa)), add(mul3(Bm, sl), mul3(A, sa))     # U = I^A s
     pA = get6(B, _PA, l, L)
-    D = s[0] * Ul[0] + s[1] * Ul[1] + s[2] * Ul[2] + s[3] * Ua[0] + s[4] * Ua[1] + s[5] * Ua[2]
+    D = s[0] * Ul[0] + s[1] * Ul[1] + s[2] * Ul[2] + s[3] * Ua[0] + s[4] * Ua[1] + s[5] * Ua[2] + ar   # + armature
     u = Z[(2 * nb + r) * L + l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4]
                                    + s[5] * pA[5])
     set3(B, _U, l, L, Ul)
@@ -491,7 +494,7 @@ def acceleration_lanes(i, mdl, B, par, QDD):
 def acceleration_lane(am, B, par, QDD, l, L):
     """At lane l (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ), q̈_i = (u_i − U_iᵀ a'_i) / D_i into
     row iv_i of QDD, a_i = a'_i + s q̈_i (am: ``articulated_model``)."""
-    r, s, nb = am
+    r, s, nb, _ = am
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
     al, aa = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ a_λ
     c, U = get6(B, _C, l, L), get6(B, _U, l, L)
@@ -617,10 +620,46 @@ def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads
     threads: a batch's threads (``rnea``'s)."""
 
 
-def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba", threads=None):
+def passive_torques(model, v):
+    """damping ⊙ q̇ + friction ⊙ tanh(q̇ / ε) (nv,) or (N, nv), the torques a joint's own losses take from the drive
+    (``model.damping``, ``model.friction``; ε = ``model.FRICTION_EPS`` = 1e-3 rad/s: Coulomb friction regularised,
+    within 1 − tanh(5) = 9e-5 of ±friction beyond |q̇| = 5 ε, and no stiction: at q̇ = 0 it is 0, so a joint
+    below the friction level creeps at ~ε·τ/friction instead of sticking). A MimicModel: Gᵀ of the full model's at
+    G q̇. None when the model has no damping or friction, or v is not an array of velocities (the caller's checks
+    then name it)."""
+    full = model.full if type(model) is MimicModel else model
+    if not full.passive:
+        return None
+    try:
+        V = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if V.ndim not in (1, 2) or V.shape[-1] != model.nv:
+        return None
+    if type(model) is MimicModel:
+        Vf = V @ model.G.T
+        return (full.damping * Vf + full.friction * np.tanh(Vf / FRICTION_EPS)) @ model.G
+    return full.damping * V + full.friction * np.tanh(V / FRICTION_EPS)
+
+
+def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba", threads=None,
+                     joint_dynamics=True):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
     matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext). threads: a batch's threads
-    (``rnea``'s)."""
+    (``rnea``'s).
+
+    Joint dynamics (docs/design.md §3): M includes diag(model.armature) always (as ``aba`` and ``crba``); with
+    joint_dynamics=True (default) the joints' damping and Coulomb friction act too, q̈ = aba(q, q̇, τ_joint) with
+    τ_joint = τ − damping ⊙ q̇ − friction ⊙ tanh(q̇ / ε) (``passive_torques``); joint_dynamics=False gives the
+    rigid bodies' q̈ = aba(q, q̇, τ) (Pinocchio's aba with armature).
+    """
+    if joint_dynamics:
+        loss = passive_torques(model, v)
+        if loss is not None:
+            try:
+                tau = np.asarray(tau, dtype=float) - loss
+            except (TypeError, ValueError):
+                pass                                     # (the route names a bad τ)
     if isinstance(method, str) and method == "aba":
         return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads)
     if not (isinstance(method, str) and method == "cholesky"):          # (an array compares elementwise)

@@ -8,7 +8,8 @@ of a compiled call costs ~30 ns of dispatch, each reshape inside a kernel as muc
                            views, ~40 ns cheaper per call to unpack than strided columns)
   F (4 nb + 1 + m, 3, 3) = blocks of 3×3 numbers:  F[0:nb] R0,  F[nb:2nb] inertia (about the CoM, body axes),
                            F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[4nb, 0] −g,
-                           F[4nb+1:] S (nv, 6), padded to whole blocks,
+                           F[4nb+1:4nb+1+m] S (nv, 6), padded to m = max(2, 2⌈nv/3⌉) blocks,
+                           F[4nb+1+m:] the armature (nv,), padded to whole blocks,
 viewed again by ``unpack`` inside the kernels (slices, one reshape).
 S holds one row per joint velocity, [linear; angular] in the body frame (``joints.motion_subspace``).
 
@@ -31,7 +32,7 @@ def kernel_arrays(model):
     return model.kernel.arrays
 
 
-ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg")
+ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature")
 ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
     parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
     kind (nb,) int     joints.REVOLUTE, PRISMATIC or FREEFLYER
@@ -41,7 +42,8 @@ ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views 
     axis (nb, 3)       joint axis in the body frame
     R0 (nb, 3, 3)      joint frame in the parent body at q = 0;   p0 (nb, 3) its origin
     mass (nb,)         body mass;   com (nb, 3) centre of mass (body frame);   inertia (nb, 3, 3) about the CoM
-    mg (3,)            −g, the base acceleration that stands for gravity"""
+    mg (3,)            −g, the base acceleration that stands for gravity
+    armature (nv,)     rotor inertia per velocity (Model.armature): M + diag(armature), τ += armature ⊙ q̈"""
 
 
 @njit(cache=True, inline="always")
@@ -49,9 +51,11 @@ def unpack(I, F):
     """The named views (``ModelArrays``) of the two kernel arrays (the layout is Model.kernel's: KernelForm)."""
     nb = I.shape[1]
     nv = I[3, nb - 1] + I[4, nb - 1] if nb else 0        # velocities in body order: the last body's end
+    m = max(2, 2 * ((nv + 2) // 3))                      # S's blocks (KernelForm.of)
     B = F[2 * nb:3 * nb]
-    return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:].reshape(-1, 6)[:nv],
-                       B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0])
+    return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:nv],
+                       B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0],
+                       F[4 * nb + 1 + m:].reshape(-1)[:nv])
 
 
 # -- forward kinematics: the one pass -----------------------------------------------------------------

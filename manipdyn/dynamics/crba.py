@@ -99,6 +99,7 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
                 fx, fy, fz, nx, ny, nz = force_up(block3(R[k], 0, 0), p[k], fx, fy, fz, nx, ny, nz)
                 k = parent[k]
     for r in range(M.shape[0]):
+        M[r, r] += arrays.armature[r]          # M + diag(armature): rotor inertia (docs/design.md §3, Joint dynamics)
         for a in range(r):
             M[a, r] = M[r, a]
 
@@ -242,26 +243,28 @@ def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
 
 @njit(cache=True, inline="always")
 def column_model(i, k, mdl):
-    """What M's entry (iv_i, iv_k) takes from the model: (its flat index in Mb's rows, S_k's row as s_l, s_a)."""
+    """What M's entry (iv_i, iv_k) takes from the model: (its flat index in Mb's rows, S_k's row as s_l, s_a, the
+    armature of velocity iv_k: added on the diagonal only, ``column_lane``)."""
     S, x = mdl.S, mdl.iv[k]
-    return mdl.iv[i] * S.shape[0] + x, (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5])
+    return mdl.iv[i] * S.shape[0] + x, (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5]), mdl.armature[x]
 
 
 @njit(cache=True, inline="always")
 def column_lane(cm, m, B, Fw, Mb, l, L):
     """At lane l: F = I^c_i s (``spatial.inertia_motion``; m: the composite's mass; cm: ``column_model(i, i)``) into
-    Fw's 6 rows, and M_ii = sᵀ F into Mb (row-major nv × nv rows of L numbers: the lower triangle is written)."""
-    e, sl, sa = cm
+    Fw's 6 rows, and M_ii = sᵀ F + armature_i into Mb (row-major nv × nv rows of L numbers: the lower triangle is
+    written; M + diag(armature), docs/design.md §3, Joint dynamics)."""
+    e, sl, sa, ar = cm
     F = inertia_motion(m, get3(B, 12, l, L), get_sym3(B, 15, l, L), sl, sa)
     Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
-    Mb[e * L + l] = sl[0] * F[0] + sl[1] * F[1] + sl[2] * F[2] + sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5]
+    Mb[e * L + l] = sl[0] * F[0] + sl[1] * F[1] + sl[2] * F[2] + sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + ar
 
 
 @njit(cache=True, inline="always")
 def column_up_lane(cm, B, Fw, Mb, l, L):
     """At lane l: column i's wrench F (Fw) carried from body k to its parent λ(k) (``spatial.force_up``; B: k's record),
     and M[iv_i, iv_λ(k)] = S_λ(k)ᵀ F (cm: ``column_model(i, λ(k))``)."""
-    e, tl, ta = cm
+    e, tl, ta, _ = cm
     F = force_up(get_rotation(B, l, L), get3(B, 9, l, L), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l],
                  Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l])
     Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F

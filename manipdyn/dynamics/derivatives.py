@@ -86,7 +86,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
-    mg = mdl.mg
+    mg, armature = mdl.mg, mdl.armature
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     R33, P3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))    # five allocations, cut into blocks
     B6, B66, B63 = np.empty((3 * nb + 4 * nv + 3, 6)), np.empty((2 * nb + 5, 6, 6)), np.empty((nb + 1, 6, 3))
@@ -203,7 +203,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
         for r in range(iv[i], iv[i] + nvj[i]):
             for c in range(nvj[i]):
                 k = iv[i] + c
-                Da[r, k] = Da[k, r] = dot6(Jc[r], YJ[c])
+                Da[r, k] = Da[k, r] = dot6(Jc[r], YJ[c]) + (armature[r] if r == k else 0.0)    # M + diag(armature)
                 Dq[r, k] = dot6(Jc[r], Fq[c])
                 Dv[r, k] = dot6(Jc[r], Fv[c])
 

@@ -30,7 +30,7 @@ __all__ = ["lagrange_mass_matrix", "christoffel_coriolis", "mass_matrix_derivati
 
 def lagrange_mass_matrix(model, q):
     """M(q) (nv, nv) or (N, nv, nv) by the closed form of T = ½ q̇ᵀ M q̇ (Eq. 23), summed over links from their
-    CoM Jacobians: M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb (O(n³), compiled: ``lagrange_mass_kernel``).
+    CoM Jacobians: M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb + diag(armature) (O(n³), compiled: ``lagrange_mass_kernel``).
     The route of ``mass_matrix(model, q, method="lagrange")``."""
     nd = fast_shape(model, q)
     if nd == 0:
@@ -92,6 +92,7 @@ def lagrange_mass_kernel(I, F, Q, M):
             for t in range(r):
                 x = Ms[r, t] + Ms[t, r]
                 Ms[r, t] = Ms[t, r] = x
+            Ms[r, r] += mdl.armature[r]                # + diag(armature): the rotors' T (docs/design.md §3)
         k = first_nonfinite_entry(Ms)
         if k >= 0:
             return -2 - nb - (s * nv * nv + k)
@@ -102,7 +103,8 @@ def _lagrange_mass_matrix(model, J, Iw):
     """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3) (numpy:
     the Christoffel route's own M)."""
     Jv, Jw = J[:, :, :3], J[:, :, 3:]
-    return np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
+    return (np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
+            + np.diag(model.armature))                 # + diag(armature): constant, so C is unchanged
 
 
 def mass_matrix_derivatives(model, Q, terms=None):

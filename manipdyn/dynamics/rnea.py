@@ -175,6 +175,7 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
         outward(mdl, work, Q[s], V[s], A[s], world or keep, keep)
         external(work, X, s, xb, xp, world)
         inward(mdl, work, tau[s])
+        rotor(mdl.armature, A[s], tau[s])
         if keep:
             store_terms(mdl, work, T[s])
         k = first_nonfinite(tau, s)            # the result is finite (else an intermediate overflowed)
@@ -235,7 +236,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
                 j = parent[i]
                 to = spare if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
-                inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB)
+                inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB, Z)
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
@@ -328,20 +329,22 @@ def external_lane(B, fe, ne, p, l, L):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def inward_lanes(i, mdl, B, to, TB):
+def inward_lanes(i, mdl, B, to, TB, Z):
     """``inward_lane`` for every lane of the block."""
-    mm = motion_model(i, mdl)
+    mm, ar = motion_model(i, mdl), mdl.armature[mdl.iv[i]]
     for l in range(LANES):
-        inward_lane(mm, B, to, TB, l, LANES)
+        inward_lane(mm, ar, B, to, TB, Z, l, LANES)
 
 
 @njit(cache=True, inline="always")
-def inward_lane(mm, B, to, TB, l, L):
-    """τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18) into row iv_i of TB, and the parent's f', n' (``to``: 6 rows) += R f'_i,
-    R n'_i + p × R f'_i (Eqs. 15, 16), at lane l, as ``inward`` for one state; mm: ``motion_model``."""
+def inward_lane(mm, ar, B, to, TB, Z, l, L):
+    """τ_i = Sᵀ [f'_i; n'_i] + armature_i q̈_i (Eqs. 17, 18; the rotor term as ``rotor``) into row iv_i of TB, and the
+    parent's f', n' (``to``: 6 rows) += R f'_i, R n'_i + p × R f'_i (Eqs. 15, 16), at lane l, as ``inward`` and
+    ``rotor`` for one state; mm: ``motion_model``, ar: joint i's armature, Z: the block's q, q̇, q̈."""
     r, sl, sa, nb = mm
     f, n = get3(B, 21, l, L), get3(B, 24, l, L)
-    TB[r * L + l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2]
+    TB[r * L + l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2] \
+        + ar * Z[(2 * nb + r) * L + l]                                            # τ += armature ⊙ q̈
     R = get_rotation(B, l, L)
     Rf, Rn = mul3(R, f), mul3(R, n)
     n_up = add(Rn, cross(get3(B, 9, l, L), Rf))
@@ -439,6 +442,14 @@ def inward(mdl, work, tau):
             Rf = rot(Rl, i, vec(f, i))
             put(f, j, add(vec(f, j), Rf))                                                  # Eq. 15
             put(n, j, add(vec(n, j), add(rot(Rl, i, vec(n, i)), cross(vec(pl, i), Rf))))  # Eq. 16
+
+
+@njit(cache=True, inline="always")
+def rotor(armature, a, tau):
+    """τ += armature ⊙ q̈: the rotor inertia of each joint's drive (Pinocchio's rnea with model.armature; docs/design.md
+    §3, Joint dynamics), so that rnea = (M + diag(armature)) q̈ + h."""
+    for r in range(tau.shape[0]):
+        tau[r] += armature[r] * a[r]
 
 
 @njit(cache=True, inline="always")

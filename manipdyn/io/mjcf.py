@@ -10,7 +10,8 @@ What is written (MuJoCo's XML reference, "MJCF"), so that MuJoCo's open-tree dyn
   in body axes (ixx iyy izz ixy ixz iyz); an inertia that is not positive definite (a zero moment, a massless
   body), which MuJoCo refuses as fullinertia, is written as principal axes ``quat`` + ``diaginertia``.
 - ``<joint type="hinge"|"slide" axis>`` at the body origin, ``range`` only for a limited joint (not a
-  continuous one); no damping, armature, friction or stiffness (MuJoCo's defaults are zero). A free-flyer
+  continuous one); the model's nonzero ``armature``, ``damping`` and ``friction`` as ``armature``, ``damping``,
+  ``frictionloss`` (MuJoCo applies frictionloss as a soft constraint: docs/design.md §3, Joint dynamics). A free-flyer
   root becomes ``<freejoint>`` (MuJoCo's q is [x y z qw qx qy qz], its v [linear (world); angular (body)]
   and its linear acceleration the origin's p̈, not ours: map states before comparing).
 - ``<option gravity>``: the Model's gravity.
@@ -90,15 +91,33 @@ def _body(parent_el, model, i) -> ET.Element:
             axes[:, 0] = -axes[:, 0]
         el.set("quat", _vec(_quat(axes)))
         el.set("diaginertia", _vec(np.maximum(moments, 0.0)))
+    dyn = _joint_dynamics(model, i)
     if model.kind[i] == FREEFLYER:
-        ET.SubElement(b, "freejoint", name=model.joint_names[i])
+        if dyn:                                      # <freejoint> takes none: a free <joint> does, one per joint
+            ET.SubElement(b, "joint", name=model.joint_names[i], type="free", **dyn)
+        else:
+            ET.SubElement(b, "freejoint", name=model.joint_names[i])
         return b
     j = ET.SubElement(b, "joint", name=model.joint_names[i],
-                      type="slide" if model.kind[i] == PRISMATIC else "hinge", axis=_vec(model.axis[i]))
+                      type="slide" if model.kind[i] == PRISMATIC else "hinge", axis=_vec(model.axis[i]), **dyn)
     lo, hi = model.lower[i], model.upper[i]
     if not model.continuous[i] and np.isfinite(lo) and np.isfinite(hi):
         j.set("range", _vec([lo, hi]))
     return b
+
+
+def _joint_dynamics(model, i) -> dict:
+    """Joint i's nonzero armature, damping, friction as MuJoCo's ``armature``, ``damping``, ``frictionloss`` (one
+    number per joint: a free flyer's six entries must be equal; ModelError otherwise)."""
+    out = {}
+    for key, attr in (("armature", "armature"), ("damping", "damping"), ("friction", "frictionloss")):
+        x = getattr(model, key)[model.idx_v[i]:model.idx_v[i] + model.nvs[i]]
+        if np.any(x != x[0]):
+            raise ModelError(f"model {model.name!r}: joint {model.joint_names[i]!r}: {key} {x.tolist()} differs "
+                             f"between its velocities; MJCF gives a joint one {attr}")
+        if x[0] != 0.0:
+            out[attr] = _num(x[0])
+    return out
 
 
 def _site(bodies, worldbody, body, name, pos, R=None):

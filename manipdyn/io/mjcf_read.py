@@ -39,8 +39,12 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   file's folder and must resolve (symlinks too) inside it; depth and count are bounded, their bytes count
   towards ``max_bytes``.
 
-Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``armature``, ``damping``, ``frictionloss``,
-``stiffness``, ``springref``, ``springdamper`` ("joint_dynamics": not applied yet; MuJoCo adds armature to M); a body's
+Read and applied: a joint's ``armature``, ``damping``, ``frictionloss`` (≥ 0) become the model's ``armature``,
+``damping`` and ``friction`` of each of its velocities (docs/design.md §3, Joint dynamics: M + diag(armature) as
+MuJoCo; damping and friction as joint torques in forward dynamics and simulation, friction regularised by tanh where
+MuJoCo's frictionloss is a soft constraint of its solver). A ``joint_dynamics=`` keyword sets or overrides them.
+Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``stiffness``, ``springref``, ``springdamper``
+("joint_dynamics": not applied yet); a body's
 ``gravcomp``, a tendon's ``stiffness``/``damping`` and ``<option density viscosity wind>`` (fluid forces)
 ("passive_force": MuJoCo's mj_rne leaves them out too);
 top-level elements not known, and attributes outside MuJoCo's schema on the elements read (``_ATTRS``: body, frame,
@@ -75,7 +79,8 @@ import os
 import numpy as np
 
 from ..errors import MJCFError, QuirkWarning
-from ..model import FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Frame, Model, Quirk, check_gravity
+from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Frame, Model, Quirk, check_gravity,
+                     with_joint_dynamics)
 from ..spatial import combine_inertias
 from .urdf import (MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, _LIST, _NUMBER, _SPACE, _check_psd, _parse_xml,
                    _show, _triangle)
@@ -94,7 +99,8 @@ _REFUSED_BODY_CHILDREN = {"composite", "flexcomp", "replicate", "attach", "plugi
 _TOP = {"compiler", "option", "size", "visual", "statistic", "default", "extension", "custom", "asset",
         "worldbody", "contact", "equality", "deformable", "tendon", "actuator", "sensor", "keyframe"}
 _MASS_GEOMS = ("sphere", "capsule", "cylinder", "box", "ellipsoid")
-_DYNAMICS = ("armature", "damping", "frictionloss", "stiffness", "springref")
+_APPLIED = ("armature", "damping", "frictionloss")    # → Model.armature, damping, friction (each dof of the joint)
+_DYNAMICS = ("stiffness", "springref")                # read, quirked, not applied
 
 # The attributes of MuJoCo 3-4's schema on the elements the reader interprets (MJCF XML reference); any other is
 # reported as an "unknown_element" quirk (MuJoCo refuses the file; an error with strict=True).
@@ -124,14 +130,16 @@ _ATTRS = {
 
 
 def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=None, tips=None, prune=False,
-              max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse"):
+              max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse",
+              joint_dynamics=None):
     """Read an MJCF file into a Model (see the module docstring for what is read, refused and converted).
 
     Parameters as ``load_urdf`` where they apply: gravity (3,) in the world frame (None: the file's ``<option
     gravity>``, MuJoCo's default [0, 0, −9.81]); strict=True refuses unknown top-level elements and inertias that
     violate the triangle inequality; locked / root / tips / prune as in ``manipdyn.reduce``; max_bytes bounds the
     file and its includes together; zero_mass_inertia "keep" | "drop", non_psd_inertia "refuse" | "keep" as in
-    load_urdf. A free joint in the file makes the model's free flyer (no ``root_joint`` keyword: the file says).
+    load_urdf; joint_dynamics ``{joint: dict(armature=, damping=, friction=)}`` overrides the file's armature, damping
+    and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes the model's free flyer (no ``root_joint`` keyword: the file says).
     Raises MJCFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
@@ -141,7 +149,7 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
         data = fh.read(max_bytes + 1)
     model = load_mjcf_string(data, source=path, gravity=gravity, strict=strict, max_bytes=max_bytes,
                              zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia,
-                             base_dir=os.path.dirname(os.path.abspath(path)))
+                             base_dir=os.path.dirname(os.path.abspath(path)), joint_dynamics=joint_dynamics)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
@@ -149,7 +157,8 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
 
 
 def load_mjcf_string(text, *, source="<string>", gravity=None, strict=False, max_bytes: int = MAX_BYTES,
-                     zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse", base_dir=None):
+                     zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse", base_dir=None,
+                     joint_dynamics=None):
     """Same as load_mjcf for MJCF text (str or bytes); ``source`` names it in messages; ``<include>`` files are
     read from ``base_dir`` (None: includes are refused)."""
     from .urdf import _check_policy
@@ -162,7 +171,7 @@ def load_mjcf_string(text, *, source="<string>", gravity=None, strict=False, max
     _expand_includes(xml, source, base_dir, max_bytes - len(data))
     reader = _Reader(xml, source, strict, zero_mass_inertia, quirks)
     g = reader.gravity() if gravity is None else check_gravity(gravity, source)
-    model = reader.build(g, non_psd_inertia)
+    model = with_joint_dynamics(reader.build(g, non_psd_inertia), joint_dynamics, source)
     _warn(model, source)
     return model
 
@@ -593,7 +602,8 @@ class _Reader:
                 raise MJCFError(f"{src}: {jw}: a free joint that is not the tree's first joint, alone in a top-level "
                                 f"body: not supported yet (the model has one free flyer, joint 0)")
             joints.append(dict(name=jname, body=body, kind=FREEFLYER, parent=-1, R0=np.eye(3), p0=np.zeros(3),
-                               axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False))
+                               axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False,
+                               dyn=self.joint_quirks(j, jcls, jname, jw, kind)))
             return 0, np.eye(3), np.zeros(3), np.zeros(3)
         a = self.bounded(self.num(j, "pos", jcls, jw, (3,), (0, 0, 0)), MAX_LENGTH, "coordinate", j, "pos", jw)
         u = self.num(j, "axis", jcls, jw, (3,), (0, 0, 1))
@@ -601,7 +611,7 @@ class _Reader:
             raise MJCFError(f"{src}: {jw}: <joint axis={_show(self.attr(j, 'axis', jcls))}> has no direction")
         u = u / np.max(np.abs(u))
         a, u = pf + Rf @ a, Rf @ (u / np.linalg.norm(u))        # through the enclosing <frame>s, if any
-        self.joint_quirks(j, jcls, jname, jw, kind)
+        dyn = self.joint_quirks(j, jcls, jname, jw, kind)
         lim, cont = self.limits(j, jcls, jw, kind)
         # mj_kinematics: each joint turns the body about its anchor, in the frame the previous joints left
         R0, p0 = (R, p + R @ a) if anchor is None else (np.eye(3), a - anchor)
@@ -614,7 +624,7 @@ class _Reader:
                                      f"drawn in the file; the file's pose is q = {x:g})"))
         joints.append(dict(name=jname, body=body if k == n - 1 else f"{body}:{jname}",
                            kind=REVOLUTE if kind == "hinge" else PRISMATIC, parent=b, R0=R0, p0=p0, axis=u, lim=lim,
-                           continuous=cont))
+                           continuous=cont, dyn=dyn))
         return len(joints) - 1, np.eye(3), -a, a
 
     def unique(self, name, what):
@@ -635,7 +645,15 @@ class _Reader:
         return _z_to(d), 0.5 * (ft[:3] + ft[3:])
 
     def joint_quirks(self, j, jcls, jname, jw, kind):
-        found = []
+        """(armature, damping, frictionloss) of the joint (each ≥ 0, applied: Model.armature, damping, friction);
+        a quirk for what is read and not applied (stiffness, springref, springdamper)."""
+        found, dyn = [], []
+        for key in _APPLIED:
+            x = self.num(j, key, jcls, jw)
+            x = 0.0 if x is None else float(x[0])
+            if not 0.0 <= x <= MAX_MASS:
+                raise MJCFError(f"{self.source}: {jw}: {key}={x!r}: must be >= 0 and <= {MAX_MASS:g}")
+            dyn.append(x)
         for key in _DYNAMICS:
             x = self.num(j, key, jcls, jw)
             if x is not None and x[0] != 0:
@@ -645,6 +663,7 @@ class _Reader:
             found.append(f"springdamper {sd[0]:g} {sd[1]:g}")
         if found:
             self.quirks.append(Quirk("joint_dynamics", jname, ", ".join(found) + ": read, not applied yet"))
+        return tuple(dyn)
 
     def limits(self, j, jcls, jw, kind):
         rng = self.num(j, "range", jcls, jw, (2,))
@@ -783,7 +802,9 @@ class _Reader:
             lower=lim[:, 0], upper=lim[:, 1], effort=np.full(nb, np.inf), velocity=np.full(nb, np.inf),
             gravity=np.array(gravity, float).reshape(3), frames=frames,
             merged={k: tuple(v) for k, v in merged.items()}, mimic=(), source=src, notes=(),
-            quirks=tuple(sorted(self.quirks, key=lambda q: order.index(q.kind))))
+            quirks=tuple(sorted(self.quirks, key=lambda q: order.index(q.kind))),
+            **{key: np.array([j["dyn"][k] for j in joints for _ in range(6 if j["kind"] == FREEFLYER else 1)], float)
+               for k, key in enumerate(("armature", "damping", "friction"))})
 
 
 def _solid(kind, s):

@@ -54,7 +54,7 @@ from lxml import etree
 
 from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
 from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, MimicModel, Model, Quirk,
-                     check_gravity)
+                     check_gravity, with_joint_dynamics)
 from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
@@ -82,7 +82,7 @@ MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data'
 
 def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
               root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep",
-              non_psd_inertia: str = "refuse", mimic: bool = False):
+              non_psd_inertia: str = "refuse", mimic: bool = False, joint_dynamics=None):
     """Read a URDF file into a Model (revolute, continuous, prismatic and fixed joints).
 
     Parameters: path to the .urdf file; root_joint None (fixed base) or "free_flyer" (the root link is a
@@ -97,7 +97,9 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     semi-definite beyond round-off is a ModelError naming every such body) or "keep" (loaded as Pinocchio, PyBullet
     and Drake load it, with a "non_psd_inertia" quirk naming each body's link and its smallest eigenvalue);
     mimic=True honours <mimic> (returns a MimicModel: mimic joints carry no coordinate, as Pinocchio 4.1's
-    ``buildModelFromUrdf(path, mimic=True)``), mimic=False loads them as independent joints.
+    ``buildModelFromUrdf(path, mimic=True)``), mimic=False loads them as independent joints; joint_dynamics
+    ``{joint: dict(armature=, damping=, friction=)}`` sets or overrides those joints' parameters (the file's
+    ``<dynamics damping friction>`` are read; URDF has no armature), ``model.with_joint_dynamics``.
     What the loader noticed is in ``model.quirks`` (see model.QUIRK_KINDS) and warned about once per kind.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
     for a root_joint other than None or "free_flyer" or a bad policy value.
@@ -113,7 +115,7 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
         data = fh.read(max_bytes + 1)        # never more than the limit, whatever the file claims
     model = load_urdf_string(data, source=path, root_joint=root_joint, gravity=gravity, strict=strict,
                              max_bytes=max_bytes, zero_mass_inertia=zero_mass_inertia,
-                             non_psd_inertia=non_psd_inertia, mimic=mimic)
+                             non_psd_inertia=non_psd_inertia, mimic=mimic, joint_dynamics=joint_dynamics)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
@@ -122,7 +124,7 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
 
 def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 0.0, -9.81), strict=False,
                      max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse",
-                     mimic: bool = False):
+                     mimic: bool = False, joint_dynamics=None):
     """Same as load_urdf for URDF text (str or bytes); ``source`` names it in messages."""
     _check_root_joint(root_joint, source)
     _check_policy(zero_mass_inertia, non_psd_inertia, mimic, source)
@@ -142,6 +144,7 @@ def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 
                      "loaded as an independent joint (mimic=False)")) for j, t, mult, off in model.mimic]
     order = list(QUIRK_KINDS)
     model = dataclasses.replace(model, quirks=tuple(sorted(quirks, key=lambda q: order.index(q.kind))))
+    model = with_joint_dynamics(model, joint_dynamics, source)
     _warn(model, source)
     return _mimic_model(model, source) if mimic else model
 
@@ -404,9 +407,11 @@ def _check_joint(j, joint_names, source):
         _check_limit(e, where, kind, source)
     for e in j.findall("mimic"):
         _check_mimic(e, name, joint_names, source)
-    for e in j.findall("dynamics"):            # not used by the model, but read (Pinocchio keeps them)
+    for e in j.findall("dynamics"):            # Model.damping, Model.friction (docs/design.md §3, Joint dynamics)
         for k in ("damping", "friction"):
-            _numbers(e, k, 1, where, source)
+            x = _numbers(e, k, 1, where, source)
+            if x is not None and not 0.0 <= x[0] <= MAX_MASS:
+                raise URDFError(f"{source}: {where}: <dynamics {k}={x[0]!r}>: must be >= 0 and <= {MAX_MASS:g}")
 
 
 def _check_axis(e, where, source, moving):
@@ -687,7 +692,20 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
         inertia=np.array([I for _, _, I in inertias], float).reshape(nb, 3, 3),
         lower=lim[:, 0], upper=lim[:, 1], effort=lim[:, 2], velocity=lim[:, 3],
         gravity=np.array(gravity, float).reshape(3), frames=frames,
-        merged={k: tuple(v) for k, v in merged.items()}, mimic=mimic, source=source, notes=tuple(notes))
+        merged={k: tuple(v) for k, v in merged.items()}, mimic=mimic, source=source, notes=tuple(notes),
+        damping=_dynamics(joints, "damping"), friction=_dynamics(joints, "friction"))
+
+
+def _dynamics(joints, key):
+    """<dynamics damping|friction> per velocity (nv,): 0 where absent; a free flyer's six entries are 0."""
+    out = []
+    for j, *_ in joints:
+        if j.type == "free_flyer":
+            out += [0.0] * 6
+        else:
+            x = getattr(j.dynamics, key, None) if j.dynamics is not None else None
+            out.append(float(x or 0.0))
+    return np.array(out, float)
 
 
 def _unit_axis(j, source, notes):

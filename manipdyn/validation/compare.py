@@ -226,7 +226,7 @@ def _lagrange_terms(model, ref, Q, V, A, T, progress, guard, chunk=250):
         M_lagrange=lambda q, v, t: mass_matrix(model, q, method="lagrange"),
         C=lambda q, v, t: coriolis_matrix(model, q, v), g=lambda q, v, t: gravity_torques(model, q),
         qdd_aba=lambda q, v, t: aba(model, q, v, t),
-        qdd_cholesky=lambda q, v, t: forward_dynamics(model, q, v, t, method="cholesky"),
+        qdd_cholesky=lambda q, v, t: forward_dynamics(model, q, v, t, method="cholesky", joint_dynamics=False),
         J_local_world_aligned=lambda q, v, t: _jacobians(model, q, None, "local_world_aligned"),
         J_local=lambda q, v, t: _jacobians(model, q, None, "local"),
         dJ_local_world_aligned=lambda q, v, t: _jacobians(model, q, v, "local_world_aligned"),

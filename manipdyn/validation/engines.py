@@ -23,10 +23,14 @@ to zero: we set ours. Drake welds the root link to the world (fixed base). <visu
 removed before any engine reads the file: no engine then needs meshes, and none can derive inertia from them.
 
 After import each adapter reads back every link's mass, CoM and inertia about the CoM in the link frame
-(Pinocchio: per body, fixed links already merged) and the armature/damping it adds per dof. ``explain``
-diffs those against the file's own numbers, link by link, and names the quirk; ``referee`` then rebuilds our
-model with the engine's parameters (``dataclasses.replace`` on mass/com/inertia, armature and damping added
-analytically) and compares again: what remains is the engine's precision.
+(Pinocchio: per body, fixed links already merged) and the armature/damping it adds per dof. The comparison
+includes our own joint dynamics (docs/design.md §3): the model's armature (in ``rnea`` and ``mass_matrix``) and
+its damping (URDF ``<dynamics damping>``) wherever the engine applies damping (``applied_damping``); friction is
+left out on both sides (MuJoCo's frictionloss is a constraint, off in these queries). ``explain`` diffs the
+engine's parameters against the file's own numbers, link by link, and against our armature and damping, and names
+the quirk; ``referee`` then rebuilds our model with the engine's parameters (``dataclasses.replace`` on
+mass/com/inertia, the engine's armature and damping added analytically) and compares again: what remains is the
+engine's precision.
 
 Engines are imported here only, lazily, inside the adapters: ``import manipdyn`` loads none of them.
 """
@@ -522,14 +526,21 @@ def explain(model, adapter, inertials) -> list:
             f"{e}: body {body!r} (links {', '.join(links)}) has mass {em[i]:.6g} kg, inertia trace "
             f"{np.trace(eI[i]):.6g}; ours {model.mass[i]:.6g} kg, {np.trace(model.inertia[i]):.6g}"
             + (f" — the file's {'; '.join(quirks)}" if quirks else ""))))
-    for j, name in enumerate(model.joint_names):
-        if adapter.armature[j]:
+    for j, name in enumerate(model.joint_names):    # ours: model.armature, model.damping (docs/design.md §3)
+        if _differs(adapter.armature[j], model.armature[j]):
             causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {adapter.armature[j]:g} "
-                               f"kg m² to joint {name!r} (M's diagonal)"))
-        if adapter.damping[j]:
+                               f"kg m² to joint {name!r} (M's diagonal); ours {model.armature[j]:g}"))
+        if adapter.damping[j] and _differs(adapter.damping[j], model.damping[j]):
             causes.append(dict(link=name, kind="damping", text=f"{e} applies joint damping "
-                               f"{adapter.damping[j]:g} N m s/rad to joint {name!r} (from <dynamics>)"))
+                               f"{adapter.damping[j]:g} N m s/rad to joint {name!r} (from <dynamics>); ours "
+                               f"{model.damping[j]:g}"))
     return causes
+
+
+def applied_damping(model, adapter):
+    """Our damping (nv,) where the engine applies damping in its queries (its read-back damping is nonzero), else 0:
+    what our side of a comparison adds, as the engine does (τ += d q̇ in ID if ``damping_in_id``, and in FD)."""
+    return np.where(adapter.damping != 0, model.damping, 0.0)
 
 
 def precision_causes(model, adapter, inertials, floor=1e-13, k=3) -> list:
@@ -714,14 +725,16 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
         with _quiet():
             theirs = _engine_terms(ad, Q, V, A, T)
         res.notes = list(ad.notes)
-        res.err = _errors(theirs, ours)
+        res.err = _errors(theirs, _our_terms(model, Q, V, A, T, np.zeros(model.nv), applied_damping(model, ad),
+                                             ad.damping_in_id))      # our armature (in M) and damping
         res.causes = explain(model, ad, inertials)
         if (res.worst or 0) > TOL and not res.causes:
             res.causes = precision_causes(model, ad, inertials)
         if theirs.get("why"):
             res.notes.append(f"{name} forward dynamics: {theirs['why']}")
         nm = neutralised(model, ad)
-        res.neutral = _errors(theirs, _our_terms(nm, Q, V, A, T, ad.armature, ad.damping, ad.damping_in_id))
+        res.neutral = _errors(theirs, _our_terms(nm, Q, V, A, T, ad.armature - model.armature, ad.damping,
+                                                 ad.damping_in_id))
         res.seconds = time.perf_counter() - t0
         rep.engines.append(res)
         del ad
@@ -729,7 +742,8 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
 
 
 def _our_terms(model, Q, V, A, T, arm, damp, damp_in_id=True):
-    """Our τ, M, q̈ on the states, with an engine's armature and damping added (zero: ours alone)."""
+    """Our τ, M, q̈ on the states (the model's armature in τ and M, as ``rnea`` and ``mass_matrix`` hold it), with
+    arm added to M's diagonal and damp as the engine applies damping (zeros: rnea, mass_matrix, aba alone)."""
     tau = rnea(model, Q, V, A) + arm * A + (damp * V if damp_in_id else 0.0)
     M = mass_matrix(model, Q) + np.diag(arm)
     out = dict(tau=tau, M=M, qdd=None, why="", cond=np.linalg.cond(M))

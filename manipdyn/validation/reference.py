@@ -42,6 +42,7 @@ class Reference:
             raise ManipdynError(f"{urdf_path}: joint order differs from Pinocchio's: ours "
                                 f"{model.joint_names}, Pinocchio {names}")
         self.pm.gravity.linear = np.asarray(model.gravity, float)
+        self.pm.armature = np.asarray(model.armature, float)      # M + diag(armature), as ours (docs §3)
         self.idx_q = np.array([self.pm.joints[i + 1].idx_q for i in range(model.njoints)], int)
         self.nq_j = np.array([self.pm.joints[i + 1].nq for i in range(model.njoints)], int)
 

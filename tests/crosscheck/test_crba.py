@@ -145,7 +145,8 @@ def floating_model(path):
     assert model.joint_names[0] == "root_joint" and model.body_names[0] == root
     kind, axis, lower, upper = model.kind.copy(), model.axis.copy(), model.lower.copy(), model.upper.copy()
     kind[0], axis[0], lower[0], upper[0] = FREEFLYER, 0.0, -np.inf, np.inf
-    return dataclasses.replace(model, kind=kind, axis=axis, lower=lower, upper=upper)
+    dyn = {k: np.concatenate([np.zeros(6), getattr(model, k)[1:]]) for k in ("armature", "damping", "friction")}
+    return dataclasses.replace(model, kind=kind, axis=axis, lower=lower, upper=upper, **dyn)
 
 
 def floating_states(model, n, rng):

@@ -74,14 +74,15 @@ def test_open_tree_m_and_tau(path):
     model = _load(path)
     m, d, iq, iv = _mujoco(model)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)     # the tree: closures off
-    assert m.nv == model.nv and not m.dof_armature.any() and not m.dof_damping.any()
+    assert m.nv == model.nv and np.array_equal(m.dof_armature[iv], model.armature)     # <dynamics damping>: written,
+    assert np.array_equal(m.dof_damping[iv], model.damping)                              # and mj_inverse adds d q̇
     rng = np.random.default_rng(0)
     worst = 0.0
     for _ in range(10):
         q, v, a = rng.uniform(-np.pi, np.pi, model.nv), rng.normal(size=model.nv), rng.normal(size=model.nv)
         d.qpos[iq], d.qvel[iv], d.qacc[iv] = q, v, a
         mujoco.mj_inverse(m, d)
-        worst = max(worst, err(d.qfrc_inverse[iv], md.rnea(model, q, v, a)),
+        worst = max(worst, err(d.qfrc_inverse[iv], md.rnea(model, q, v, a) + model.damping * v),
                     err(_full_m(m, d)[np.ix_(iv, iv)], md.mass_matrix(model, q)))
     print(f"\n{path.stem}: M and τ against MuJoCo: {worst:.1e}")
     assert worst <= OPEN, f"{path.stem}: {worst:.2e}"

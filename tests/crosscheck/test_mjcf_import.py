@@ -1,7 +1,7 @@
 """The MJCF reader (manipdyn.io.mjcf_read): MJCF files become Models whose M and τ are MuJoCo's and Pinocchio's.
 
-References (independent of the reader): MuJoCo 4.0 compiling the same text (mj_fullM minus dof_armature; mj_rne
-with gravity, which leaves out armature and passive forces; body_mass / body_ipos / body_iquat / body_inertia;
+References (independent of the reader): MuJoCo 4.0 compiling the same text (mj_fullM, with its armature as
+ours; mj_rne with gravity, which leaves out armature — added back as armature ⊙ q̈ — and passive forces; body_mass / body_ipos / body_iquat / body_inertia;
 site_xpos / site_xmat); Pinocchio 4.1's buildModelFromMJCF; and, for the round trip to_mjcf -> load_mjcf_string,
 the URDF model the text was written from (two models of ours, built by two readers from two formats).
 
@@ -63,7 +63,7 @@ def full_m(m, d):
 
 
 def mujoco_errors(model, m, n=5, seed=0):
-    """Worst err of our M and τ against MuJoCo's (M = mj_fullM − armature, τ = mj_rne with q̈) over n random
+    """Worst err of our M and τ against MuJoCo's (M = mj_fullM, τ = mj_rne with q̈ + armature ⊙ q̈) over n random
     states, MuJoCo's conventions converted here: free joint qpos [x y z qw qx qy qz], qvel [R v_lin (world);
     ω (body)], qacc's linear part the origin's world acceleration R (a_lin + ω × v_lin), its generalized force
     and M rows for the linear dofs in world axes (τ_mj = Tᵀ τ, M_mj = Tᵀ M T with v = T v_mj)."""
@@ -97,24 +97,24 @@ def mujoco_errors(model, m, n=5, seed=0):
         d.qacc[:] = qacc
         tau_mj = np.zeros(m.nv)
         mujoco.mj_rne(m, d, 1, tau_mj)
-        M_mj = full_m(m, d) - np.diag(m.dof_armature)
+        M_mj = full_m(m, d)                            # with MuJoCo's armature, as ours (model.armature)
+        tau_mj += m.dof_armature * qacc                # mj_rne leaves it out; rnea has it (Pinocchio's)
         tau, M = md.rnea(model, q, v, a), md.mass_matrix(model, q)
         worst = max(worst, err(T.T @ tau, tau_mj[iv]), err(T.T @ M @ T, M_mj[np.ix_(iv, iv)]))
     return worst
 
 
 def pin_errors(model, path, n=5, seed=1):
-    """Worst err of our M and τ against Pinocchio's buildModelFromMJCF of the same file (its armature removed)."""
+    """Worst err of our M and τ against Pinocchio's buildModelFromMJCF of the same file (armature in both)."""
     import pinocchio as pin
     pm = pin.buildModelFromMJCF(str(path))
     assert (pm.nq, pm.nv) == (model.nq, model.nv)
     pd, rng, worst = pm.createData(), np.random.default_rng(seed), 0.0
-    arm = np.asarray(pm.armature)
     for _ in range(n):
         q, v, a = random_state(model, rng)
         M = pin.crba(pm, pd, q)
-        M = np.triu(M) + np.triu(M, 1).T - np.diag(arm)
-        tau = pin.rnea(pm, pd, q, v, a) - arm * a
+        M = np.triu(M) + np.triu(M, 1).T
+        tau = pin.rnea(pm, pd, q, v, a)
         worst = max(worst, err(md.rnea(model, q, v, a), tau), err(md.mass_matrix(model, q), M))
     return worst
 
@@ -357,9 +357,11 @@ def test_quirks_name_each_joint_and_value():
     with pytest.warns(md.QuirkWarning, match="joint_dynamics"):
         model = md.load_mjcf_string(text)
     q = {x.name: x.detail for x in model.quirks if x.kind == "joint_dynamics"}
-    assert set(q) == {"hip", "arm", "x"} and "springdamper 0.5 1" in q["x"]
-    assert "armature 0.1" in q["hip"] and "damping 2" in q["hip"] and "frictionloss 0.3" in q["hip"]
-    assert "stiffness 5" in q["arm"] and "springref 0.2" in q["arm"]
+    assert set(q) == {"arm", "x"} and "springdamper 0.5 1" in q["x"]        # hip's armature, damping, frictionloss:
+    assert "stiffness 5" in q["arm"] and "springref 0.2" in q["arm"]         # applied, not quirked
+    k = model.joint_index("hip")
+    assert (model.armature[k], model.damping[k], model.friction[k]) == (0.1, 2.0, 0.3)
+    assert np.count_nonzero(model.armature) == 1 and np.count_nonzero(model.friction) == 1
     assert {x.name for x in model.quirks if x.kind == "joint_ref"} == {"ry", "hip", "knee"}
 
 

@@ -1,6 +1,6 @@
 """Third-party MJCF: gymnasium's MuJoCo assets (gymnasium supplies the files only; its set is skipped without it) and
 PyBullet's pybullet_data/mjcf (the engines extra). A file MuJoCo 4.0 loads either loads here and agrees with MuJoCo
-(M = mj_fullM − armature, τ = mj_rne; conventions as in test_mjcf_import.mujoco_errors) or is refused with an
+(M = mj_fullM, τ = mj_rne + armature ⊙ q̈: armature applied as MuJoCo does; conventions as in test_mjcf_import.mujoco_errors) or is refused with an
 MJCFError naming what is not supported; a file MuJoCo refuses (old MJCF: global coordinates, a tendon on a missing
 joint, unknown attributes) is loaded or refused by an MJCFError, never another exception. docs/mjcf.md holds the
 table (``PYTHONPATH=. python scripts/mjcf_table.py`` writes it) and must list every file with the same outcome.

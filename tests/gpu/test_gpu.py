@@ -27,9 +27,9 @@ from numba import cuda
 from manipdyn.validation import random_states
 from test_lanes import _tree
 warnings.simplefilter("ignore")
-from test_gpu import wrenches
+from test_gpu import tree_model, wrenches
 out = dict(nojit=_jit.NOJIT, sim=cuda.simulator_enabled if hasattr(cuda, "simulator_enabled") else None)
-for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", md.load_urdf_string(_tree(tool=True)))):
+for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tree))):
     for N in (1, 7, 40):
         Q, V, A = random_states(model, N, np.random.default_rng(N))
         dq = cuda.to_device(Q)                      # a device array in, as a user's would be
@@ -82,6 +82,14 @@ print(json.dumps(out))
 """
 
 
+def tree_model(_tree):
+    """The test tree with a turned, offset tool frame and armature on every joint (so that the GPU's CRBA, RNEA and
+    ABA steps read it: M + diag(armature), τ += armature ⊙ q̈, D_i + armature_i)."""
+    import dataclasses
+    model = md.load_urdf_string(_tree(tool=True))
+    return dataclasses.replace(model, armature=np.linspace(0.1, 0.9, model.nv))
+
+
 def wrenches(model, N):
     """f_ext for the probe: on the tip body, a mid body (a (3,) moment, the same for every state), the "tool" frame
     (offset from its body and turned: R and p × f count) and a frame of the fixed base (dropped: it changes no
@@ -116,7 +124,8 @@ def test_the_probe_ran_the_simulator_uncompiled(probe):
 def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     sys.path.insert(0, str(ROOT / "tests" / "batch"))
     from test_lanes import _tree
-    model = md.load_urdf(AAU) if name == "aau_arm" else md.load_urdf_string(_tree(tool=True))
+    model = md.load_urdf(AAU) if name == "aau_arm" else tree_model(_tree)
+    assert name == "aau_arm" or model.armature.all()
     Q, V, A = random_states(model, N, np.random.default_rng(N))
     got = {k: np.array(x) for k, x in probe[f"{name}/{N}"].items()}
     assert_close(got["rnea"], md.rnea(model, Q, V, A), 1e-14, "rnea")                        # measured ≤ 2e-16
