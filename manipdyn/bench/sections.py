@@ -140,7 +140,8 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "potential_energy": Case(lambda q, v, a: potential_energy(model, q),
                                  lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), "computePotentialEnergy", None,
                                  as_ours=np.atleast_1d, as_pin=np.atleast_1d),
-        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics_(model, q, v, a, method="cholesky"),
+        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics_(model, q, v, a, method="cholesky",
+                                                                              joint_dynamics=False),   # as P.aba
                                             lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
         "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives_(model, q, v, a),
                                  lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),

@@ -18,7 +18,7 @@ import pytest
 
 import manipdyn as md
 from manipdyn.errors import InputError
-from tests.conftest import AAU, assert_close
+from tests.conftest import AAU, assert_close, err
 from tests.crosscheck.test_crba import _pin_q, random_tree_text
 
 pin = pytest.importorskip("pinocchio")
@@ -254,3 +254,39 @@ def test_mimic_model_joint_dynamics_act_through_the_map():
     want = md.aba(mm, q, v, tau - loss)
     assert_close(md.forward_dynamics(mm, q, v, tau), want, 1e-15, "q̈")                 # the same solve: 0
     assert _err(md.forward_dynamics(mm, q, v, tau, joint_dynamics=False), want) > 1e-3
+
+
+@pytest.mark.parametrize("method", ["aba", "cholesky"])
+def test_simulate_loses_what_damping_and_friction_take(method):
+    """Power balance over a simulated motion without gravity or torque: the energy T + ½ q̇ᵀ diag(armature) q̇ falls by
+    ∫ q̇ᵀ (d ⊙ q̇ + f ⊙ tanh(q̇/ε)) dt (a physical law; the integral by the trapezoid rule on RK4's samples, so the
+    residue is set by dt, not by rounding); with joint_dynamics=False the energy is conserved."""
+    from manipdyn.model import FRICTION_EPS
+    model = md.load_urdf(AAU, gravity=(0.0, 0.0, 0.0),
+                         joint_dynamics={j: dict(armature=0.2, damping=0.4, friction=0.3) for j in
+                                         md.load_urdf(AAU).joint_names})
+    rng = np.random.default_rng(12)
+    q0, v0 = md.random_configuration(model, rng=rng), rng.normal(0, 2, model.nv)
+
+    def energy(r):
+        return md.kinetic_energy(model, r.q, r.v) + 0.5 * np.sum(model.armature * r.v ** 2, axis=-1)
+
+    r = md.simulate(model, q0, v0, (0.0, 0.5), dt=1e-3, integrator="rk4", method=method)
+    E = energy(r)
+    P = np.sum(r.v * (model.damping * r.v + model.friction * np.tanh(r.v / FRICTION_EPS)), axis=-1)
+    lost = np.sum(0.5 * (P[1:] + P[:-1]) * np.diff(r.t))
+    assert E[0] - E[-1] > 0.2 * E[0]                                  # the losses are felt: measured 58 %
+    assert abs((E[0] - E[-1]) - lost) < 1e-5 * E[0], (E[0] - E[-1], lost)   # measured 3.1e-7 (the trapezoid rule
+    #                                                                          across tanh's steep sign changes)
+    free = md.simulate(model, q0, v0, (0.0, 0.5), dt=1e-3, integrator="rk4", method=method, joint_dynamics=False)
+    Ef = energy(free)
+    assert abs(Ef[-1] - Ef[0]) < 1e-11 * Ef[0]                       # conserved: measured 5.2e-13 (RK4, dt = 1e-3)
+
+
+def test_regressor_is_the_rigid_bodies_and_armature_a_known_term():
+    """Y π = rnea − armature ⊙ q̈: the regressor holds the bodies' parameters only (docs/derivatives.md)."""
+    model, _, _ = _models("tree6")
+    Q, V, A = _states(model, 5, 9)
+    Y, pi = md.joint_torque_regressor(model, Q, V, A), md.dynamic_parameters(model)
+    assert_close(Y @ pi + model.armature * A, md.rnea(model, Q, V, A), 1e-14, "Y π + armature q̈")   # measured 1.4e-16
+    assert err(Y @ pi, md.rnea(model, Q, V, A)) > 1e-3                      # (1.6e-2: the armature counts)
