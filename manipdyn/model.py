@@ -47,7 +47,7 @@ def check_joint_dynamics(x, key, nv, where, names=None) -> np.ndarray:
     if bad.size:
         k = int(bad[0])
         who = f" (joint {names[k]!r})" if names is not None else ""
-        raise InputError(f"{where}: {key}[{k}]{who} = {a[k]!r}: must be finite and >= 0")
+        raise InputError(f"{where}: {key}[{k}]{who} = {float(a[k])!r}: must be finite and >= 0")
     return a
 
 

@@ -290,3 +290,20 @@ def test_regressor_is_the_rigid_bodies_and_armature_a_known_term():
     Y, pi = md.joint_torque_regressor(model, Q, V, A), md.dynamic_parameters(model)
     assert_close(Y @ pi + model.armature * A, md.rnea(model, Q, V, A), 1e-14, "Y π + armature q̈")   # measured 1.4e-16
     assert err(Y @ pi, md.rnea(model, Q, V, A)) > 1e-3                      # (1.6e-2: the armature counts)
+
+
+def test_readers_refuse_negative_joint_dynamics_by_name():
+    from manipdyn.errors import MJCFError, URDFError
+    mj = ('<mujoco><worldbody><body name="b"><joint name="j" axis="0 0 1" {}/><inertial pos="0 0 0" mass="1" '
+          'diaginertia="1 1 1"/></body></worldbody></mujoco>')
+    with pytest.raises(MJCFError, match="joint 'j'.*armature"):
+        md.load_mjcf_string(mj.format('armature="-1"'))
+    assert md.load_mjcf_string(mj.format('damping="2" frictionloss="0.5"')).friction.tolist() == [0.5]
+    text = AAU.read_text().replace('<joint name="joint2" type="revolute">',
+                                   '<joint name="joint2" type="revolute"><dynamics damping="-0.5"/>', 1)
+    assert text != AAU.read_text()
+    with pytest.raises(URDFError, match="joint2.*damping"):
+        md.load_urdf_string(text)
+    ok = md.load_urdf_string(text.replace('damping="-0.5"', 'damping="0.5" friction="0.25"'))
+    k = ok.joint_index("joint2")
+    assert (ok.damping[k], ok.friction[k]) == (0.5, 0.25) and np.count_nonzero(ok.damping) == 1
