@@ -991,7 +991,8 @@ def _poses_at_qpos0(joints):
             out.append(j["q0"])
             continue
         R, p = Rp @ j["R0"], pp + Rp @ j["p0"]                 # the joint frame; then the joint's motion by q0
-        out.append((R @ _axis_R(j["axis"], j["q0"]), p) if j["kind"] == REVOLUTE else (R, p + R @ (j["q0"] * j["axis"])))
+        out.append((R @ _axis_R(j["axis"], j["q0"]), p) if j["kind"] == REVOLUTE
+                   else (R, p + R @ (j["q0"] * j["axis"])))
     return out
 
 

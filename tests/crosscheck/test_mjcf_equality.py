@@ -142,7 +142,8 @@ BODIES = """<mujoco><compiler angle="radian"/>
     <body name="b" pos="1.2 0 1"><joint name="j3" axis="1 0 0"/><joint name="j4" axis="0 1 0" pos="0 0.1 0"/>
       <inertial pos="0 0 -0.2" mass="1" diaginertia="0.02 0.02 0.01"/>
       <body name="b2" pos="0 0 -0.5"><joint name="j5" type="slide" axis="0 0 1" ref="0.05"/>
-        <inertial pos="0 0 0" mass="0.5" diaginertia="0.01 0.01 0.01"/><site name="sb" pos="0.1 0.2 0" euler="0 1 0"/></body>
+        <inertial pos="0 0 0" mass="0.5" diaginertia="0.01 0.01 0.01"/>
+        <site name="sb" pos="0.1 0.2 0" euler="0 1 0"/></body>
       <body name="b3" pos="0 0 -0.5"><joint name="j6" axis="0 0 1" ref="0.25"/>
         <inertial pos="0 0 0" mass="0.5" diaginertia="0.01 0.01 0.01"/></body>
       <body name="b4" pos="0.1 0 -0.5"><joint name="j7" axis="0 0 1" ref="0.5"/>
