@@ -44,6 +44,8 @@ import numpy as np
 MAX_JSON_BYTES = 16 << 20          # the JSON document of one glTF
 MAX_TRIANGLES = 1_000_000          # per file: 50 MB of binary STL, under geometry.MAX_MESH_BYTES
 MAX_BYTES = 64 << 20               # file + buffers, default (geometry passes its own limit)
+MAX_ELEMENTS_PER_TRIANGLE = 8      # accessor elements read (positions + indices, all accessors) per triangle allowed
+MAX_NOTES = 5                      # notes on skipped primitives kept (then a count)
 
 _GLB_MAGIC, _JSON_CHUNK, _BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
 _DATA_URI = re.compile(r"data:application/(?:octet-stream|gltf-buffer);base64,", re.I)
@@ -76,10 +78,14 @@ class Gltf:
     bytes_read: int = 0
 
 
-def read_gltf(path, max_bytes=MAX_BYTES, max_triangles=MAX_TRIANGLES) -> Gltf:
-    """The triangles of the default scene of a .glb or .gltf file; GltfError says why a file is refused."""
+def read_gltf(path, max_bytes=None, max_triangles=None) -> Gltf:
+    """The triangles of the default scene of a .glb or .gltf file; GltfError says why a file is refused.
+
+    ``max_bytes`` bounds the file and its buffers together (default MAX_BYTES), ``max_triangles`` the
+    triangles drawn, every instance counted (default MAX_TRIANGLES)."""
     try:
-        return _Reader(Path(path), max_bytes, max_triangles).read()
+        return _Reader(Path(path), MAX_BYTES if max_bytes is None else max_bytes,
+                       MAX_TRIANGLES if max_triangles is None else max_triangles).read()
     except GltfError:
         raise
     except (ValueError, TypeError, KeyError, IndexError, OverflowError, AttributeError, struct.error) as exc:
@@ -105,6 +111,8 @@ class _Reader:
         self.bytes_read = 0
         self.bin = None                 # the GLB's BIN chunk
         self.buffers = {}               # index -> bytes, loaded when an accessor needs them
+        self.accessors = {}             # index -> array, each accessor read once
+        self.elements = 0               # accessor elements read, at most MAX_ELEMENTS_PER_TRIANGLE * max_triangles
         self.notes = []
 
     # ------------------------------------------------------------------ files and buffers
@@ -230,6 +238,8 @@ class _Reader:
         """Accessor k as an (count, width) array; ``types``/``components`` are the allowed type and
         componentType values."""
         where = f"accessor {k} ({what})"
+        if k in self.accessors and self.accessors[k][0] == (types, components):
+            return self.accessors[k][1]
         acc = _item(self.doc, "accessors", k)
         if "sparse" in acc:
             raise GltfError(f"{where} is sparse (sparse accessors are not read)")
@@ -243,6 +253,11 @@ class _Reader:
         if count > 3 * self.max_triangles:
             raise GltfError(f"{where}: count {count}, more than the {3 * self.max_triangles} vertices of the "
                             f"{self.max_triangles} triangles a glTF file may draw")
+        self.elements += count
+        if self.elements > MAX_ELEMENTS_PER_TRIANGLE * self.max_triangles:
+            raise GltfError(f"accessors of more than {MAX_ELEMENTS_PER_TRIANGLE * self.max_triangles} elements "
+                            f"in all ({MAX_ELEMENTS_PER_TRIANGLE} per triangle of the {self.max_triangles} a glTF "
+                            f"file may draw)")
         if "bufferView" not in acc:
             raise GltfError(f"{where} has no bufferView (an all-zero accessor draws nothing)")
         bv_k = _int(acc, "bufferView", where)
@@ -265,8 +280,10 @@ class _Reader:
         if end > v_len:
             raise GltfError(f"{where}: {count} elements from byte {a_off} with stride {stride} end at byte "
                             f"{end}, past its bufferView {bv_k} ({v_len} bytes)")
-        return np.ndarray((count, width), dtype=dt, buffer=buf, offset=v_off + a_off,
-                          strides=(stride, dt.itemsize)).copy()
+        out = np.ndarray((count, width), dtype=dt, buffer=buf, offset=v_off + a_off,
+                         strides=(stride, dt.itemsize)).copy()
+        self.accessors[k] = ((types, components), out)
+        return out
 
     # ------------------------------------------------------------------ document
     def _document(self, doc) -> Gltf:
@@ -315,8 +332,9 @@ class _Reader:
             stack.extend((c, M) for c in reversed(children))
         if not out:
             raise GltfError("no triangles to draw" + (f" ({'; '.join(self.notes)})" if self.notes else ""))
-        tri = np.concatenate(out)
-        return Gltf(tri, rgba or None, self.notes, self.bytes_read)
+        notes = self.notes[:MAX_NOTES] + ([f"... and {len(self.notes) - MAX_NOTES} more skipped primitives"]
+                                          if len(self.notes) > MAX_NOTES else [])
+        return Gltf(np.concatenate(out), rgba, notes, self.bytes_read)
 
     def _primitive(self, m, p, prim):
         """Primitive p of mesh m as (N, 3, 3) float64 triangles in the mesh frame, or None (with a note)."""

@@ -118,6 +118,14 @@ def test_non_triangle_primitives_are_skipped_with_a_note(tmp_path):
     b.node(root=True, mesh=b.mesh(lines, tris))
     got = read_gltf(write(tmp_path, b, "glb"))
     assert len(got.triangles) == 12 and len(got.notes) == 1 and "mode 1 (LINES)" in got.notes[0]
+    b.doc["meshes"][0]["primitives"] = [dict(lines, mode=m) for m in (0, 1, 2, 3, 5, 6, 0)] + [tris]
+    got = read_gltf(write(tmp_path, b, "glb"))          # at most 5 notes, then a count
+    assert len(got.triangles) == 12 and len(got.notes) == 6 and got.notes[-1] == "... and 2 more skipped primitives"
+    assert "mode 5 (TRIANGLE_STRIP)" in got.notes[4]
+    # load_visuals draws the visual and warns about the skipped primitives, naming the link
+    path = robot_with_mesh(tmp_path, "cube.glb")
+    with pytest.warns(GeometryWarning, match=r"link 'arm': visual 0: mesh 'cube.glb': mesh 0 primitive 0 skipped"):
+        assert len(load_visuals(path)) == 1
 
 
 def test_binary_stl_layout():
