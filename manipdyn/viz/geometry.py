@@ -16,7 +16,8 @@ GeometryWarning naming the link and the value: nothing outside the roots is ever
 
 glTF 2.0 meshes (.gltf + .bin, .glb) are converted here to binary STL by viz/gltf.py (the bundled meshcat
 viewer draws only stl, obj and dae); their buffers are read only inside the mesh file's own folder. Without a
-URDF <material>, the first primitive's baseColorFactor colours the visual.
+URDF <material>, the first primitive's baseColorFactor colours the visual. glTF is y-up: its vertices are
+turned into the z-up frame of a URDF link (GLTF_TO_URDF) before the URDF's scale and origin apply.
 """
 from __future__ import annotations
 
@@ -39,6 +40,9 @@ MAX_MESH_BYTES = 64 << 20        # one mesh file (example-robot-data's largest: 
 MAX_MESH_TOTAL = 512 << 20       # all meshes of one URDF together
 MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae", ".gltf": "gltf", ".glb": "gltf"}
 DEFAULT_RGBA = (0.7, 0.7, 0.75, 1.0)
+# glTF is y-up (its spec), a URDF link z-up: a .gltf/.glb's vertices are turned +90° about x, (x, y, z) → (x, -z, y),
+# as RViz (ros2/rviz#1482), Drake and Blender's importer do; see viz/gltf.py
+GLTF_TO_URDF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 _PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")   # plain ASCII decimal
 
@@ -300,7 +304,7 @@ def _gltf_mesh(filename, path, budget, notes):
         got = read_gltf(path, max_bytes=min(MAX_MESH_BYTES, budget[0]))
     except GltfError as exc:
         raise _Skip(f"mesh {filename!r}: {exc}") from None
-    data = binary_stl(got.triangles)
+    data = binary_stl(got.triangles @ GLTF_TO_URDF.T)
     cost = max(got.bytes_read, len(data))
     if cost > budget[0]:
         raise _Skip(f"mesh {filename!r}: its STL of {len(data)} bytes exceeds the {MAX_MESH_TOTAL} of all meshes")

@@ -22,10 +22,13 @@ column-major, or ``translation`` · ``rotation`` (x, y, z, w) · ``scale``), eac
 view's ``byteOffset``/``byteStride`` and the accessor's ``byteOffset``; and the first primitive's
 ``pbrMetallicRoughness.baseColorFactor``. Any refusal raises GltfError with the reason.
 
-Axes: glTF is y-up in metres, but a URDF's mesh is placed as its file gives it: urdfdom and RViz (through
-assimp, which converts no glTF axes) apply no conversion, nor do Pinocchio's mesh loaders nor meshcat (which
-draws the file's vertices in the visual's frame). Vendors that ship .glb in URDFs export them in the link
-frame, so the vertices are used as they are, with no y-up → z-up turn.
+Axes: glTF is y-up (+Y up, +Z forward, metres), a URDF link z-up. The triangles returned here are in the
+file's own frame; viz/geometry.py turns them +90° about x, (x, y, z) → (x, -z, y), before the URDF's scale
+and origin apply. That is what the tools that read glTF in robot descriptions do now: RViz since
+ros2/rviz#1482 (2025; before it, assimp passed glTF vertices through unturned, and TRI's glTF robots lay on
+their side, ros2/rviz#1229), Drake and its meshcat, Blender's importer. urdfdom only passes the file name on;
+meshcat draws stl/obj/dae only. Pinocchio's assimp-based loaders (hpp-fcl/coal) apply no turn, so a .glb
+collision mesh there is y-up: a file authored for that reading lies on its side here (rotate its <origin>).
 """
 from __future__ import annotations
 

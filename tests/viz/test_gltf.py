@@ -1,6 +1,7 @@
 """glTF 2.0 meshes (manipdyn/viz/gltf.py): small files written by hand (tests/gltf_files.py) read back as the
 triangles they describe — vertices moved by transforms computed here independently (Rodrigues, not a
-quaternion formula), a cube's volume and area — and a URDF that names a .glb draws it in the exported page."""
+quaternion formula), a cube's volume and area — and a URDF that names a .glb draws it in the exported page,
+turned from glTF's y-up into the link's z-up."""
 from __future__ import annotations
 
 import base64
@@ -143,7 +144,7 @@ def test_urdf_with_glb_loads_and_its_page_is_written(tmp_path):
     assert MESH_FORMATS[".glb"] == MESH_FORMATS[".gltf"] == "gltf"
     (tmp_path / "meshes").mkdir()
     b = Builder()
-    b.cube(translation=[0.0, 0.0, 0.2], scale=[0.1, 0.1, 0.1])
+    b.cube(translation=[0.0, 0.2, 0.0], scale=[0.1, 0.2, 0.3])        # 0.2 m up (+y) in the y-up file
     b.doc["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.2, 1.0]}}]
     b.doc["meshes"][0]["primitives"][0]["material"] = 0
     (tmp_path / "meshes" / "arm.glb").write_bytes(b.glb())
@@ -160,7 +161,8 @@ def test_urdf_with_glb_loads_and_its_page_is_written(tmp_path):
     b.doc["meshes"][0]["primitives"][0].pop("material")
     (tmp_path / "meshes" / "arm.glb").write_bytes(b.glb())
     assert load_visuals(robot_with_mesh(tmp_path, "meshes/arm.glb"))[0].rgba == DEFAULT_RGBA
-    # the page carries the converted STL: the cube's 12 triangles, scaled and lifted as the file says
+    # the page carries the converted STL: the cube's 12 triangles, scaled and lifted as the file says, turned from
+    # glTF's y-up into the link's z-up: file (x, y, z) is link (x, -z, y), so "up" stays up
     model = md.load_urdf(path)
     page = tmp_path / "g.html"
     with warnings.catch_warnings():
@@ -175,6 +177,8 @@ def test_urdf_with_glb_loads_and_its_page_is_written(tmp_path):
     assert struct.unpack_from("<I", blob, at + 80) == (12,)
     rec = np.frombuffer(blob, dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")], count=12,
                         offset=at + 84)
-    M = np.diag([0.1, 0.1, 0.1, 1.0])
-    M[2, 3] = 0.2
-    assert_close(rec["v"], moved(CUBE, M), 1e-7, "vertices in the page")
+    v = CUBE * [0.1, 0.2, 0.3]
+    want = np.stack([v[..., 0], -v[..., 2], v[..., 1]], axis=-1) + [0.0, 0.0, 0.2]
+    assert_close(rec["v"], want, 1e-7, "vertices in the page")
+    assert_close(rec["v"].reshape(-1, 3).max(axis=0), [0.05, 0.15, 0.3], 1e-7, "upper corner in the link frame")
+    assert_close(volume_area(rec["v"])[0], 0.006, 1e-9, "volume (a rotation keeps the winding)")
