@@ -182,3 +182,35 @@ def test_urdf_with_glb_loads_and_its_page_is_written(tmp_path):
     assert_close(rec["v"], want, 1e-7, "vertices in the page")
     assert_close(rec["v"].reshape(-1, 3).max(axis=0), [0.05, 0.15, 0.3], 1e-7, "upper corner in the link frame")
     assert_close(volume_area(rec["v"])[0], 0.006, 1e-9, "volume (a rotation keeps the winding)")
+
+
+
+def test_viewer_parses_the_converted_stl(tmp_path):
+    # in headless Chromium the bundled meshcat viewer turns the page's STL into the cube's 36 vertices, in the
+    # link frame (glTF's +y up is the link's +z)
+    from browser import HAVE_BROWSER, Browser
+    if not HAVE_BROWSER:
+        pytest.skip("Debian's chromium and chromium-driver are not installed")
+    (tmp_path / "meshes").mkdir()
+    b = Builder()
+    b.cube(translation=[0.0, 0.2, 0.0], scale=[0.1, 0.2, 0.3])
+    (tmp_path / "meshes" / "arm.glb").write_bytes(b.glb())
+    path = robot_with_mesh(tmp_path, "meshes/arm.glb")
+    page = tmp_path / "g.html"
+    viz.export_html(md.load_urdf(path), path, np.linspace(0, 1, 5), np.zeros((5, 1)), page)
+    found = []
+    with Browser(800, 600) as br:
+        br.open(f"file://{page}")
+        for _ in range(20):                      # the viewer parses mesh files as they arrive
+            br.frames(3)
+            found = br.run("""var out = [];
+                viewer.scene_tree.find(['manipdyn']).object.traverse(function (o) {
+                  if (o.isMesh && o.geometry.attributes.position && o.geometry.attributes.position.count === 36)
+                    out.push(Array.from(o.geometry.attributes.position.array)); });
+                return out;""")
+            if found:
+                break
+    assert len(found) == 1, f"{len(found)} meshes of 36 vertices in the viewer"
+    v = CUBE * [0.1, 0.2, 0.3]
+    want = np.stack([v[..., 0], -v[..., 2], v[..., 1]], axis=-1) + [0.0, 0.0, 0.2]
+    assert_close(np.array(found[0]).reshape(12, 3, 3), want, 1e-7, "vertices the viewer drew")
