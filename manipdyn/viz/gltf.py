@@ -26,9 +26,10 @@ Axes: glTF is y-up (+Y up, +Z forward, metres), a URDF link z-up. The triangles 
 file's own frame; viz/geometry.py turns them +90° about x, (x, y, z) → (x, -z, y), before the URDF's scale
 and origin apply. That is what the tools that read glTF in robot descriptions do now: RViz since
 ros2/rviz#1482 (2025; before it, assimp passed glTF vertices through unturned, and TRI's glTF robots lay on
-their side, ros2/rviz#1229), Drake and its meshcat, Blender's importer. urdfdom only passes the file name on;
-meshcat draws stl/obj/dae only. Pinocchio's assimp-based loaders (hpp-fcl/coal) apply no turn, so a .glb
-collision mesh there is y-up: a file authored for that reading lies on its side here (rotate its <origin>).
+their side, ros2/rviz#1229), Drake with its meshcat and Blender's importer (as that pull request reports).
+urdfdom only passes the file name on; meshcat draws stl/obj/dae only. Pinocchio reads meshes through assimp
+(hpp-fcl/coal), which as far as we know keeps glTF vertices unturned (not checked against its source): a file
+authored for such a reader lies on its side here (turn its <origin> by -90° about x).
 """
 from __future__ import annotations
 
