@@ -118,9 +118,11 @@ def _referee(args) -> int:
 
     engines = parse_engines(args.against)
     states = args.states if args.states is not None else 100
-    if args.root_joint or args.reference or args.lock or args.root or args.tips or args.prune or args.mimic:
-        raise InputError("--against compares the file as written, fixed base: --root-joint, --reference, --mimic "
-                         "and the reduction options do not apply")
+    if args.reference or args.lock or args.root or args.tips or args.prune or args.mimic:
+        raise InputError("--against compares the file as written (fixed base, or a free-flyer root with --root-joint "
+                         "free_flyer): --reference, --mimic and the reduction options do not apply")
+    if args.root_joint and (args.zoo or _sweep_mode(args)):
+        raise InputError("--root-joint applies to the files given; --zoo and folder sweeps load each file fixed-base")
     if args.markdown and not args.zoo and not _sweep_mode(args):
         raise InputError("--markdown writes the --against sweep summary: add --zoo, a folder or --jobs")
     if args.zoo:
@@ -134,7 +136,7 @@ def _referee(args) -> int:
     for path in [Path(p) for p in args.urdf] or bundled_models():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            model = load_urdf(path)
+            model = load_urdf(path, root_joint=args.root_joint)
         rep = referee(model, path, engines, n_states=states, seed=args.seed)
         reports.append(rep)
         print(format_referee(rep))

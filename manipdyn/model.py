@@ -122,6 +122,9 @@ QUIRK_KINDS = {
     "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
                      "stiffness or damping, <option> fluid density, viscosity or wind); MuJoCo's mj_rne leaves them out "
                      "too",
+    "equality_softness": "an MJCF equality's solref, solimp or a weld's torquescale: MuJoCo's constraint softness (or "
+                         "the scale of its rows), not a model parameter; manipdyn's closures are rigid",
+    "inactive_equality": "an MJCF equality with active=\"false\": not read as a closure (MuJoCo starts with it off)",
 }
 
 

@@ -61,6 +61,8 @@ _TERMS = "tests/crosscheck/test_compiled_terms.py"
 _JD = "tests/crosscheck/test_joint_dynamics.py"
 _MJCF = "tests/crosscheck/test_mjcf_import.py"
 _MJCF = "tests/crosscheck/test_mjcf_export.py"
+_MJCF_EQ = "tests/crosscheck/test_mjcf_equality.py"
+_ENGINES_FLOAT = "tests/crosscheck/test_engines_floating.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -564,6 +566,24 @@ FAULTS = (
           "return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
           "return bool(lam[0] + lam[1] > lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))",
           (_ENGINES,), "the referee's triangle-inequality test inverted: the cause is misnamed"),
+    Fault("engines-mujoco-free-linear-world-axes", "validation", "manipdyn/validation/engines.py",
+          'np.block([[R, Z], [Z, I3]]) if self.layout == "mujoco"',
+          'np.block([[I3, Z], [Z, I3]]) if self.layout == "mujoco"',
+          (_ENGINES_FLOAT,), "MuJoCo's free-joint linear velocity (world axes) taken as ours (body axes): the base's "
+                             "linear rows of qvel, qacc and qfrc not turned by R"),
+    Fault("engines-mujoco-free-bias-dropped", "validation", "manipdyn/validation/engines.py",
+          "lin = _rotation_xyzw(q[3:7]) @ np.cross(v[3:6], v[:3])",
+          "lin = 0.0 * _rotation_xyzw(q[3:7]) @ np.cross(v[3:6], v[:3])",
+          (_ENGINES_FLOAT,), "a world-frame free base's acceleration taken as R v̇ (no R (ω × v)): MuJoCo's and "
+                             "Drake's linear qacc is d/dt (R v), not our spatial acceleration turned"),
+    Fault("engines-drake-floating-blocks-swapped", "validation", "manipdyn/validation/engines.py",
+          "else np.block([[Z, R], [R, Z]])", "else np.block([[R, Z], [Z, R]])",
+          (_ENGINES_FLOAT,), "Drake's floating-body velocity read as [linear; angular] (it is [angular (world); "
+                             "linear (world)])"),
+    Fault("engines-pybullet-base-at-link-origin", "validation", "manipdyn/validation/engines.py",
+          "Pb = np.block([[Z, Ri.T], [Ri.T, -Ri.T @ cx]])", "Pb = np.block([[Z, I3], [I3, Z]])",
+          (_ENGINES_FLOAT,), "PyBullet's floating base taken at the root link's origin and axes (Bullet's base is "
+                             "the root's inertial frame)"),
     Fault("joint-velocity-angular-row-swapped", "rnea", "manipdyn/joints.py",
           "        a1 += S[r, 4] * xr\n",
           "        a1 += S[r, 3] * xr\n",
@@ -606,6 +626,16 @@ FAULTS = (
           "    else:\n        ground_z = base_low", "    else:\n        ground_z = 0.0",
           ("tests/viz/test_play_page.py::test_ground_is_under_the_robot",),
           "the ground at the base frame's origin whatever lies below it (the SPM's base sinks into it)"),
+    Fault("viz-gltf-quaternion-wxyz", "viz", "manipdyn/viz/gltf.py",
+          "M[:3, :3] = quaternion_matrix(*(q / norm))",
+          "M[:3, :3] = quaternion_matrix(*np.roll(q / norm, 1))",
+          ("tests/viz/test_gltf.py::test_node_hierarchy_trs_and_matrix",),
+          "a glTF node's rotation read as (w, x, y, z) instead of glTF's (x, y, z, w)"),
+    Fault("viz-gltf-byte-stride-ignored", "viz", "manipdyn/viz/gltf.py",
+          'stride = _int(view, "byteStride", f"bufferView {bv_k}", default=0) or elem',
+          "stride = elem",
+          ("tests/viz/test_gltf.py::test_interleaved_buffer_views",),
+          "a glTF buffer view's byteStride ignored: interleaved positions read as if packed"),
     Fault("reduce-locked-free-flyer-quaternion-conjugated", "reduce", "manipdyn/reduce.py",
           "np.ascontiguousarray(np.atleast_1d(value), float), R, p)",
           "np.ascontiguousarray(np.atleast_1d(value) * np.r_[1, 1, 1, -1, -1, -1, 1][:np.size(value)], float), R, p)",
@@ -690,6 +720,23 @@ FAULTS = (
           "R0, p0 = (R, p + R @ a) if anchor is None",
           "R0, p0 = (R, p) if anchor is None",
           (_MJCF,), "a joint's pos (its anchor in the body) ignored: the joint turns about the body origin"),
+    Fault("mjcf-connect-anchor-in-body2", "loader", "manipdyn/io/mjcf_read.py",
+          "p1, R1, p2, R2 = anchor, np.eye(3), T2[0].T @ (x - T2[1]), np.eye(3)",
+          "p1, R1, p2, R2 = T2[0].T @ (x - T2[1]), np.eye(3), anchor, np.eye(3)",
+          (_MJCF_EQ,), "a body connect's anchor put in body2's frame (MuJoCo's is in body1's; body2's point is "
+                       "computed at qpos0)"),
+    Fault("mjcf-weld-relpose-inverted", "loader", "manipdyn/io/mjcf_read.py",
+          "p1, R1 = T1[0].T @ (x - T1[1]), T1[0].T @ T2[0]", "p1, R1 = T1[0].T @ (x - T1[1]), T2[0].T @ T1[0]",
+          (_MJCF_EQ,), "a body weld's default relative pose taken as body1 in body2 instead of body2 in body1"),
+    Fault("mjcf-qpos0-ref-ignored", "loader", "manipdyn/io/mjcf_read.py",
+          "out.append((R @ _axis_R(j[\"axis\"], j[\"q0\"]), p)",
+          "out.append((R @ _axis_R(j[\"axis\"], 0.0), p)",
+          (_MJCF_EQ,), "MuJoCo's qpos0 taken with hinges at 0, not at their ref: a body connect's second anchor "
+                       "and a weld's relative pose computed in the wrong configuration"),
+    Fault("mjcf-joint-equality-sides-swapped", "loader", "manipdyn/io/mjcf_read.py",
+          'return Constraint(name, "coupling", a, self.body_name(a), I3, z, z, b1, self.body_name(b1), I3, z, z,',
+          'return Constraint(name, "coupling", b1, self.body_name(b1), I3, z, z, a, self.body_name(a), I3, z, z,',
+          (_MJCF_EQ,), "a joint equality joint1 = c1 joint2 read as joint2 = c1 joint1"),
     Fault("mjcf-euler-extrinsic", "loader", "manipdyn/io/mjcf_read.py",
           "R = R @ Rk if ch.islower() else Rk @ R",
           "R = Rk @ R if ch.islower() else R @ Rk",

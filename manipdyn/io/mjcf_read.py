@@ -1,4 +1,4 @@
-"""MJCF (MuJoCo's XML) -> Model: the reader (``io/mjcf.py`` is the writer). Stage 1: open kinematic trees.
+"""MJCF (MuJoCo's XML) -> Model: the reader (``io/mjcf.py`` is the writer). Open kinematic trees and their closures.
 
 What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's grammar, ``urdf._NUMBER``):
 
@@ -35,6 +35,19 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
 - Sites, and every named body, become frames of the model (``Model.frames``; ``frame_placement`` of a body's
   name is MuJoCo's ``xpos``/``xmat``). Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``,
   ``site<id>`` with MuJoCo's ids. The world is the fixed base, named "world".
+- ``<equality>`` -> the model's closures (``Model.constraints``, model.Constraint, as the URDF reader's), in file
+  order, as MuJoCo's compiler and ``mj_equalityAnchors`` read them:
+  ``connect`` with ``body1`` and ``anchor`` (body semantic: the anchor in body1's frame; body2, default the world,
+  holds the point that coincides with it at MuJoCo's qpos0 — the joints at their ``ref``, a free body at its pose in
+  the file) or ``site1``/``site2`` (the sites' origins) -> "spherical"; two connects between the same two bodies,
+  and no other, whose anchors are as far apart on each -> one "revolute" closure, its axis through them (the same
+  constraint; what ``to_mjcf`` writes for a revolute closure). ``weld`` with ``body1`` (``anchor`` on body2, default
+  0; ``relpose`` (x y z qw qx qy qz) body2's frame in body1's, the anchor's point on body1 at its position part; a
+  zero quaternion, the default, takes both from qpos0) or ``site1``/``site2`` (the sites' frames) -> "fixed";
+  ``torquescale="0"`` (no orientation rows) -> "spherical". ``joint``: ``joint1 = c0 + c1 joint2`` (``polycoef``;
+  MuJoCo's positions are relative to qpos0, i.e. ``ref``) -> "coupling" with ratio c1, when the two joints hang
+  from the same body (each alone on its side of their common ancestor: the closure model's coupling row); without
+  ``joint2`` (or c1 = 0), joint1 = 0. ``class`` defaults (``<default><equality>``) give active, solref, solimp.
 - ``<include file>``: the included file's children replace the element; paths are relative to the main
   file's folder and must resolve (symlinks too) inside it; depth and count are bounded, their bytes count
   towards ``max_bytes``.
@@ -48,7 +61,10 @@ Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``stiffness``, ``spring
 ``gravcomp``, a tendon's ``stiffness``/``damping`` and ``<option density viscosity wind>`` (fluid forces)
 ("passive_force": MuJoCo's mj_rne leaves them out too);
 top-level elements not known, and attributes outside MuJoCo's schema on the elements read (``_ATTRS``: body, frame,
-inertial, joint, freejoint, geom, site, compiler, option) ("unknown_element"; an error with strict=True).
+inertial, joint, freejoint, geom, site, compiler, option, connect, weld, an equality's joint) ("unknown_element"; an
+error with strict=True); an equality's ``solref``/``solimp`` and a weld's ``torquescale`` other than 1
+("equality_softness": MuJoCo's softness and row scale, not a model parameter; the closure is rigid); an equality with
+``active="false"`` ("inactive_equality": skipped).
 
 Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, ``<contact>``, ``<actuator>``,
 ``<sensor>``, ``<visual>``, ``<statistic>``, ``<size>``, ``<keyframe>``, ``<custom>``, ``<extension>``, cameras
@@ -56,7 +72,10 @@ and lights, a geom's contact and visual attributes, geoms that do not give mass,
 
 Refused (MJCFError naming the file, the element and what is not supported): ``ball`` joints ("ball joint: not
 supported yet"), a free joint below the root or beside another joint, a free joint's ``align`` (or ``<compiler
-alignfree>``), ``<equality>`` (closures: a later stage), tendons with ``armature``, ``mesh``, ``hfield``,
+alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
+quadratic or higher ``polycoef`` terms, with an offset (c0 + ref1 − c1 ref2 ≠ 0: the coupling row has none), between
+joints that do not hang from the same body, or on a free joint, an equality whose two sides are one rigid body,
+tendons with ``armature``, ``mesh``, ``hfield``,
 ``plane`` and ``sdf`` geoms that would give mass, ``shellinertia``, ``fromto`` on boxes and ellipsoids,
 ``<composite>``, ``<flexcomp>``, ``<replicate>``, ``<attach>``, ``<plugin>`` in a body,
 ``<compiler>`` options that change masses (``boundmass``, ``boundinertia``,
@@ -73,13 +92,14 @@ default to degrees in MJCF.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 
 import numpy as np
 
 from ..errors import MJCFError, QuirkWarning
-from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Frame, Model, Quirk, check_gravity,
+from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, Model, Quirk, check_gravity,
                      with_joint_dynamics)
 from ..spatial import combine_inertias
 from .urdf import (MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, _LIST, _NUMBER, _SPACE, _check_psd, _parse_xml,
@@ -99,6 +119,7 @@ _REFUSED_BODY_CHILDREN = {"composite", "flexcomp", "replicate", "attach", "plugi
 _TOP = {"compiler", "option", "size", "visual", "statistic", "default", "extension", "custom", "asset",
         "worldbody", "contact", "equality", "deformable", "tendon", "actuator", "sensor", "keyframe"}
 _MASS_GEOMS = ("sphere", "capsule", "cylinder", "box", "ellipsoid")
+_EQUALITIES = ("connect", "weld", "joint")
 _APPLIED = ("armature", "damping", "frictionloss")    # → Model.armature, damping, friction (each dof of the joint)
 _DYNAMICS = ("stiffness", "springref")                # read, quirked, not applied
 
@@ -118,6 +139,10 @@ _ATTRS = {
              "rgba", "friction", "mass", "density", "shellinertia", "solmix", "solref", "solimp", "margin", "gap",
              "fromto", "hfield", "mesh", "fitscale", "fluidshape", "fluidcoef", "user", *_O},
     "site": {"name", "class", "type", "group", "material", "size", "fromto", "rgba", "user", *_O},
+    "connect": {"name", "class", "active", "solref", "solimp", "body1", "body2", "anchor", "site1", "site2"},
+    "weld": {"name", "class", "active", "solref", "solimp", "body1", "body2", "anchor", "relpose", "site1", "site2",
+             "torquescale"},
+    "joint_eq": {"name", "class", "active", "solref", "solimp", "joint1", "joint2", "polycoef"},
     "compiler": {"autolimits", "boundmass", "boundinertia", "settotalmass", "balanceinertia", "strippath",
                  "coordinate", "angle", "fitaabb", "eulerseq", "meshdir", "texturedir", "assetdir", "discardvisual",
                  "usethread", "fusestatic", "inertiafromgeom", "inertiagrouprange", "saveinertial", "alignfree",
@@ -280,12 +305,14 @@ class _Reader:
         self.refuse_top()
         self.fluid()
 
-    def known(self, e, where):
-        """Attributes of e outside MuJoCo's schema: an "unknown_element" quirk each (an error with strict=True)."""
-        if e.tag not in _ATTRS:                                 # cameras, lights: not read at all
+    def known(self, e, where, tag=None):
+        """Attributes of e outside MuJoCo's schema: an "unknown_element" quirk each (an error with strict=True);
+        tag: the schema's key when it is not e.tag (an equality's <joint>)."""
+        tag = tag or e.tag
+        if tag not in _ATTRS:                                   # cameras, lights: not read at all
             return
         for key in e.keys():
-            if key not in _ATTRS[e.tag]:
+            if key not in _ATTRS[tag]:
                 detail = f"{where}: <{e.tag} {key}={_show(e.get(key))}>: not an MJCF attribute manipdyn knows; not read"
                 if self.strict:
                     raise MJCFError(f"{self.source}: {detail} (strict=True)")
@@ -405,9 +432,12 @@ class _Reader:
     def refuse_top(self):
         src = self.source
         for e in self.xml.findall("equality"):
-            kinds = sorted({c.tag for c in e if isinstance(c.tag, str)})
-            if kinds:
-                raise MJCFError(f"{src}: <equality> ({', '.join(kinds)}): closures from MJCF are not supported yet")
+            for c in e:
+                if isinstance(c.tag, str) and c.tag not in _EQUALITIES:
+                    why = (f"a {c.tag} equality constrains {'tendon lengths' if c.tag == 'tendon' else 'a flex'}, "
+                           f"not rigid bodies or joints: not supported" if c.tag in ("tendon", "flex", "flexvert")
+                           else "not an equality manipdyn knows (connect, weld, joint)")
+                    raise MJCFError(f"{src}: <equality><{c.tag} name={_show(c.get('name') or '')}>: {why}")
         for t in self.xml.findall("tendon"):
             for c in t:
                 if not isinstance(c.tag, str):
@@ -538,7 +568,8 @@ class _Reader:
                 raise MJCFError(f"{src}: <compiler settotalmass> on a model without mass")
             k = self.total / m_all
             parts = {b: [(k * m, c, k * I) for m, c, I in ps] for b, ps in parts.items()}
-        return self.assemble(joints, parts, frames, merged, gravity, non_psd_inertia)
+        constraints = self.equalities(joints, frames)
+        return self.assemble(joints, parts, frames, merged, gravity, non_psd_inertia, constraints)
 
     def expand(self, e, cc, where):
         """The children of a body (or the world) with <frame> elements flattened, in file order: [(element, R, p,
@@ -602,7 +633,7 @@ class _Reader:
                 raise MJCFError(f"{src}: {jw}: a free joint that is not the tree's first joint, alone in a top-level "
                                 f"body: not supported yet (the model has one free flyer, joint 0)")
             joints.append(dict(name=jname, body=body, kind=FREEFLYER, parent=-1, R0=np.eye(3), p0=np.zeros(3),
-                               axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False,
+                               axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False, q0=(R, p),
                                dyn=self.joint_quirks(j, jcls, jname, jw, kind)))
             return 0, np.eye(3), np.zeros(3), np.zeros(3)
         a = self.bounded(self.num(j, "pos", jcls, jw, (3,), (0, 0, 0)), MAX_LENGTH, "coordinate", j, "pos", jw)
@@ -615,7 +646,7 @@ class _Reader:
         lim, cont = self.limits(j, jcls, jw, kind)
         # mj_kinematics: each joint turns the body about its anchor, in the frame the previous joints left
         R0, p0 = (R, p + R @ a) if anchor is None else (np.eye(3), a - anchor)
-        ref = self.num(j, "ref", jcls, jw, (1,), (0,))[0]
+        ref, x = self.num(j, "ref", jcls, jw, (1,), (0,))[0], 0.0
         if ref != 0:                                        # MuJoCo moves the body by qpos − ref: folded in
             x = self.angle(ref) if kind == "hinge" else self.bounded(np.array([ref]), MAX_LENGTH, "ref", j, "ref",
                                                                      jw)[0]
@@ -624,7 +655,7 @@ class _Reader:
                                      f"drawn in the file; the file's pose is q = {x:g})"))
         joints.append(dict(name=jname, body=body if k == n - 1 else f"{body}:{jname}",
                            kind=REVOLUTE if kind == "hinge" else PRISMATIC, parent=b, R0=R0, p0=p0, axis=u, lim=lim,
-                           continuous=cont, dyn=dyn))
+                           continuous=cont, q0=x, dyn=dyn))
         return len(joints) - 1, np.eye(3), -a, a
 
     def unique(self, name, what):
@@ -679,6 +710,147 @@ class _Reader:
         if lo > hi:
             raise MJCFError(f"{self.source}: {jw}: range {rng.tolist()}: lower > upper")
         return (float(lo), float(hi)), False
+
+    # -- equality constraints (closures) ---------------------------------------------------------------------
+    def equalities(self, joints, frames):
+        """<equality> connect, weld and joint elements as the model's closures (model.Constraint), in file order;
+        two connects between the same two bodies whose anchors are as far apart on each body become one revolute
+        closure (the axis through them: the same constraint, 5 independent rows instead of 6 of rank 5)."""
+        out, names, poses = [], set(), None
+        self.joint_bodies = [j["body"] for j in joints]
+        for e in self.xml.findall("equality"):
+            for c in e:
+                if not isinstance(c.tag, str):
+                    continue
+                k = len(names)
+                name = c.get("name") or f"equality{k}"
+                where = f"<equality><{c.tag} name={_show(name)}>"
+                if name in names:
+                    raise MJCFError(f"{self.source}: {where}: the name is used twice")
+                names.add(name)
+                self.known(c, where, "joint_eq" if c.tag == "joint" else c.tag)
+                cls = self.cls(c, "main")
+                get = lambda key: c.get(key, self.classes[cls].get("equality", {}).get(key))  # noqa: E731
+                active = get("active") or "true"
+                if active not in ("true", "false"):
+                    raise MJCFError(f"{self.source}: {where}: active={_show(active)}: expected true or false")
+                if active == "false":
+                    self.quirks.append(Quirk("inactive_equality", name, f"{where}: active=\"false\": not a closure "
+                                             f"of the model (MuJoCo starts with it off)"))
+                    continue
+                soft = [f"{key}={_show(get(key))}" for key in ("solref", "solimp") if get(key) is not None]
+                if c.tag == "joint":
+                    out.append(self.joint_equality(c, name, where, joints, get))
+                    continue
+                if poses is None:
+                    poses = _poses_at_qpos0(joints)
+                ts = self.nums(c, "torquescale", (1,), where, get("torquescale")) if c.tag == "weld" else None
+                if ts is not None and ts[0] != 1:
+                    soft.append(f"torquescale={_show(get('torquescale'))}")
+                out.append(self.body_equality(c, name, where, frames, poses, ts is not None and ts[0] == 0, get))
+                if soft:
+                    self.quirks.append(Quirk("equality_softness", name, f"{where}: {', '.join(soft)}: MuJoCo's "
+                                             f"constraint softness (or row scale), not a model parameter; the "
+                                             f"closure is rigid here"))
+        return _merge_connects(out)
+
+    def site_or_body(self, c, key, frames, where, kind, required=True):
+        """The frame (model.Frame) of the body or site named by attribute key (world for a missing body2)."""
+        n = c.get(key)
+        if n is None:
+            if required:
+                raise MJCFError(f"{self.source}: {where}: needs {key}")
+            return frames["world"]
+        if self.names.get(n) != kind:
+            raise MJCFError(f"{self.source}: {where}: {key}={_show(n)}: no such {kind}")
+        return frames[n]
+
+    def body_equality(self, c, name, where, frames, poses, point_only, get):
+        """A connect (spherical closure) or weld (fixed; spherical with torquescale 0) as MuJoCo's compiler and
+        mj_equalityAnchors read it: body semantic (connect: body1 and anchor; weld: body1) or site semantic."""
+        weld = c.tag == "weld"
+        body = c.get("body1") is not None and (weld or c.get("anchor") is not None)
+        if not body and (c.get("site1") is None or c.get("site2") is None):
+            raise MJCFError(f"{self.source}: {where}: needs body1{'' if weld else ' and anchor'}, or site1 and site2")
+        if not body:                                        # the sites' frames coincide (weld) or their origins
+            f1, f2 = (self.site_or_body(c, k, frames, where, "site") for k in ("site1", "site2"))
+            a = (f1.body, f1.R, f1.p)
+            b = (f2.body, f2.R, f2.p)
+        else:
+            f1 = self.site_or_body(c, "body1", frames, where, "body")
+            f2 = self.site_or_body(c, "body2", frames, where, "body", required=False)
+            T1, T2 = _compose(poses, f1), _compose(poses, f2)   # the MJCF bodies' frames in the world at qpos0
+            anchor = self.bounded(self.nums(c, "anchor", (3,), where), MAX_LENGTH, "coordinate", c, "anchor", where)
+            anchor = np.zeros(3) if anchor is None else anchor
+            if not weld:                                    # anchor on body1; body2's point: the same at qpos0
+                x = T1[1] + T1[0] @ anchor
+                p1, R1, p2, R2 = anchor, np.eye(3), T2[0].T @ (x - T2[1]), np.eye(3)
+            else:                                           # anchor on body2; relpose: body2's frame in body1's
+                rel = self.nums(c, "relpose", (7,), where, get("relpose"))
+                if rel is None or not np.any(rel[3:]):      # MuJoCo's default: the relative pose at qpos0
+                    x = T2[1] + T2[0] @ anchor
+                    p1, R1 = T1[0].T @ (x - T1[1]), T1[0].T @ T2[0]
+                else:
+                    self.bounded(rel[:3], MAX_LENGTH, "coordinate", c, "relpose", where)
+                    p1, R1 = rel[:3], _quat_R(rel[3:] / np.max(np.abs(rel[3:])))
+                p2, R2 = anchor, np.eye(3)
+            a = (f1.body, f1.R @ R1, f1.p + f1.R @ p1)     # into our bodies' frames
+            b = (f2.body, f2.R @ R2, f2.p + f2.R @ p2)
+        if a[0] == b[0]:
+            raise MJCFError(f"{self.source}: {where}: both sides are on the same rigid body (nothing to close)")
+        kind = "fixed" if weld and not point_only else "spherical"
+        z = np.zeros(3)
+        return Constraint(name, kind, a[0], self.body_name(a[0]), a[1], a[2], z, b[0], self.body_name(b[0]), b[1],
+                          b[2], z, source=c.tag)
+
+    def body_name(self, b):
+        return "world" if b < 0 else self.joint_bodies[b]
+
+    def joint_equality(self, c, name, where, joints, get):
+        """q1 − q1₀ = c₀ + c₁ (q2 − q2₀) (MuJoCo's joint equality, q₀ = qpos0) as a coupling row: linear, without
+        offset, and the two joints each alone on their side of a common ancestor (model.Constraint)."""
+        idx = {j["name"]: i for i, j in enumerate(joints)}
+        ids = []
+        for key in ("joint1", "joint2"):
+            n = c.get(key)
+            if n is None:
+                if key == "joint1":
+                    raise MJCFError(f"{self.source}: {where}: needs joint1")
+                ids.append(None)
+                continue
+            if n not in idx:
+                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)}: no such joint")
+            if joints[idx[n]]["kind"] == FREEFLYER:
+                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)} is a free joint; a joint equality relates "
+                                f"hinge and slide joints")
+            ids.append(idx[n])
+        i1, i2 = ids
+        poly = self.nums(c, "polycoef", (5,), where, get("polycoef"))
+        poly = np.array([0.0, 1.0, 0, 0, 0]) if poly is None else poly
+        if np.any(poly[2:]):
+            raise MJCFError(f"{self.source}: {where}: polycoef={_show(get('polycoef'))}: a polynomial coupling "
+                            f"(quadratic or higher terms): not supported (the closure model's coupling is linear)")
+        b1 = i1
+        if i2 is None or poly[1] == 0:                      # q1 = 0: the coupling of body1's parent and body1
+            a = joints[i1]["parent"]
+        else:
+            a = i2
+            if a == b1 or joints[a]["parent"] != joints[b1]["parent"]:
+                raise MJCFError(f"{self.source}: {where}: joints {joints[i1]['name']!r} and {joints[i2]['name']!r} "
+                                f"are not each alone on their side of a common ancestor (siblings): not supported "
+                                f"(the closure model's coupling relates the joints on the two tree paths below the "
+                                f"bodies' common ancestor)")
+        r1, r2 = joints[i1]["q0"], (joints[i2]["q0"] if i2 is not None else 0.0)
+        c1 = poly[1] if i2 is not None else 0.0
+        offset = poly[0] + r1 - c1 * r2                     # q1 = offset + c1 q2
+        if abs(offset) > 1e-12 * (1 + abs(poly[0]) + abs(r1) + abs(c1 * r2)):   # round-off of the refs: none
+            raise MJCFError(f"{self.source}: {where}: q1 = {offset:g} + {c1:g} q2 (polycoef and the joints' ref): a "
+                            f"coupling with an offset: not supported (the closure model's coupling row has none)")
+        if not np.isfinite(c1) or abs(c1) > MAX_MASS:
+            raise MJCFError(f"{self.source}: {where}: ratio {c1:g} beyond the bound {MAX_MASS:g}")
+        I3, z = np.eye(3), np.zeros(3)
+        return Constraint(name, "coupling", a, self.body_name(a), I3, z, z, b1, self.body_name(b1), I3, z, z,
+                          ratio=float(c1) if a == i2 else 0.0, source="joint")
 
     # -- mass ------------------------------------------------------------------------------------------------
     def body_inertia(self, e, items, where):
@@ -774,7 +946,7 @@ class _Reader:
         return [(m, p, R @ np.diag(m * Id) @ R.T)]
 
     # -- the model -------------------------------------------------------------------------------------------
-    def assemble(self, joints, parts, frames, merged, gravity, non_psd_inertia):
+    def assemble(self, joints, parts, frames, merged, gravity, non_psd_inertia, constraints=()):
         src, nb = self.source, len(joints)
         inertias = [combine_inertias(parts[i]) if parts[i] else (0.0, np.zeros(3), np.zeros((3, 3)))
                     for i in range(nb)]
@@ -801,7 +973,7 @@ class _Reader:
             inertia=np.array([I for _, _, I in inertias], float).reshape(nb, 3, 3),
             lower=lim[:, 0], upper=lim[:, 1], effort=np.full(nb, np.inf), velocity=np.full(nb, np.inf),
             gravity=np.array(gravity, float).reshape(3), frames=frames,
-            merged={k: tuple(v) for k, v in merged.items()}, mimic=(), source=src, notes=(),
+            merged={k: tuple(v) for k, v in merged.items()}, mimic=(), source=src, notes=(), constraints=constraints,
             quirks=tuple(sorted(self.quirks, key=lambda q: order.index(q.kind))),
             **{key: np.array([j["dyn"][k] for j in joints for _ in range(6 if j["kind"] == FREEFLYER else 1)], float)
                for k, key in enumerate(("armature", "damping", "friction"))})
@@ -829,3 +1001,44 @@ def _solid(kind, s):
     a, b, c = s                                             # ellipsoid
     return 4 / 3 * math.pi * a * b * c, np.array([b * b + c * c, a * a + c * c, a * a + b * b]) / 5
 
+
+def _poses_at_qpos0(joints):
+    """[(R, p)] of each of our bodies in the world at MuJoCo's qpos0 (each joint at its ref; a free body at its pose
+    in the file): the configuration MuJoCo's compiler takes a connect's or weld's missing anchor and pose from."""
+    out = []
+    for j in joints:
+        Rp, pp = (np.eye(3), np.zeros(3)) if j["parent"] < 0 else out[j["parent"]]
+        if j["kind"] == FREEFLYER:
+            out.append(j["q0"])
+            continue
+        R, p = Rp @ j["R0"], pp + Rp @ j["p0"]                 # the joint frame; then the joint's motion by q0
+        out.append((R @ _axis_R(j["axis"], j["q0"]), p) if j["kind"] == REVOLUTE
+                   else (R, p + R @ (j["q0"] * j["axis"])))
+    return out
+
+
+def _compose(poses, f):
+    """(R, p) in the world at qpos0 of a frame (model.Frame) on one of our bodies (-1: the world)."""
+    R, p = (np.eye(3), np.zeros(3)) if f.body < 0 else poses[f.body]
+    return R @ f.R, p + R @ f.p
+
+
+def _merge_connects(closures):
+    """Two spherical closures (connects) between the same two bodies, and no other, whose anchors are equally far
+    apart on each body (relative 1e-12) -> one revolute closure at the first anchor, its axis through the second
+    (coincident anchors with equal spacing ⇔ a coincident point and an aligned axis)."""
+    pairs = {}
+    for k, c in enumerate(closures):
+        pairs.setdefault((c.parent, c.child), []).append(k)
+    out, drop = list(closures), set()
+    for ks in pairs.values():
+        if len(ks) != 2 or any(closures[k].type != "spherical" for k in ks):
+            continue
+        c1, c2 = (closures[k] for k in ks)
+        dp, dc = c2.pp - c1.pp, c2.pc - c1.pc
+        lp, lc = np.linalg.norm(dp), np.linalg.norm(dc)
+        if lp == 0 or abs(lp - lc) > 1e-12 * lp:
+            continue
+        out[ks[0]] = dataclasses.replace(c1, type="revolute", axis_p=dp / lp, axis_c=dc / lc)
+        drop.add(ks[1])
+    return tuple(c for k, c in enumerate(out) if k not in drop)

@@ -1,8 +1,11 @@
 """Other engines as referees: Pinocchio, MuJoCo, PyBullet and Drake on the same URDF and the same states.
 
-Each engine loads the file its own way; an adapter maps its joint order to ours by joint name (fixed base,
-1-dof joints: q and v share the order; a continuous joint is one angle everywhere but in Pinocchio, whose
-(cos, sin) the ``Reference`` converts), sets the same gravity, and gives back, in our order:
+Each engine loads the file its own way; an adapter maps its joint order to ours by joint name (1-dof joints: q
+and v share the order; a continuous joint is one angle everywhere but in Pinocchio, whose (cos, sin) the
+``Reference`` converts), sets the same gravity, and gives back, in our order (a free-flyer root, loaded with
+``root_joint="free_flyer"``: each engine's floating base converted by ``FloatingBase`` — MuJoCo a free joint
+added to the root body, qvel [linear (world); angular (body)]; Drake's floating body, v [angular (world); linear
+(world)]; PyBullet's base, the root's inertial frame, M only: its inverse dynamics refuses a floating base):
 
 - τ = ID(q, q̇, q̈): Pinocchio ``rnea``; MuJoCo ``mj_inverse`` (qfrc_inverse); PyBullet
   ``calculateInverseDynamics``; Drake ``CalcInverseDynamics`` with ``CalcForceElementsContribution``
@@ -151,18 +154,72 @@ class Adapter:
         self.damping = np.zeros(model.nv)        # viscous: the engine's τ includes + d q̇
         self.damping_in_id = True                # whether ID (as well as FD) includes the damping
 
+    terms = ("tau", "M", "qdd")    # what the engine's queries give for this model (the rest: None, not compared)
+
     def session(self):
         """A context for a run of queries (MuJoCo: its warnings collected into the notes)."""
         return contextlib.nullcontext()
 
     def _perm(self, names, where):
-        """Index in the engine's dof vector of each of our joints (by name)."""
+        """Index in the engine's dof vector of each of our 1-dof joints (by name; a free-flyer root excluded)."""
+        ours = self._one_dof()
         pos = {n: i for i, n in enumerate(names)}
-        missing = [j for j in self.model.joint_names if j not in pos]
-        if missing or len(names) != self.model.nv:
+        missing = [j for j in ours if j not in pos]
+        if missing or len(names) != len(ours):
             raise EngineRefused(f"{self.name}: its moving joints {list(names)} are not ours "
-                                f"{list(self.model.joint_names)} ({where})")
-        return np.array([pos[j] for j in self.model.joint_names], int)
+                                f"{list(ours)} ({where})")
+        return np.array([pos[j] for j in ours], int)
+
+    def _one_dof(self):
+        return self.model.joint_names[1:] if self.model.floating else self.model.joint_names
+
+
+def _rotation_xyzw(quat):
+    """Rotation matrix of our free flyer's quaternion (x, y, z, w), normalised."""
+    x, y, z, w = np.asarray(quat, float) / np.linalg.norm(quat)
+    return _quat_matrix((w, x, y, z))
+
+
+class FloatingBase:
+    """A free-flyer root as an engine holds it: its dof block is P_b v_b of ours (v_b = [linear; angular] in the
+    body frame, docs/design.md §3), P_b orthogonal, and its acceleration P_b a_b + c(q, v). So, with the joints'
+    permutation in P (nv_engine, nv): engine velocity P v, acceleration P a + c, our τ = Pᵀ f (f the engine's
+    generalized force: power fᵀ P v), our M = Pᵀ M_e P, and for forward dynamics f = P τ, a = Pᵀ (q̈_e − c).
+
+    ``layout``: "mujoco" — MuJoCo's free joint, qvel [linear (world); angular (body)]: P_b = diag(R, 1), c = [R (ω ×
+    v); 0]; "drake" — Drake's quaternion floating joint, v [angular (world); linear (world)]: P_b = [[0, R], [R, 0]],
+    c = [0; R (ω × v)]; "pybullet" — btMultiBody's base, which is the root link's *inertial* frame (Bullet's URDF
+    import; orientation R_i, origin c in the link frame, PyBullet's getDynamicsInfo(-1) local inertial frame),
+    [angular; linear] in that frame: P_b = [[0, R_iᵀ], [R_iᵀ, −R_iᵀ [c]×]] (v_c = v + ω × c), not orthogonal — M only
+    (Pᵀ M P). R: the base's orientation in the world, ω, v its body-frame angular and linear velocity. (The linear
+    rows' c: d/dt (R v) = R (v̇ + ω × v), where v̇ is our spatial acceleration's linear part.)"""
+
+    def __init__(self, layout, base_v, joint_v, nv_engine, inertial=None):
+        self.layout, self.base_v, self.joint_v, self.nv_engine = layout, base_v, np.asarray(joint_v, int), nv_engine
+        self.inertial = inertial                 # pybullet: (R_i, c) of the base's inertial frame in the link frame
+
+    def P(self, q):
+        R, Z, I3 = _rotation_xyzw(q[3:7]), np.zeros((3, 3)), np.eye(3)
+        if self.layout == "pybullet":
+            Ri, c = self.inertial
+            cx = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
+            Pb = np.block([[Z, Ri.T], [Ri.T, -Ri.T @ cx]])
+        else:
+            Pb = np.block([[R, Z], [Z, I3]]) if self.layout == "mujoco" else np.block([[Z, R], [R, Z]])
+        n = len(self.joint_v)
+        P = np.zeros((self.nv_engine, 6 + n))
+        P[self.base_v:self.base_v + 6, :6] = Pb
+        P[self.joint_v, np.arange(6, 6 + n)] = 1.0
+        return P
+
+    def c(self, q, v):
+        out = np.zeros(self.nv_engine)
+        if self.layout == "pybullet":
+            return out
+        lin = _rotation_xyzw(q[3:7]) @ np.cross(v[3:6], v[:3])
+        k = self.base_v + (0 if self.layout == "mujoco" else 3)
+        out[k:k + 3] = lin
+        return out
 
 
 class PinocchioAdapter(Adapter):
@@ -211,7 +268,9 @@ class MujocoAdapter(Adapter):
         heard, before = [], mj.get_mju_user_warning()
         mj.set_mju_user_warning(heard.append)    # else MuJoCo appends its warnings to ./MUJOCO_LOG.TXT
         try:
-            m = mj.MjModel.from_xml_string(text)
+            m = self._compile(mj, text, model)
+        except EngineRefused:
+            raise
         except Exception as exc:
             raise EngineRefused(f"mujoco: {_one_line(exc)}") from exc
         finally:
@@ -220,12 +279,20 @@ class MujocoAdapter(Adapter):
         self.m, self.d = m, mj.MjData(m)
         m.opt.disableflags |= int(mj.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mj.mjtDisableBit.mjDSBL_CONTACT)
         m.opt.gravity[:] = model.gravity
+        free = [j for j in range(m.njnt) if m.jnt_type[j] == 0]                       # mjJNT_FREE
         names = [m.joint(j).name for j in range(m.njnt) if m.jnt_type[j] in (2, 3)]   # hinge, slide
-        if any(m.jnt_type[j] not in (2, 3) for j in range(m.njnt)):
-            raise EngineRefused("mujoco: the model has ball or free joints")
+        if any(m.jnt_type[j] not in (0, 2, 3) for j in range(m.njnt)) or len(free) != int(model.floating):
+            raise EngineRefused("mujoco: the model has ball joints, or free joints other than our free-flyer root")
         self._perm(names, "joint names")          # refuses unless the moving joints are ours
-        self.iq = np.array([m.jnt_qposadr[m.joint(n).id] for n in model.joint_names], int)
-        self.iv = np.array([m.jnt_dofadr[m.joint(n).id] for n in model.joint_names], int)
+        one = self._one_dof()
+        self.iq = np.array([m.jnt_qposadr[m.joint(n).id] for n in one], int)
+        iv = np.array([m.jnt_dofadr[m.joint(n).id] for n in one], int)
+        self.fb = None
+        if model.floating:                        # qpos [x y z qw qx qy qz], qvel [linear (world); angular (body)]
+            self.fq, fv = int(m.jnt_qposadr[free[0]]), int(m.jnt_dofadr[free[0]])
+            self.fb = FloatingBase("mujoco", fv, iv, m.nv)
+            iv = np.concatenate([np.arange(fv, fv + 6), iv])
+        self.iv = iv
         self.armature, self.damping = m.dof_armature[self.iv].copy(), m.dof_damping[self.iv].copy()
         for b in range(1, m.nbody):
             R = _quat_matrix(m.body_iquat[b])
@@ -242,14 +309,38 @@ class MujocoAdapter(Adapter):
             self.mj.set_mju_user_warning(before)
             self.notes += [f"mujoco warned: {_one_line(w)}" for w in list(dict.fromkeys(heard))[:5]]
 
+    @staticmethod
+    def _compile(mj, text, model):
+        """MuJoCo's model of the URDF text; a free-flyer root: its root body given a free joint (MjSpec), as
+        MuJoCo's URDF import welds the root link to the world."""
+        if not model.floating:
+            return mj.MjModel.from_xml_string(text)
+        spec = mj.MjSpec.from_string(text)
+        root = spec.worldbody.first_body()
+        if root is None or root.name != model.root_link or len(spec.worldbody.bodies) != 1:
+            raise EngineRefused(f"mujoco: the free-flyer root {model.root_link!r} is not the one body MuJoCo's URDF "
+                                f"import puts under the world")
+        root.add_freejoint(name=model.joint_names[0])
+        return spec.compile()
+
     def _set(self, q, v):
-        self.d.qpos[self.iq], self.d.qvel[self.iv] = q, v
+        if self.fb is None:
+            self.d.qpos[self.iq], self.d.qvel[self.iv] = q, v
+            return
+        self.d.qpos[self.iq] = q[7:]
+        self.d.qpos[self.fq:self.fq + 7] = np.concatenate([q[:3], q[6:7], q[3:6]])   # (w, x, y, z) first
+        self.d.qvel[:] = self.fb.P(q) @ v
 
     def tau(self, q, v, a):
         self._set(q, v)
         self.d.qacc[:] = 0
-        self.d.qacc[self.iv] = a
+        if self.fb is None:
+            self.d.qacc[self.iv] = a
+        else:
+            self.d.qacc[:] = self.fb.P(q) @ a + self.fb.c(q, v)
         self.mj.mj_inverse(self.m, self.d)
+        if self.fb is not None:
+            return self.fb.P(q).T @ self.d.qfrc_inverse
         return self.d.qfrc_inverse[self.iv].copy()
 
     def mass(self, q):
@@ -260,11 +351,19 @@ class MujocoAdapter(Adapter):
             self.mj.mj_fullM(self.m, M, self.d.qM)
         else:                                    # MuJoCo 4: mj_fullM(m, d, dst)
             self.mj.mj_fullM(self.m, self.d, M)
+        if self.fb is not None:
+            P = self.fb.P(q)
+            return P.T @ M @ P
         return M[np.ix_(self.iv, self.iv)]
 
     def qdd(self, q, v, tau):
         self._set(q, v)
         self.d.qfrc_applied[:] = 0
+        if self.fb is not None:
+            P = self.fb.P(q)
+            self.d.qfrc_applied[:] = P @ tau
+            self.mj.mj_forward(self.m, self.d)
+            return P.T @ (self.d.qacc - self.fb.c(q, v))
         self.d.qfrc_applied[self.iv] = tau
         self.mj.mj_forward(self.m, self.d)
         return self.d.qacc[self.iv].copy()
@@ -283,8 +382,8 @@ class PybulletAdapter(Adapter):
             with tempfile.TemporaryDirectory() as tmp:
                 f = Path(tmp) / self.path.name
                 f.write_text(stripped_urdf(path), encoding="utf-8")
-                self.body = p.loadURDF(str(f), useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
-                                       physicsClientId=self.cid)
+                self.body = p.loadURDF(str(f), useFixedBase=not model.floating,
+                                       flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=self.cid)
         except Exception as exc:
             p.disconnect(self.cid)
             raise EngineRefused(f"pybullet: {_one_line(exc)}") from exc
@@ -294,19 +393,33 @@ class PybulletAdapter(Adapter):
         dofs = sorted((i[3], i[1].decode()) for i in info if i[3] >= 0)   # (qIndex, name)
         self.ix = self._perm([n for _, n in dofs], "joint names")
         jd = {i[1].decode(): i[6] for i in info}
-        d = np.array([jd[j] for j in model.joint_names], float)
+        d = np.array([jd[j] for j in self._one_dof()], float)
         if np.any(d):      # getJointInfo's jointDamping acts in stepSimulation, not in the queries used here
-            listed = ", ".join(f"{j} {x:g}" for j, x in zip(model.joint_names, d) if x)
+            listed = ", ".join(f"{j} {x:g}" for j, x in zip(self._one_dof(), d) if x)
             self.notes.append(f"joint damping from <dynamics> ({listed}) acts only when stepping, not in "
                               "calculateInverseDynamics: not compared")
         for i in info:
             dyn = p.getDynamicsInfo(self.body, i[0], physicsClientId=self.cid)
             R = np.array(p.getMatrixFromQuaternion(dyn[4]), float).reshape(3, 3)
             self.links[i[12].decode()] = (float(dyn[0]), np.array(dyn[3], float), R @ np.diag(dyn[2]) @ R.T)
+        self.fb = None
+        if model.floating:
+            # calculateMassMatrix (flags=0) takes the joints' positions and gives the base's 6 dofs first,
+            # [angular; linear] in the base's inertial frame (btMultiBody's base); calculateInverseDynamics of a
+            # floating base fails with flags=0 ("Inverse Dynamics computations failed") and corrupts the heap with
+            # flags=1 (PyBullet 3.2.7, measured; bullet3 issues 3149, 3264): τ and q̈ are not asked for
+            dyn = p.getDynamicsInfo(self.body, -1, physicsClientId=self.cid)
+            R = np.array(p.getMatrixFromQuaternion(dyn[4]), float).reshape(3, 3)
+            root = p.getBodyInfo(self.body, physicsClientId=self.cid)[0].decode()
+            self.links[root] = (float(dyn[0]), np.array(dyn[3], float), R @ np.diag(dyn[2]) @ R.T)
+            self.fb = FloatingBase("pybullet", 0, 6 + self.ix, 6 + len(self.ix), (R, np.array(dyn[3], float)))
+            self.terms = ("M",)
+            self.notes.append("floating base: M only — PyBullet's calculateInverseDynamics refuses a floating base "
+                              "(flags=0) or corrupts the heap (flags=1), so τ and q̈ are not compared")
 
     def _ours_to_engine(self, x):
-        y = np.zeros(self.model.nv)
-        y[self.ix] = x
+        y = np.zeros(len(self.ix))
+        y[self.ix] = x[7:] if self.fb is not None and len(x) == self.model.nq else x
         return y.tolist()
 
     def tau(self, q, v, a):
@@ -316,6 +429,9 @@ class PybulletAdapter(Adapter):
 
     def mass(self, q):
         M = np.array(self.p.calculateMassMatrix(self.body, self._ours_to_engine(q), physicsClientId=self.cid))
+        if self.fb is not None:
+            P = self.fb.P(q)
+            return P.T @ M @ P
         return M[np.ix_(self.ix, self.ix)]
 
     def qdd(self, q, v, tau):
@@ -345,7 +461,7 @@ class DrakeAdapter(Adapter):
         log.propagate = False                    # kept in the notes instead of printed
         try:
             Parser(plant).AddModelsFromString(stripped_urdf(path), "urdf")
-            if model.root_link != "world":
+            if model.root_link != "world" and not model.floating:     # a free-flyer root: Drake's free body
                 plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(model.root_link))
             plant.Finalize()
         except Exception as exc:
@@ -364,7 +480,18 @@ class DrakeAdapter(Adapter):
                 starts.append(jt.velocity_start())
         order = np.argsort(starts)
         self.ix = self._perm([names[k] for k in order], "joint names")
-        self.damping = np.array([plant.GetJointByName(j).default_damping() for j in model.joint_names], float)
+        self.fb = None
+        if model.floating:                        # q [qw qx qy qz x y z], v [angular (world); linear (world)]
+            base = plant.GetBodyByName(model.root_link)
+            if not base.is_floating_base_body() or plant.num_velocities() != model.nv:
+                raise EngineRefused(f"drake: {model.root_link!r} is not Drake's one floating body")
+            self.fq, fv = base.floating_positions_start(), base.floating_velocities_start_in_v()
+            jv = np.array(starts, int)[order][self.ix]
+            self.iq = np.array([plant.GetJointByName(n).position_start() for n in self._one_dof()], int)
+            self.fb = FloatingBase("drake", fv, jv, plant.num_velocities())
+            self.ix = np.concatenate([np.arange(fv, fv + 6), jv])
+        self.damping = np.array([0.0] * (6 * int(model.floating)) +
+                                [plant.GetJointByName(j).default_damping() for j in self._one_dof()], float)
         refl = np.zeros(plant.num_velocities())
         for k in range(plant.num_actuators()):
             act = plant.get_joint_actuator(plant.GetJointActuatorIndices()[k])
@@ -384,6 +511,13 @@ class DrakeAdapter(Adapter):
             plant.get_actuation_input_port().FixValue(self.ctx, np.zeros(plant.num_actuated_dofs()))
 
     def _set(self, q, v):
+        if self.fb is not None:
+            x = np.zeros(self.plant.num_positions())
+            x[self.fq:self.fq + 7] = np.concatenate([q[6:7], q[3:6], q[:3]])   # (w, x, y, z), then position
+            x[self.iq] = q[7:]
+            self.plant.SetPositions(self.ctx, x)
+            self.plant.SetVelocities(self.ctx, self.fb.P(q) @ v)
+            return
         x = np.zeros(self.plant.num_velocities())
         x[self.ix] = q
         self.plant.SetPositions(self.ctx, x)
@@ -394,22 +528,34 @@ class DrakeAdapter(Adapter):
         self._set(q, v)
         f = self.Forces(self.plant)
         self.plant.CalcForceElementsContribution(self.ctx, f)
+        if self.fb is not None:
+            vd = self.fb.P(q) @ a + self.fb.c(q, v)
+            return self.fb.P(q).T @ np.asarray(self.plant.CalcInverseDynamics(self.ctx, vd, f))
         vd = np.zeros(self.model.nv)
         vd[self.ix] = a
         return np.asarray(self.plant.CalcInverseDynamics(self.ctx, vd, f))[self.ix]
 
     def mass(self, q):
         self._set(q, np.zeros(self.model.nv))
-        return np.asarray(self.plant.CalcMassMatrix(self.ctx))[np.ix_(self.ix, self.ix)]
+        M = np.asarray(self.plant.CalcMassMatrix(self.ctx))
+        if self.fb is not None:
+            P = self.fb.P(q)
+            return P.T @ M @ P
+        return M[np.ix_(self.ix, self.ix)]
 
     def qdd(self, q, v, tau):
         self._set(q, v)
         t = np.zeros(self.model.nv)
         t[self.ix] = tau
+        if self.fb is not None:
+            t = self.fb.P(q) @ tau
         if not self.fd_port_refused:
             try:
                 self.tau_port.FixValue(self.ctx, t)
-                return np.asarray(self.plant.get_generalized_acceleration_output_port().Eval(self.ctx))[self.ix]
+                vd = np.asarray(self.plant.get_generalized_acceleration_output_port().Eval(self.ctx))
+                if self.fb is not None:
+                    return self.fb.P(q).T @ (vd - self.fb.c(q, v))
+                return vd[self.ix]
             except RuntimeError as exc:          # e.g. mimic couplers: constraints need a discrete plant
                 self.fd_port_refused = True
                 self.notes.append(f"forward-dynamics port refused ({_one_line(exc)[:160]}); q̈ from Drake's "
@@ -526,14 +672,17 @@ def explain(model, adapter, inertials) -> list:
             f"{e}: body {body!r} (links {', '.join(links)}) has mass {em[i]:.6g} kg, inertia trace "
             f"{np.trace(eI[i]):.6g}; ours {model.mass[i]:.6g} kg, {np.trace(model.inertia[i]):.6g}"
             + (f" — the file's {'; '.join(quirks)}" if quirks else ""))))
-    for j, name in enumerate(model.joint_names):    # ours: model.armature, model.damping (docs/design.md §3)
-        if _differs(adapter.armature[j], model.armature[j]):
-            causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {adapter.armature[j]:g} "
-                               f"kg m² to joint {name!r} (M's diagonal); ours {model.armature[j]:g}"))
-        if adapter.damping[j] and _differs(adapter.damping[j], model.damping[j]):
+    for j, name in enumerate(model.joint_names):    # ours: model.armature, model.damping (per dof, docs/design.md §3)
+        if model.nvs[j] != 1:                          # a free-flyer root: no armature or damping of its own
+            continue
+        k = model.idx_v[j]
+        if _differs(adapter.armature[k], model.armature[k]):
+            causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {adapter.armature[k]:g} "
+                               f"kg m² to joint {name!r} (M's diagonal); ours {model.armature[k]:g}"))
+        if adapter.damping[k] and _differs(adapter.damping[k], model.damping[k]):
             causes.append(dict(link=name, kind="damping", text=f"{e} applies joint damping "
-                               f"{adapter.damping[j]:g} N m s/rad to joint {name!r} (from <dynamics>); ours "
-                               f"{model.damping[j]:g}"))
+                               f"{adapter.damping[k]:g} N m s/rad to joint {name!r} (from <dynamics>); ours "
+                               f"{model.damping[k]:g}"))
     return causes
 
 
@@ -694,8 +843,8 @@ class RefereeReport:
 
 def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeReport:
     """Every engine against manipdyn on the same seeded random states: τ, M, q̈, causes, neutralised."""
-    if model.floating or np.any(model.kind == FREEFLYER):
-        raise InputError(f"{path}: the engines referee compares fixed-base models only")
+    if np.any(model.kind[1:] == FREEFLYER) or (np.any(model.kind == FREEFLYER) and not model.floating):
+        raise InputError(f"{path}: the engines referee compares fixed-base models and a free-flyer root only")
     rng = np.random.default_rng(seed)
     Q, V, A = random_states(model, n_states, rng)
     T = rng.normal(0.0, 5.0, V.shape)
@@ -766,8 +915,11 @@ def _engine_terms(ad, Q, V, A, T):
 
 
 def _engine_queries(ad, Q, V, A, T):
-    out = dict(tau=np.array([ad.tau(q, v, a) for q, v, a in zip(Q, V, A)]),
+    out = dict(tau=np.array([ad.tau(q, v, a) for q, v, a in zip(Q, V, A)]) if "tau" in ad.terms else None,
                M=np.array([ad.mass(q) for q in Q]), qdd=None, why="")
+    if "qdd" not in ad.terms:
+        out["why"] = "not asked of this engine for this model (see its notes)"
+        return out
     try:
         out["qdd"] = np.array([ad.qdd(q, v, t) for q, v, t in zip(Q, V, T)])
         if not np.all(np.isfinite(out["qdd"])):
@@ -781,6 +933,9 @@ def _errors(theirs, ours) -> dict:
     """Worst error measure over the states; q̈ as err/cond(M) (docs/design.md §3), None when either side has none."""
     err = {}
     for k in ("tau", "M"):
+        if theirs[k] is None:                    # the engine cannot give it for this model (its notes say why)
+            err[k] = None
+            continue
         err[k] = max(error(x, y) for x, y in zip(theirs[k], ours[k])) if np.all(np.isfinite(theirs[k])) \
             else math.inf
     if theirs["qdd"] is None or ours["qdd"] is None:

@@ -13,6 +13,11 @@ A package name must be a plain name (no empty name, no ``.``/``..``, no path sep
 whose file is refused, missing, too large or of an unknown format, or whose numbers are bad (sizes ≤ 0 or
 non-finite, a scale that is not 3 finite non-zero numbers, an rgba outside [0, 1]), is skipped with a
 GeometryWarning naming the link and the value: nothing outside the roots is ever opened.
+
+glTF 2.0 meshes (.gltf + .bin, .glb) are converted here to binary STL by viz/gltf.py (the bundled meshcat
+viewer draws only stl, obj and dae); their buffers are read only inside the mesh file's own folder. Without a
+URDF <material>, the first primitive's baseColorFactor colours the visual. glTF is y-up: its vertices are
+turned into the z-up frame of a URDF link (GLTF_TO_URDF) before the URDF's scale and origin apply.
 """
 from __future__ import annotations
 
@@ -28,12 +33,16 @@ import numpy as np
 from ..errors import GeometryWarning, InputError, URDFError
 from ..extras import require
 from ..spatial import rpy_matrix
+from .gltf import GltfError, binary_stl, read_gltf
 
 MAX_URDF_BYTES = 64 << 20        # a URDF larger than this is refused (the loader reads it whole)
 MAX_MESH_BYTES = 64 << 20        # one mesh file (example-robot-data's largest: 29 MB)
 MAX_MESH_TOTAL = 512 << 20       # all meshes of one URDF together
-MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae"}
+MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".dae": "dae", ".gltf": "gltf", ".glb": "gltf"}
 DEFAULT_RGBA = (0.7, 0.7, 0.75, 1.0)
+# glTF is y-up (its spec), a URDF link z-up: a .gltf/.glb's vertices are turned +90° about x, (x, y, z) → (x, -z, y),
+# as RViz (ros2/rviz#1482), Drake and Blender's importer do; see viz/gltf.py
+GLTF_TO_URDF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 _PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*\Z")
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")   # plain ASCII decimal
 
@@ -189,15 +198,19 @@ def load_visuals(urdf_path, package_dirs=None):
     out, budget = [], [MAX_MESH_TOTAL]
     for link in root.findall("link"):
         for k, vis in enumerate(link.findall("visual")):
+            notes = []
             try:
-                out.append(_visual(link.get("name"), vis, urdf_path, package_dirs, materials, budget))
+                out.append(_visual(link.get("name"), vis, urdf_path, package_dirs, materials, budget, notes))
             except _Skip as why:
                 warnings.warn(f"{urdf_path}: link {link.get('name')!r}: visual {k} skipped: {why}",
+                              GeometryWarning, stacklevel=2)
+            for note in notes:                  # drawn, but part of it is not
+                warnings.warn(f"{urdf_path}: link {link.get('name')!r}: visual {k}: {note}",
                               GeometryWarning, stacklevel=2)
     return out
 
 
-def _visual(link, vis, urdf_path, package_dirs, materials, budget) -> Visual:
+def _visual(link, vis, urdf_path, package_dirs, materials, budget, notes=None) -> Visual:
     """One <visual> element as a Visual; _Skip says why it cannot be drawn."""
     g = meshcat_module("meshcat.geometry")
     T = np.eye(4)
@@ -205,9 +218,8 @@ def _visual(link, vis, urdf_path, package_dirs, materials, budget) -> Visual:
     if origin is not None:
         T[:3, :3] = rpy_matrix(_numbers(origin, "rpy", 3, "0 0 0"))
         T[:3, 3] = _numbers(origin, "xyz", 3, "0 0 0")
-    rgba = DEFAULT_RGBA
-    if vis.find("material") is not None:
-        rgba = _material_rgba(vis.find("material"), materials) or rgba
+    given = _material_rgba(vis.find("material"), materials) if vis.find("material") is not None else None
+    rgba = given or DEFAULT_RGBA
     geometry = vis.find("geometry")
     shapes = [] if geometry is None else [e for e in geometry if e.tag in ("box", "sphere", "cylinder", "mesh")]
     if len(shapes) != 1:
@@ -226,7 +238,8 @@ def _visual(link, vis, urdf_path, package_dirs, materials, budget) -> Visual:
     if np.any(scale == 0):
         raise _Skip(f"<mesh scale={shape.get('scale')!r}> has a zero factor")
     S[:3, :3] = np.diag(scale)
-    return Visual(link, _mesh(shape.get("filename"), urdf_path, package_dirs, budget), T @ S, rgba)
+    mesh, file_rgba = _mesh(shape.get("filename"), urdf_path, package_dirs, budget, notes)
+    return Visual(link, mesh, T @ S, given or file_rgba or DEFAULT_RGBA)
 
 
 def _numbers(e, key, n, default, positive=False) -> np.ndarray:
@@ -254,8 +267,9 @@ def _material_rgba(mat, materials):
     return tuple(float(x) for x in rgba)
 
 
-def _mesh(filename, urdf_path, package_dirs, budget):
-    """The meshcat geometry of a mesh file: resolved, confined, bounded in size, then read once."""
+def _mesh(filename, urdf_path, package_dirs, budget, notes=None):
+    """(meshcat geometry, the file's own rgba or None) of a mesh file: resolved, confined, bounded in size,
+    then read once; a glTF is converted to binary STL (its notes on skipped parts go to ``notes``)."""
     g, umsgpack = meshcat_module("meshcat.geometry"), meshcat_module("umsgpack")
     try:
         path = resolve_mesh(filename, urdf_path, package_dirs)
@@ -263,7 +277,9 @@ def _mesh(filename, urdf_path, package_dirs, budget):
         raise _Skip(str(exc).removeprefix(f"{urdf_path}: ")) from None
     fmt = MESH_FORMATS.get(path.suffix.lower())
     if fmt is None:
-        raise _Skip(f"mesh {filename!r}: format {path.suffix!r} not supported (stl, obj, dae)")
+        raise _Skip(f"mesh {filename!r}: format {path.suffix!r} not supported (stl, obj, dae, gltf, glb)")
+    if fmt == "gltf":
+        return _gltf_mesh(filename, path, budget, notes)
     info = path.stat()
     if not stat.S_ISREG(info.st_mode) or info.st_size > min(MAX_MESH_BYTES, budget[0]):
         raise _Skip(f"mesh {filename!r}: {info.st_size} bytes, more than the {MAX_MESH_BYTES} a mesh may "
@@ -272,9 +288,27 @@ def _mesh(filename, urdf_path, package_dirs, budget):
         data = fh.read(MAX_MESH_BYTES + 1)[:MAX_MESH_BYTES]
     budget[0] -= len(data)
     if fmt == "stl":
-        return g.MeshGeometry(umsgpack.Ext(g.threejs_type(np.uint8)[1], data), "stl")   # as meshcat's from_file
+        return g.MeshGeometry(umsgpack.Ext(g.threejs_type(np.uint8)[1], data), "stl"), None  # as from_file
     try:
-        return g.MeshGeometry(data.decode("utf-8"), fmt)
+        return g.MeshGeometry(data.decode("utf-8"), fmt), None
     except UnicodeDecodeError:
         raise _Skip(f"mesh {filename!r}: a .{fmt} file must be UTF-8 text") from None
 
+
+
+def _gltf_mesh(filename, path, budget, notes):
+    """A .gltf/.glb as a binary-STL meshcat geometry and its base colour; the larger of the bytes read (file
+    and buffers) and the STL written counts against the budget of all meshes."""
+    g, umsgpack = meshcat_module("meshcat.geometry"), meshcat_module("umsgpack")
+    try:
+        got = read_gltf(path, max_bytes=min(MAX_MESH_BYTES, budget[0]))
+    except GltfError as exc:
+        raise _Skip(f"mesh {filename!r}: {exc}") from None
+    data = binary_stl(got.triangles @ GLTF_TO_URDF.T)
+    cost = max(got.bytes_read, len(data))
+    if cost > budget[0]:
+        raise _Skip(f"mesh {filename!r}: its STL of {len(data)} bytes exceeds the {MAX_MESH_TOTAL} of all meshes")
+    budget[0] -= cost
+    if notes is not None:
+        notes += [f"mesh {filename!r}: {note}" for note in got.notes]
+    return g.MeshGeometry(umsgpack.Ext(g.threejs_type(np.uint8)[1], data), "stl"), got.rgba

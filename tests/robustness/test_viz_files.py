@@ -15,6 +15,7 @@ import json
 import os
 import re
 import secrets
+import struct
 import subprocess
 import sys
 import warnings
@@ -217,3 +218,199 @@ def test_cli_package_dir_and_refusal(world):
     for bad in ("meshes", "=x", "../x=" + str(world["tmp"]), f"m={world['tmp'] / 'missing'}"):
         r = _cli("play", str(urdf), "--html", "c.html", "--package-dir", bad, cwd=world["tmp"])
         assert r.returncode == 2 and "--package-dir" in r.stderr and "Traceback" not in r.stderr, (bad, r.stderr)
+
+
+# ---------------------------------------------------------------------------------------------- glTF buffers
+# A .gltf names its buffers by URI: they are read only inside the mesh file's own folder (robot/meshes/ here).
+# The secret buffer (tmp/secret.bin, outside every root) holds a valid cube, so a reader that followed the URI
+# would draw it; robot/stray.bin lies inside the URDF's folder but outside the mesh's folder: refused as well.
+GLTF_URIS = [
+    ("dotdot", "../../secret.bin"),
+    ("dotdot-to-urdf-folder", "../stray.bin"),
+    ("dotdot-percent", "%2e%2e/%2e%2e/secret.bin"),
+    ("dotdot-backslash", "..\\..\\secret.bin"),
+    ("absolute", "{S}"),
+    ("file-uri", "file://{S}"),
+    ("http-uri", "http://127.0.0.1:9/secret.bin"),
+    ("symlink-file", "link.bin"),
+    ("symlinked-folder", "up/secret.bin"),
+    ("data-uri-not-octet-stream", "data:text/plain;base64,AAAA"),
+]
+
+
+@pytest.fixture
+def gltf_world(world):
+    from gltf_files import Builder
+    b = Builder()
+    b.cube()
+    _, cube = b.gltf()
+    secret = world["tmp"] / "secret.bin"
+    secret.write_bytes(cube)
+    (world["robot"] / "stray.bin").write_bytes(cube)
+    (world["robot"] / "meshes" / "link.bin").symlink_to(secret)
+    return dict(world, builder=b, cube=cube, secret_bin=secret)
+
+
+def gltf_export(gltf_world, uri, monkeypatch):
+    b = gltf_world["builder"]
+    js, _ = b.gltf(uri.format(S=gltf_world["secret_bin"]))
+    (gltf_world["robot"] / "meshes" / "arm.gltf").write_bytes(js)
+    return export(gltf_world, "meshes/arm.gltf", None, monkeypatch)
+
+
+@pytest.mark.parametrize("uri", [u for _, u in GLTF_URIS], ids=[i for i, _ in GLTF_URIS])
+def test_gltf_buffer_outside_the_mesh_folder_is_never_read(gltf_world, uri, monkeypatch):
+    page, caught, opened_outside = gltf_export(gltf_world, uri, monkeypatch)
+    assert opened_outside == [], f"opened outside the roots: {opened_outside}"
+    assert b"converted from glTF" not in b"".join(payloads(page))
+    geo = [str(w.message) for w in caught if issubclass(w.category, GeometryWarning)]
+    assert len(geo) == 1 and "'arm'" in geo[0] and "skipped" in geo[0], geo
+    shown = uri.format(S=gltf_world["secret_bin"])
+    assert repr(shown[:40]) in geo[0] or repr(shown) in geo[0], geo[0]
+
+
+def test_gltf_buffer_inside_the_mesh_folder_is_read(gltf_world, monkeypatch):
+    # control: the same buffer beside the .gltf is read and the cube is drawn (so the cases above can fail)
+    (gltf_world["robot"] / "meshes" / "cube.bin").write_bytes(gltf_world["cube"])
+    page, caught, opened_outside = gltf_export(gltf_world, "cube.bin", monkeypatch)
+    assert opened_outside == [] and not [w for w in caught if issubclass(w.category, GeometryWarning)]
+    assert b"converted from glTF" in b"".join(payloads(page))
+
+
+# ------------------------------------------------------------------------------------- malformed glTF files
+def _with(edit, form="glb"):
+    """A case: apply ``edit`` to the builder of a cube (it may return the file's bytes itself)."""
+    def make(b):
+        out = edit(b)
+        if isinstance(out, bytes):
+            return out
+        return b.glb() if form == "glb" else b.gltf(None)[0]
+    return make
+
+
+def _deep_json(b):
+    return b'{"asset": {"version": "2.0"}, "x": ' + b"[" * 200000 + b"]" * 200000 + b"}"
+
+
+def _glb_chunk_past_end(b):
+    data = bytearray(b.glb())
+    struct.pack_into("<I", data, 12, 10 ** 6)
+    return bytes(data)
+
+
+def _instances(b):
+    mesh = b.doc["nodes"][0]["mesh"]
+    for _ in range(200):
+        b.node(root=True, mesh=mesh)
+
+
+def _many_accessors(b):
+    # three distinct accessors of 2900 positions each over one view, one triangle each: few triangles, but
+    # 8700 elements read, more than the 8 per allowed triangle (8000)
+    view = b.view(np.zeros((2900, 3), "<f4").tobytes())
+    for _ in range(3):
+        pos = b.accessor(view, 5126, "VEC3", 2900)
+        b.node(root=True, mesh=b.mesh({"attributes": {"POSITION": pos}, "indices": b.indices([0, 1, 2])}))
+
+
+def _set(path, value):
+    def edit(b):
+        obj = b.doc
+        for key in path[:-1]:
+            obj = obj[key]
+        obj[path[-1]] = value
+    return edit
+
+
+def _positions(P):
+    def edit(b):
+        b.doc["accessors"][0]["bufferView"] = b.view(np.asarray(P, "<f4").tobytes())
+    return edit
+
+
+BAD_GLTF = {   # id: (file bytes from the cube's builder, text the warning must quote)
+    "glb-truncated": (lambda b: b.glb()[:-10], "truncated"),
+    "glb-header-only": (lambda b: b.glb()[:12], "truncated"),
+    "glb-wrong-magic": (lambda b: b"glTX" + b.glb()[4:], "magic"),
+    "glb-version-1": (lambda b: b.glb(version=1), "version 1"),
+    "glb-chunk-past-end": (_glb_chunk_past_end, "past the end"),
+    "json-not-json": (lambda b: b"{not json", "not JSON"),
+    "json-array": (lambda b: b"[1, 2]", "not an object"),
+    "json-nan": (_with(_set(["nodes", 0, "translation"], [float("nan"), 0, 0]), "gltf"), "NaN"),
+    "json-deep": (_deep_json, "nested too deeply"),
+    "asset-version-1": (_with(_set(["asset", "version"], "1.0")), "asset.version"),
+    "no-scene": (_with(_set(["scenes"], [])), "no scene"),
+    "accessor-count-past-view": (_with(_set(["accessors", 0, "count"], 9)), "past its bufferView"),
+    "accessor-offset-huge": (_with(_set(["accessors", 0, "byteOffset"], 2 ** 62)), "past its bufferView"),
+    "accessor-count-huge": (_with(_set(["accessors", 0, "count"], 10 ** 15)), "count 1000000000000000"),
+    "view-past-buffer": (_with(_set(["bufferViews", 0, "byteLength"], 10 ** 9)), "past its buffer"),
+    "view-stride-short": (_with(_set(["bufferViews", 0, "byteStride"], 4)), "byteStride 4"),
+    "buffer-longer-than-data": (_with(_set(["buffers", 0, "byteLength"], 10 ** 6)), "truncated"),
+    "index-out-of-range": (_with(lambda b: b.doc["accessors"][1].update(bufferView=b.view(
+        np.array([0, 1, 8] * 12, "<u2").tobytes()))), "index 8 out of range"),
+    "index-count-not-triangles": (_with(_set(["accessors", 1, "count"], 35)), "whole number of triangles"),
+    "index-type-float": (_with(_set(["accessors", 1, "componentType"], 5126)), "FLOAT SCALAR"),
+    "node-cycle": (_with(lambda b: [b.node(children=[0]), _set(["nodes", 0, "children"], [1])(b)]),
+                   "reached twice"),
+    "node-self-cycle": (_with(_set(["nodes", 0, "children"], [0])), "reached twice"),
+    "node-shared-child": (_with(lambda b: [b.node(root=True, children=[0])]), "reached twice"),
+    "node-index-missing": (_with(_set(["scenes", 0, "nodes"], [7])), "nodes[7] does not exist"),
+    "node-index-bool": (_with(_set(["nodes", 0, "mesh"], True)), "mesh = True"),
+    "triangle-budget": (_with(_instances), "more than the 1000 triangles"),
+    "accessor-element-budget": (_with(_many_accessors), "accessors of more than 8000 elements"),
+    "positions-nan": (_with(_positions(np.where(np.arange(24).reshape(8, 3) == 5, np.nan, 0.5))), "non-finite"),
+    "positions-inf": (_with(_positions(np.full((8, 3), np.inf))), "non-finite"),
+    "positions-overflow-by-matrix": (_with(_set(["nodes", 0, "matrix"], [1e300, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0,
+                                                                         0, 0, 0, 1])), "non-finite positions"),
+    "rotation-not-unit": (_with(_set(["nodes", 0, "rotation"], [0, 0, 0, 0])), "not a unit quaternion"),
+    "matrix-short": (_with(_set(["nodes", 0, "matrix"], [1, 0, 0])), "not 16 finite numbers"),
+    "sparse-accessor": (_with(_set(["accessors", 0, "sparse"], {"count": 1})), "sparse"),
+    "draco": (_with(_set(["meshes", 0, "primitives", 0, "extensions"], {"KHR_draco_mesh_compression": {}})),
+              "KHR_draco_mesh_compression"),
+    "meshopt": (_with(_set(["bufferViews", 0, "extensions"], {"EXT_meshopt_compression": {}})),
+                "EXT_meshopt_compression"),
+    "quantization-required": (_with(_set(["extensionsRequired"], ["KHR_mesh_quantization"])),
+                              "KHR_mesh_quantization"),
+    "quantized-positions": (_with(lambda b: [_set(["extensionsUsed"], ["KHR_mesh_quantization"])(b),
+                                             _set(["accessors", 0, "componentType"], 5123)(b)]),
+                            "KHR_mesh_quantization"),
+    "lines-only": (_with(_set(["meshes", 0, "primitives", 0, "mode"], 1)), "mode 1 (LINES)"),
+    "data-uri-bad-base64": (lambda b: b.gltf(None)[0].replace(b";base64,", b";base64,!!"), "base64"),
+    "bin-missing": (lambda b: b.gltf("missing.bin")[0], "not found"),
+}
+
+
+@pytest.mark.parametrize("make,quoted", list(BAD_GLTF.values()), ids=list(BAD_GLTF))
+def test_bad_gltf_is_skipped_with_a_warning(make, quoted, tmp_path, monkeypatch):
+    from gltf_files import Builder, robot_with_mesh
+
+    from manipdyn.viz import gltf
+    monkeypatch.setattr(gltf, "MAX_TRIANGLES", 1000)
+    b = Builder()
+    b.cube()
+    data = make(b)
+    name = "arm.glb" if data[:4] in (b"glTF", b"glTX") else "arm.gltf"
+    (tmp_path / name).write_bytes(data)
+    path = robot_with_mesh(tmp_path, name)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert load_visuals(path) == []
+    texts = [str(w.message) for w in caught if issubclass(w.category, GeometryWarning)]
+    assert len(texts) == 1 and "link 'arm'" in texts[0] and name in texts[0] and quoted in texts[0], texts
+
+
+def test_gltf_larger_than_the_mesh_limit(tmp_path, monkeypatch):
+    # the .gltf is small, its buffer is not: the file and its buffers count together against the limit
+    from gltf_files import Builder, robot_with_mesh
+
+    from manipdyn.viz import geometry
+    b = Builder()
+    b.cube()
+    js, bn = b.gltf("cube.bin")
+    (tmp_path / "arm.gltf").write_bytes(js)
+    (tmp_path / "cube.bin").write_bytes(bn)
+    monkeypatch.setattr(geometry, "MAX_MESH_BYTES", len(js) + len(bn) - 1)
+    with pytest.warns(GeometryWarning, match=r"buffer 0 'cube.bin': \d+ bytes, more than"):
+        assert load_visuals(robot_with_mesh(tmp_path, "arm.gltf")) == []
+    monkeypatch.setattr(geometry, "MAX_MESH_BYTES", len(js) + len(bn))
+    assert len(load_visuals(robot_with_mesh(tmp_path, "arm.gltf"))) == 1
