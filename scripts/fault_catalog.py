@@ -282,6 +282,10 @@ FAULTS = (
           "X[(6 * k + r) * N + s] = R[3 * r] * f[s, 0] + R[3 * r + 1] * f[s, 1] + R[3 * r + 2] * f[s, 2]",
           "X[(6 * k + r) * N + s] = R[r] * f[s, 0] + R[r + 3] * f[s, 1] + R[r + 6] * f[s, 2]",
           ("tests/gpu/test_gpu.py",), "the GPU turns a local force from the frame's axes with Rᵀ instead of R"),
+    Fault("identify-friction-column-unscaled", "regressor", "manipdyn/examples/identify.py",
+          "for x in (a, v, np.tanh(v / FRICTION_EPS))]", "for x in (a, v, np.tanh(v))]",
+          ("tests/unit/test_identify.py",), "the identification's friction column is tanh(q̇) instead of "
+          "tanh(q̇/ε): friction and damping come back wrong"),
     Fault("rnea-lanes-fext-lever-reversed", "rnea", "manipdyn/dynamics/rnea.py",
           "add(ne, cross(p, fe))", "add(ne, cross(fe, p))",
           ("tests/batch/test_lanes.py", _RNEA), "the lane step (CPU and GPU) takes a wrench's moment about the body's "

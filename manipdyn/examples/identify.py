@@ -20,7 +20,11 @@ Brussel 1997, Eq. 8), with q, q̇, q̈ analytic:
     q_j(t) = q_j0 + Σ_{l=1..L} a_jl/(ω_f l) sin(ω_f l t) − b_jl/(ω_f l) cos(ω_f l t)
     q̇_j(t) = Σ a_jl cos(ω_f l t) + b_jl sin(ω_f l t),   q̈_j(t) = Σ ω_f l (b_jl cos(ω_f l t) − a_jl sin(ω_f l t))
 
-The torques are the model's own (``rnea``, gravity included) plus noise. The identified β̂ predicts the
+The torques are the model's own (``rnea``, gravity included) plus noise. With the joints' own dynamics (the
+default arm has them: ``DEMO_JOINT_DYNAMICS``) the drive torque adds the rotor and the losses, and π grows by
+3 nv parameters, each linear in τ: τ_j += armature_j q̈_j (in ``rnea``) + damping_j q̇_j + friction_j tanh(q̇_j/ε)
+(``aba.passive_torques``), so W gains the columns q̈_j, q̇_j, tanh(q̇_j/ε) in joint j's rows. The first joint's
+armature acts with its link's I_zz (both multiply q̈_1 alone): one base parameter holds their sum. The identified β̂ predicts the
 torques of a second, different trajectory, τ̂' = W₁' β̂ (W₁' the same pivoted columns of its regressor);
 the prediction error there, against the noise-free torques, has expected mean square
 σ² ‖W₁' R₁₁⁻¹‖_F² / (K' nv) — small when the first trajectory excites every base parameter — and against the
@@ -33,11 +37,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..dynamics.aba import passive_torques
 from ..dynamics.regressor import PARAMETER_NAMES, dynamic_parameters, joint_torque_regressor
 from ..dynamics.rnea import rnea
+from ..model import FRICTION_EPS, JOINT_DYNAMICS
 from ..paths import bundled_dir
 
 RANK_TOL = 1e-8          # |R_kk| / |R_00| below this: a column that depends on the earlier ones
+# the default arm's drives: rotor inertia reflected through a gearbox (kg m²), viscous damping (N m s/rad) and
+# Coulomb friction (N m) per joint, of the size a harmonic drive of a 5-10 kg arm has (illustrative values)
+DEMO_JOINT_DYNAMICS = {f"joint{j + 1}": dict(armature=a, damping=d, friction=f) for j, (a, d, f) in enumerate(
+    ((0.20, 2.0, 3.0), (0.20, 2.0, 3.0), (0.10, 1.0, 2.0), (0.05, 0.5, 1.0), (0.02, 0.2, 0.5)))}
 
 
 @dataclass
@@ -76,7 +86,7 @@ class Identification:
     beta_std: np.ndarray      # (r,) standard deviation of β̂, σ √diag((W₁ᵀW₁)⁻¹)
     rank: int                 # r, of n_params = 10 nb
     columns: np.ndarray       # (r,) the entries of π whose regressor columns W₁ holds (P[:r], pivot order)
-    n_params: int
+    n_params: int             # 10 nb inertial parameters (+ 3 nv armature, damping, friction)
     cond: float               # cond(W₁): the excitation of the base parameters
     sigma: float              # torque noise σ, N·m
     seed: int
@@ -106,9 +116,15 @@ def base_parameters(W, tol=RANK_TOL):
     return P, r, K
 
 
-def _labels(model, P, r, K, terms=3):
-    """Each base parameter as 'p[body] + k p'[body'] …' (the few largest of its combination)."""
+def parameter_names(model, joint_dynamics):
+    """The names of π's entries: 'p[body]' of the 10 nb inertial parameters, then (joint_dynamics)
+    'armature[v]', 'damping[v]', 'friction[v]' of each velocity v."""
     names = [f"{PARAMETER_NAMES[c % 10]}[{model.body_names[c // 10]}]" for c in range(10 * model.njoints)]
+    return names + ([f"{k}[{v}]" for k in JOINT_DYNAMICS for v in model.v_names] if joint_dynamics else [])
+
+
+def _labels(names, P, r, K, terms=3):
+    """Each base parameter as 'p[body] + k p'[body'] …' (the few largest of its combination)."""
     out = []
     for k in range(r):
         extra = [(K[k, m], names[P[r + m]]) for m in np.argsort(-np.abs(K[k])) if abs(K[k, m]) > 1e-10]
@@ -117,27 +133,57 @@ def _labels(model, P, r, K, terms=3):
     return out
 
 
-def _stack(model, traj, t):
+def regressor(model, q, v, a, joint_dynamics):
+    """W (K nv, n) with τ = W π: the inertial parameters' columns (``joint_torque_regressor``), then with
+    joint_dynamics the columns of each velocity's armature (q̈_j), damping (q̇_j) and friction (tanh(q̇_j/ε)),
+    nonzero in that velocity's rows only."""
+    W = joint_torque_regressor(model, q, v, a).reshape(-1, 10 * model.njoints)
+    if not joint_dynamics:
+        return W
+    E = np.eye(model.nv)
+    extra = [(x[:, :, None] * E).reshape(-1, model.nv) for x in (a, v, np.tanh(v / FRICTION_EPS))]
+    return np.hstack([W] + extra)
+
+
+def parameters(model, joint_dynamics):
+    """π: ``dynamic_parameters`` then, with joint_dynamics, model.armature, damping, friction."""
+    pi = dynamic_parameters(model)
+    return np.concatenate([pi] + [np.asarray(getattr(model, k), float) for k in JOINT_DYNAMICS]) \
+        if joint_dynamics else pi
+
+
+def drive_torques(model, q, v, a, joint_dynamics):
+    """What the drives deliver: rnea (with the rotors' armature ⊙ q̈) and, with joint_dynamics, the losses."""
+    tau = rnea(model, q, v, a)
+    loss = passive_torques(model, v) if joint_dynamics else None
+    return tau if loss is None else tau + loss
+
+
+def _stack(model, traj, t, jd):
     q, v, a = traj.sample(t)
-    return (q, v, a), joint_torque_regressor(model, q, v, a).reshape(-1, 10 * model.njoints), rnea(model, q, v, a)
+    return (q, v, a), regressor(model, q, v, a, jd), drive_torques(model, q, v, a, jd)
 
 
-def identify(model=None, *, samples=400, sigma=0.5, seed=0, duration=10.0, harmonics=5) -> Identification:
-    """Identify the base parameters of ``model`` (default: the bundled AAU arm) from ``samples`` noisy
-    torque samples (noise σ, N·m) of one random Fourier trajectory, and test them on a second one.
+def identify(model=None, *, samples=400, sigma=0.5, seed=0, duration=10.0, harmonics=5,
+             joint_dynamics=None) -> Identification:
+    """Identify the base parameters of ``model`` (default: the bundled AAU arm, with the drives of
+    ``DEMO_JOINT_DYNAMICS``) from ``samples`` noisy torque samples (noise σ, N·m) of one random Fourier
+    trajectory, and test them on a second one. joint_dynamics: also identify each joint's armature, damping
+    and friction (None: when the model has any).
 
     Deterministic for a given seed: the trajectories and the noise come from numpy's default_rng(seed).
     """
     if model is None:
         from ..io.urdf import load_urdf
-        model = load_urdf(bundled_dir() / "aau_arm.urdf")
+        model = load_urdf(bundled_dir() / "aau_arm.urdf", joint_dynamics=DEMO_JOINT_DYNAMICS)
+    jd = bool(model.passive or np.any(model.armature)) if joint_dynamics is None else bool(joint_dynamics)
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, duration, samples, endpoint=False)
     fit, test = (FourierTrajectory.random(model.nv, rng, harmonics, period=duration) for _ in range(2))
-    (s1, W, tau), (s2, W2, tau2) = _stack(model, fit, t), _stack(model, test, t)
+    (s1, W, tau), (s2, W2, tau2) = _stack(model, fit, t, jd), _stack(model, test, t, jd)
     tau_m, tau2_m = tau + rng.normal(0.0, sigma, tau.shape), tau2 + rng.normal(0.0, sigma, tau2.shape)
     P, r, K = base_parameters(W)
-    pi = dynamic_parameters(model)
+    pi = parameters(model, jd)
     beta = pi[P[:r]] + K @ pi[P[r:]]
     W1 = W[:, P[:r]]
     beta_hat = np.linalg.lstsq(W1, tau_m.ravel(), rcond=None)[0]
@@ -146,7 +192,7 @@ def identify(model=None, *, samples=400, sigma=0.5, seed=0, duration=10.0, harmo
     pred = (W2[:, P[:r]] @ beta_hat).reshape(tau2.shape)
     rms = lambda x: float(np.sqrt(np.mean(np.square(x))))      # noqa: E731
     return Identification(
-        labels=_labels(model, P, r, K), beta_true=beta, beta_hat=beta_hat,
+        labels=_labels(parameter_names(model, jd), P, r, K), beta_true=beta, beta_hat=beta_hat,
         beta_std=sigma * np.sqrt(np.sum(R1inv ** 2, axis=1)), rank=r, columns=P[:r], n_params=pi.size,
         cond=float(np.linalg.cond(W1)), sigma=float(sigma), seed=seed, samples=samples,
         rms_fit=rms(W1 @ beta_hat - tau_m.ravel()), rms_test=rms(pred - tau2_m), rms_test_true=rms(pred - tau2),
