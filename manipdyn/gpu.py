@@ -26,6 +26,8 @@ and timed by ``scripts/gpu_bench.py`` on a GPU.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from .dynamics.aba import (_A, _V, ARTICULATED, acceleration_lane, articulated_lane, articulated_model, bias_lane,
@@ -368,13 +370,13 @@ def _wrenches(model, f_ext, f_ext_frame, N, call):
     error on a flagged row. Frames of the fixed base are dropped (they change no torque)."""
     if f_ext_frame not in ("local", "world"):
         raise InputError(f"{call}: f_ext_frame must be 'local' or 'world', not {f_ext_frame!r}")
-    if f_ext is not None and not isinstance(f_ext, dict):
+    if f_ext is not None and not isinstance(f_ext, Mapping):
         raise InputError(f"{call}: f_ext must be None or a dict {{link or frame name: (force, moment)}}, "
                          f"not {type(f_ext).__name__}")
     c, rows = _cuda(), []
     for name, pair in (f_ext or {}).items():
         fr = frame_of(model, name)
-        if isinstance(pair, (str, bytes, dict)) or not hasattr(pair, "__len__") or len(pair) != 2:
+        if isinstance(pair, (str, bytes, Mapping)) or not hasattr(pair, "__len__") or len(pair) != 2:
             raise InputError(f"{call}: f_ext[{name!r}] must be a pair (force, moment)")
         d = []
         for what, w in zip(("force", "moment"), pair):

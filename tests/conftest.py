@@ -25,6 +25,18 @@ def assert_close(x, y, tol, what=""):
     assert e <= tol, f"{what}: err {e:.3e} > tol {tol:.0e}"
 
 
+def mujoco_full_m(m, d):
+    """MuJoCo's full mass matrix M (nv, nv) of data d (after mj_forward or mj_inverse), armature included:
+    mj_fullM's arguments changed from (m, dst, qM) in MuJoCo 3 to (m, d, dst) in MuJoCo 4."""
+    import mujoco
+    M = np.zeros((m.nv, m.nv))
+    if hasattr(d, "qM"):
+        mujoco.mj_fullM(m, M, d.qM)
+    else:
+        mujoco.mj_fullM(m, d, M)
+    return M
+
+
 def inertial_xml(mass, com=(0, 0, 0), I=(0, 0, 0, 0, 0, 0), rpy=(0, 0, 0)):
     ixx, iyy, izz, ixy, ixz, iyz = I
     return (f'<inertial><origin xyz="{com[0]} {com[1]} {com[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>'

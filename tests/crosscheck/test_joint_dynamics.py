@@ -18,7 +18,7 @@ import pytest
 
 import manipdyn as md
 from manipdyn.errors import InputError
-from tests.conftest import AAU, assert_close, err
+from tests.conftest import AAU, assert_close, err, mujoco_full_m
 from tests.crosscheck.test_crba import _pin_q, random_tree_text
 
 pin = pytest.importorskip("pinocchio")
@@ -219,9 +219,7 @@ def test_damping_and_saturated_friction_match_mujoco():
         fr = np.asarray(d.efc_type) == int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
         sat = np.abs(np.abs(d.efc_force[fr]) - m.dof_frictionloss[d.efc_id[fr]]) / m.dof_frictionloss[d.efc_id[fr]]
         worst_sat = max(worst_sat, float(np.max(sat)))                   # saturated: |force| = frictionloss
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, M) if not hasattr(d, "qM") else mujoco.mj_fullM(m, M, d.qM)
-        rigid[s] = np.linalg.cond(M)
+        rigid[s] = np.linalg.cond(mujoco_full_m(m, d))
     worst = {}
     for how, qdd in (("aba", md.forward_dynamics(ours, Q, V, T)),
                      ("cholesky", md.forward_dynamics(ours, Q, V, T, method="cholesky")),

@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import ROOT, err
+from conftest import ROOT, err, mujoco_full_m
 
 import manipdyn as md
 from manipdyn.constraints import complete_state, constrained_forward_dynamics
@@ -56,15 +56,6 @@ def _mujoco(model, **kw):
     return m, mujoco.MjData(m), iq, iv
 
 
-def _full_m(m, d):
-    M = np.zeros((m.nv, m.nv))
-    if hasattr(d, "qM"):                 # MuJoCo 3: mj_fullM(m, dst, qM); 4: mj_fullM(m, d, dst)
-        mujoco.mj_fullM(m, M, d.qM)
-    else:
-        mujoco.mj_fullM(m, d, M)
-    return M
-
-
 ARMS = [ROOT / "urdf" / n for n in ("aau_arm.urdf", "fourbar.urdf", "spm.urdf")] + \
        [p for p in arm_paths() if p.stem in ("ur5_robot", "panda", "kinova", "baxter")]
 
@@ -83,7 +74,7 @@ def test_open_tree_m_and_tau(path):
         d.qpos[iq], d.qvel[iv], d.qacc[iv] = q, v, a
         mujoco.mj_inverse(m, d)
         worst = max(worst, err(d.qfrc_inverse[iv], md.rnea(model, q, v, a) + model.damping * v),
-                    err(_full_m(m, d)[np.ix_(iv, iv)], md.mass_matrix(model, q)))
+                    err(mujoco_full_m(m, d)[np.ix_(iv, iv)], md.mass_matrix(model, q)))
     print(f"\n{path.stem}: M and τ against MuJoCo: {worst:.1e}")
     assert worst <= OPEN, f"{path.stem}: {worst:.2e}"
 
@@ -217,6 +208,6 @@ def test_free_flyer_root_at_identity_orientation(stem):
         d.qvel[:], d.qacc[:] = v, a
         d.qacc[:3] = a[:3] + np.cross(v[3:6], v[:3])
         mujoco.mj_inverse(m, d)
-        worst = max(worst, err(d.qfrc_inverse, md.rnea(model, q, v, a)), err(_full_m(m, d), md.mass_matrix(model, q)))
+        worst = max(worst, err(d.qfrc_inverse, md.rnea(model, q, v, a)), err(mujoco_full_m(m, d), md.mass_matrix(model, q)))
     print(f"\n{stem}: free-flyer root, M and τ against MuJoCo: {worst:.1e}")
     assert worst <= OPEN, f"{stem}: {worst:.2e}"

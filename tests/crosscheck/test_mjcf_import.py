@@ -23,7 +23,7 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import ROOT, err, urdf
+from conftest import ROOT, err, mujoco_full_m, urdf
 
 import manipdyn as md
 from manipdyn.io.mjcf import to_mjcf
@@ -51,15 +51,6 @@ def random_state(model, rng):
         quat = rng.normal(size=4)
         q[:7] = np.concatenate([rng.normal(size=3), quat / np.linalg.norm(quat)])
     return q, rng.normal(size=model.nv), rng.normal(size=model.nv)
-
-
-def full_m(m, d):
-    M = np.zeros((m.nv, m.nv))
-    if hasattr(d, "qM"):                 # MuJoCo 3: mj_fullM(m, dst, qM); 4: mj_fullM(m, d, dst)
-        mujoco.mj_fullM(m, M, d.qM)
-    else:
-        mujoco.mj_fullM(m, d, M)
-    return M
 
 
 def mujoco_errors(model, m, n=5, seed=0):
@@ -97,7 +88,7 @@ def mujoco_errors(model, m, n=5, seed=0):
         d.qacc[:] = qacc
         tau_mj = np.zeros(m.nv)
         mujoco.mj_rne(m, d, 1, tau_mj)
-        M_mj = full_m(m, d)                            # with MuJoCo's armature, as ours (model.armature)
+        M_mj = mujoco_full_m(m, d)                            # with MuJoCo's armature, as ours (model.armature)
         tau_mj += m.dof_armature * qacc                # mj_rne leaves it out; rnea has it (Pinocchio's)
         tau, M = md.rnea(model, q, v, a), md.mass_matrix(model, q)
         worst = max(worst, err(T.T @ tau, tau_mj[iv]), err(T.T @ M @ T, M_mj[np.ix_(iv, iv)]))
