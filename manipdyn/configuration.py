@@ -2,15 +2,17 @@
 
 Names and meaning are Pinocchio's (``pin.neutral``, ``pin.integrate``, ``pin.difference``,
 ``pin.randomConfiguration``, ``pin.normalize``), on manipdyn's q (docs/design.md §3: a continuous joint is one
-angle, where Pinocchio stores cos/sin; a free-flyer root is [x y z qx qy qz qw] as in Pinocchio):
+angle, where Pinocchio stores cos/sin; a free-flyer root is [x y z qx qy qz qw], a ball joint [qx qy qz qw], as in
+Pinocchio):
 
-    q ⊕ v         integrate: 1-dof joints q + v; free flyer M(q) exp6(v), v = [linear; angular] body frame
-    q1 ⊖ q0       difference: the v with q0 ⊕ v = q1 (continuous joints: the shortest angle; free flyer
-                  log6(M(q0)⁻¹ M(q1)), rotation angle ≤ π)
+    q ⊕ v         integrate: 1-dof joints q + v; ball quat ⊗ exp(ω); free flyer M(q) exp6(v), v = [linear;
+                  angular] body frame
+    q1 ⊖ q0       difference: the v with q0 ⊕ v = q1 (continuous joints: the shortest angle; ball
+                  log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1)); rotation angles ≤ π)
 
 The joint formulas are those of ``manipdyn.joints`` (compiled ``integrate_kernel``/``difference_kernel``);
 this module checks the arguments and handles the batch. Every function takes one state (nq,) / (nv,) or a
-batch (N, nq) / (N, nv) and returns the matching shape. A free flyer's quaternion must be of unit norm
+batch (N, nq) / (N, nv) and returns the matching shape. A free flyer's or ball joint's quaternion must be of unit norm
 within ``QUAT_TOL`` (InputError naming the row otherwise; ``normalize`` fixes it): the placement formulas
 read it as a rotation.
 """
@@ -19,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError
-from .joints import FREEFLYER, PRISMATIC, difference_kernel, integrate_kernel
+from .joints import BALL, FREEFLYER, PRISMATIC, difference_kernel, integrate_kernel
 from .dynamics.state import as_batch, check_model, check_scalar, unbatch
 from .model import QUAT_TOL
 
@@ -35,14 +37,9 @@ def _arrays(model):
     return model.kernel.config
 
 
-def _quat_slices(model):
-    """The first q index of every free flyer's quaternion (x y z w = q[k:k+4])."""
-    return [int(model.idx_q[i]) + 3 for i in range(model.njoints) if model.kind[i] == FREEFLYER]
-
-
 def check_quaternions(model, Q, name="q"):
-    """Refuse a free-flyer quaternion whose norm is not 1 within QUAT_TOL (Q in batch form (N, nq))."""
-    for k in _quat_slices(model):
+    """Refuse a quaternion (free flyer, ball joint) whose norm is not 1 within QUAT_TOL (Q in batch form (N, nq))."""
+    for k in model.quat_q:
         n = np.linalg.norm(Q[:, k:k + 4], axis=1)
         bad = np.flatnonzero(np.abs(n - 1.0) > QUAT_TOL)
         if bad.size:
@@ -54,18 +51,19 @@ def check_quaternions(model, Q, name="q"):
 
 
 def neutral(model) -> np.ndarray:
-    """q_neutral (nq,): every joint at 0, a free flyer at the origin with the identity quaternion (0 0 0 1)."""
+    """q_neutral (nq,): every joint at 0, a free flyer at the origin, every quaternion the identity (0 0 0 1)."""
     check_model(model)
     q = np.zeros(model.nq)
-    q[[k + 3 for k in _quat_slices(model)]] = 1.0
+    q[model.quat_q + 3] = 1.0
     return q
 
 
 def integrate(model, q, v) -> np.ndarray:
     """q ⊕ v (nq,) or (N, nq): the configuration reached from q by moving with velocity v for unit time.
 
-    1-dof joints q + v; a free flyer M(q) exp6(v) with v = [linear; angular] in the body frame (SE(3)
-    exponential, Lie group integration as Pinocchio's integrate). q (nq,) or (N, nq), v (nv,) or (N, nv).
+    1-dof joints q + v; a ball joint quat ⊗ exp(ω) (ω in the body frame); a free flyer M(q) exp6(v) with
+    v = [linear; angular] in the body frame (SE(3) exponential, Lie group integration as Pinocchio's integrate).
+    q (nq,) or (N, nq), v (nv,) or (N, nv).
     """
     (Q, V), single = as_batch(model, q=q, v=v)
     check_quaternions(model, Q)
@@ -78,8 +76,8 @@ def integrate(model, q, v) -> np.ndarray:
 def difference(model, q0, q1) -> np.ndarray:
     """q1 ⊖ q0 (nv,) or (N, nv): the velocity v with integrate(q0, v) = q1.
 
-    1-dof joints q1 − q0 (continuous joints wrapped into [−π, π]); a free flyer log6(M(q0)⁻¹ M(q1)), the
-    rotation part of angle ≤ π (at exactly π either direction is a solution).
+    1-dof joints q1 − q0 (continuous joints wrapped into [−π, π]); a ball joint log(quat0⁻¹ quat1); a free flyer
+    log6(M(q0)⁻¹ M(q1)); rotations of angle ≤ π (at exactly π either direction is a solution).
     """
     (Q0, Q1), single = as_batch(model, q0=q0, q1=q1)
     check_quaternions(model, Q0, "q0")
@@ -96,7 +94,8 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
     revolute  within [lower, upper] when both are finite, else [−π, π] (continuous joints too);
     prismatic within [lower, upper] when both are finite, else [−0.5, 0.5] m;
     free flyer position uniform in [−1, 1]³ m, orientation uniform on SO(3): a unit quaternion from four
-              independent standard normals, normalised (uniform on the sphere S³).
+              independent standard normals, normalised (uniform on the sphere S³);
+    ball      orientation uniform on SO(3), as the free flyer's.
     rng: a numpy Generator, an int seed, or None (fresh entropy). Pinocchio's randomConfiguration also
     samples within the limits; its free-flyer position needs finite limits, hence the fixed cube here.
     """
@@ -110,10 +109,12 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
     Q = np.empty((N, model.nq))
     for i in range(model.njoints):
         k = int(model.idx_q[i])
-        if model.kind[i] == FREEFLYER:
-            Q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (N, 3))
+        if model.kind[i] in (FREEFLYER, BALL):
+            if model.kind[i] == FREEFLYER:
+                Q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (N, 3))
+                k += 3
             u = rng.normal(size=(N, 4))
-            Q[:, k + 3:k + 7] = u / np.linalg.norm(u, axis=1, keepdims=True)
+            Q[:, k:k + 4] = u / np.linalg.norm(u, axis=1, keepdims=True)
             continue
         lo, hi = float(model.lower[i]), float(model.upper[i])
         if not (np.isfinite(lo) and np.isfinite(hi)):
@@ -124,12 +125,12 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
 
 
 def normalize(model, q) -> np.ndarray:
-    """q (nq,) or (N, nq) with every free flyer's quaternion divided by its norm (the rest unchanged).
+    """q (nq,) or (N, nq) with every quaternion (free flyer, ball joint) divided by its norm (the rest unchanged).
 
     InputError for a quaternion of norm 0 (it names no rotation)."""
     (Q,), single = as_batch(model, q=q)
     Q = Q.copy()
-    for k in _quat_slices(model):
+    for k in model.quat_q:
         n = np.linalg.norm(Q[:, k:k + 4], axis=1, keepdims=True)
         if np.any(n == 0.0):
             r = int(np.flatnonzero(n[:, 0] == 0.0)[0])

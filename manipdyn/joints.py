@@ -14,12 +14,15 @@ constant in body i's frame for every type here; so its acceleration is S q̈ (no
 | revolute    | 1  | 1  | angle θ (continuous: unbounded)| (Rot(z, θ), 0)               | [0; z]            |
 | prismatic   | 1  | 1  | displacement d                 | (1, d z)                     | [z; 0]            |
 | free_flyer  | 7  | 6  | [x y z, quaternion qx qy qz qw]| (R(quat), [x y z])           | 1₆ (body frame)   |
+| ball        | 4  | 3  | quaternion qx qy qz qw         | (R(quat), 0)                 | [0; 1₃]           |
 
 z is the joint's unit axis in body i's frame. A free flyer's v = [linear; angular] velocity of the body
 in its own frame (Pinocchio's convention), so q moves by ``integrate`` (q ⊕ v = M(q) exp6(v)), never by
-q + v dt. A continuous joint is one angle (Pinocchio stores cos/sin; ``validation`` converts); its
+q + v dt. A ball (spherical) joint is the free flyer's rotation alone (Pinocchio's ``JointModelSpherical``,
+MuJoCo's ``ball``): v = ω, the body's angular velocity relative to its parent, in the body's own frame, and q moves
+by quat ⊗ exp(ω). A continuous joint is one angle (Pinocchio stores cos/sin; ``validation`` converts); its
 ``difference`` is the shortest angle, as Pinocchio's. Fixed joints are not joints here: the loader merges
-the bodies they hold together. The free flyer is allowed as the root joint only (parent = fixed base).
+the bodies they hold together. The free flyer is allowed as the root joint only (parent = fixed base); a ball joint anywhere.
 
 Everything below that a compiled kernel calls is written for numba (``_jit.njit``): scalar loops over
 3-vectors, no allocation per call.
@@ -31,12 +34,15 @@ import numpy as np
 from ._jit import njit
 from .spatial import cross3
 
-REVOLUTE, PRISMATIC, FREEFLYER = 0, 1, 2
-TYPE_NAMES = ("revolute", "prismatic", "free_flyer")
-NQ = (1, 1, 7)                # configuration size per type
-NV = (1, 1, 6)                # velocity size per type
-FREE_COORDS = ("x", "y", "z", "qx", "qy", "qz", "qw")   # names of a free flyer's q entries
-FREE_RATES = ("vx", "vy", "vz", "wx", "wy", "wz")        # names of its v entries
+REVOLUTE, PRISMATIC, FREEFLYER, BALL = 0, 1, 2, 3
+TYPE_NAMES = ("revolute", "prismatic", "free_flyer", "ball")
+NQ = (1, 1, 7, 4)             # configuration size per type
+NV = (1, 1, 6, 3)             # velocity size per type
+QUAT_AT = (-1, -1, 3, 0)      # where the unit quaternion (qx qy qz qw) starts in the joint's q block (-1: none)
+OMEGA_AT = (-1, -1, 3, 0)     # where the body-frame angular velocity (wx wy wz) starts in its v block (-1: none)
+COORDS = ((), (), ("x", "y", "z", "qx", "qy", "qz", "qw"), ("qx", "qy", "qz", "qw"))  # names of q entries
+RATES = ((), (), ("vx", "vy", "vz", "wx", "wy", "wz"), ("wx", "wy", "wz"))             # names of v entries
+#                                                        (a 1-dof joint's one entry is named by the joint)
 
 
 def motion_subspace(kind: int, axis) -> np.ndarray:
@@ -45,17 +51,26 @@ def motion_subspace(kind: int, axis) -> np.ndarray:
         return np.concatenate([np.zeros(3), axis])[None]
     if kind == PRISMATIC:
         return np.concatenate([axis, np.zeros(3)])[None]
+    if kind == BALL:
+        return np.eye(6)[3:]
     return np.eye(6)
 
 
 # -- the joint's motion X_J(q), compiled --------------------------------------------------------------
 
 @njit(cache=True, inline="always")
+def quat_rotation(x, y, z, w):
+    """The 9 entries (row by row) of the rotation of the unit quaternion (x, y, z, w) (scalar last, as
+    Pinocchio/Eigen store it)."""
+    return (1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+            2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+            2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y))
+
+
+@njit(cache=True, inline="always")
 def quat_to_matrix(x, y, z, w, R):
-    """R (3, 3) of the unit quaternion (x, y, z, w) (scalar last, as Pinocchio/Eigen store it)."""
-    R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-    R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-    R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    """R (3, 3) of the unit quaternion (x, y, z, w) (``quat_rotation`` into an array)."""
+    R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2] = quat_rotation(x, y, z, w)
 
 
 @njit(cache=True, inline="always")
@@ -68,7 +83,7 @@ def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
     # whose last use lies inside a branch makes numba keep an atomic reference-count pair per call.
     kind, iq = kind[i], iq[i]
     last = q.shape[0] - 1
-    q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's
+    q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's, ball's
     q3, q4, q5, q6 = q[min(iq + 3, last)], q[min(iq + 4, last)], q[min(iq + 5, last)], q[min(iq + 6, last)]
     x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
     if kind == REVOLUTE:                       # Rodrigues, written out: R_J = Rot(z, θ), p_J = 0
@@ -81,10 +96,11 @@ def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
     elif kind == PRISMATIC:                    # R_J = 1, p_J = d z
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
         px, py, pz = q0 * x, q0 * y, q0 * z
+    elif kind == BALL:                         # ball: R_J = R(quat), p_J = 0
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q0, q1, q2, q3)
+        px = py = pz = 0.0
     else:                                      # free flyer: R_J = R(quat), p_J = [x y z]
-        r00, r01, r02 = 1 - 2 * (q4 * q4 + q5 * q5), 2 * (q3 * q4 - q5 * q6), 2 * (q3 * q5 + q4 * q6)
-        r10, r11, r12 = 2 * (q3 * q4 + q5 * q6), 1 - 2 * (q3 * q3 + q5 * q5), 2 * (q4 * q5 - q3 * q6)
-        r20, r21, r22 = 2 * (q3 * q5 - q4 * q6), 2 * (q4 * q5 + q3 * q6), 1 - 2 * (q3 * q3 + q4 * q4)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q3, q4, q5, q6)
         px, py, pz = q0, q1, q2
     for a in range(3):
         b0, b1, b2 = R0[i, a, 0], R0[i, a, 1], R0[i, a, 2]
@@ -156,15 +172,53 @@ def _Vinv_coeff(th2):
     return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2
 
 
+@njit(cache=True, inline="always")
+def _turn_quat(Q, s, a, wx, wy, wz, out):
+    """out[s, a:a+4] = Q[s, a:a+4] ⊗ exp(ω): the unit quaternion turned by the body-frame rotation vector ω,
+    of the sign nearest the start (as Pinocchio), normalised."""
+    x0, y0, z0, w0 = Q[s, a], Q[s, a + 1], Q[s, a + 2], Q[s, a + 3]
+    ex, ey, ez, ew = _exp_quat(wx, wy, wz)
+    x = w0 * ex + x0 * ew + y0 * ez - z0 * ey
+    y = w0 * ey - x0 * ez + y0 * ew + z0 * ex
+    z = w0 * ez + x0 * ey - y0 * ex + z0 * ew
+    ww = w0 * ew - x0 * ex - y0 * ey - z0 * ez
+    nrm = np.sqrt(x * x + y * y + z * z + ww * ww)
+    if x * x0 + y * y0 + z * z0 + ww * w0 < 0.0:
+        nrm = -nrm
+    out[s, a], out[s, a + 1], out[s, a + 2], out[s, a + 3] = x / nrm, y / nrm, z / nrm, ww / nrm
+
+
+@njit(cache=True, inline="always")
+def _log_quat(Q0, Q1, s, a):
+    """ω = log(quat0⁻¹ ⊗ quat1) (3-tuple), the body-frame rotation vector from Q0[s, a:a+4] to Q1[s, a:a+4],
+    of angle ≤ π."""
+    x0, y0, z0, w0 = Q0[s, a], Q0[s, a + 1], Q0[s, a + 2], Q0[s, a + 3]
+    x1, y1, z1, w1 = Q1[s, a], Q1[s, a + 1], Q1[s, a + 2], Q1[s, a + 3]
+    n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0      # quat0⁻¹ = conj / |quat0|²
+    rx = (w0 * x1 - x0 * w1 - y0 * z1 + z0 * y1) / n0
+    ry = (w0 * y1 + x0 * z1 - y0 * w1 - z0 * x1) / n0
+    rz = (w0 * z1 - x0 * y1 + y0 * x1 - z0 * w1) / n0
+    rw = (w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1) / n0
+    if rw < 0.0:                               # the shorter of the two rotations (θ ≤ π)
+        rx, ry, rz, rw = -rx, -ry, -rz, -rw
+    sn = np.sqrt(rx * rx + ry * ry + rz * rz)
+    th = 2.0 * np.arctan2(sn, rw)              # log3: ω = θ u
+    k = th / sn if sn > 1e-300 else 2.0 / rw
+    return k * rx, k * ry, k * rz
+
+
 @njit(cache=True)
 def integrate_kernel(kind, iq, iv, Q, V, out):
-    """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a free flyer
+    """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a ball joint quat ⊗ exp(ω); a free flyer
     M(q) exp6(v) with v = [linear; angular] in the body frame (Pinocchio's integrate)."""
     t1, t2, w = np.empty(3), np.empty(3), np.empty(3)
     R = np.empty((3, 3))
     for s in range(Q.shape[0]):
         for j in range(kind.shape[0]):
             a, b = iq[j], iv[j]
+            if kind[j] == BALL:
+                _turn_quat(Q, s, a, V[s, b], V[s, b + 1], V[s, b + 2], out)
+                continue
             if kind[j] != FREEFLYER:
                 out[s, a] = Q[s, a] + V[s, b]
                 continue
@@ -179,45 +233,30 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
                 t1[k] = V[s, b + k] + ca * t1[k] + cb * t2[k]
             for k in range(3):                 # p ← p + R V(ω) v
                 out[s, a + k] = Q[s, a + k] + R[k, 0] * t1[0] + R[k, 1] * t1[1] + R[k, 2] * t1[2]
-            ex, ey, ez, ew = _exp_quat(w[0], w[1], w[2])     # quat ← quat ⊗ exp(ω)
-            x = w0 * ex + x0 * ew + y0 * ez - z0 * ey
-            y = w0 * ey - x0 * ez + y0 * ew + z0 * ex
-            z = w0 * ez + x0 * ey - y0 * ex + z0 * ew
-            ww = w0 * ew - x0 * ex - y0 * ey - z0 * ez
-            nrm = np.sqrt(x * x + y * y + z * z + ww * ww)
-            if x * x0 + y * y0 + z * z0 + ww * w0 < 0.0:     # the sign nearest the start (as Pinocchio)
-                nrm = -nrm
-            out[s, a + 3], out[s, a + 4], out[s, a + 5], out[s, a + 6] = x / nrm, y / nrm, z / nrm, ww / nrm
+            _turn_quat(Q, s, a + 3, w[0], w[1], w[2], out)   # quat ← quat ⊗ exp(ω)
 
 
 @njit(cache=True)
 def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
     """out (N, nv) = Q1 ⊖ Q0, the velocity that integrate turns Q0 into Q1 in unit time: q1 − q0
-    (continuous joints: the shortest angle); free flyer log6(M(q0)⁻¹ M(q1))."""
+    (continuous joints: the shortest angle); ball log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1))."""
     R = np.empty((3, 3))
     d, w, t1, t2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for s in range(Q0.shape[0]):
         for j in range(kind.shape[0]):
             a, b = iq[j], iv[j]
+            if kind[j] == BALL:
+                out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q0, Q1, s, a)
+                continue
             if kind[j] != FREEFLYER:
                 x = Q1[s, a] - Q0[s, a]
                 if continuous[j]:              # wrapped into [−π, π]
                     x = np.arctan2(np.sin(x), np.cos(x))
                 out[s, b] = x
                 continue
+            w[0], w[1], w[2] = _log_quat(Q0, Q1, s, a + 3)
             x0, y0, z0, w0 = Q0[s, a + 3], Q0[s, a + 4], Q0[s, a + 5], Q0[s, a + 6]
-            x1, y1, z1, w1 = Q1[s, a + 3], Q1[s, a + 4], Q1[s, a + 5], Q1[s, a + 6]
-            n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0      # quat0⁻¹ = conj / |quat0|²
-            rx = (w0 * x1 - x0 * w1 - y0 * z1 + z0 * y1) / n0
-            ry = (w0 * y1 + x0 * z1 - y0 * w1 - z0 * x1) / n0
-            rz = (w0 * z1 - x0 * y1 + y0 * x1 - z0 * w1) / n0
-            rw = (w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1) / n0
-            if rw < 0.0:                       # the shorter of the two rotations (θ ≤ π)
-                rx, ry, rz, rw = -rx, -ry, -rz, -rw
-            sn = np.sqrt(rx * rx + ry * ry + rz * rz)
-            th = 2.0 * np.arctan2(sn, rw)      # log3: ω = θ u
-            k = th / sn if sn > 1e-300 else 2.0 / rw
-            w[0], w[1], w[2] = k * rx, k * ry, k * rz
+            n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0
             quat_to_matrix(x0 / np.sqrt(n0), y0 / np.sqrt(n0), z0 / np.sqrt(n0), w0 / np.sqrt(n0), R)
             for c in range(3):                 # d = R0ᵀ (p1 − p0)
                 d[c] = (R[0, c] * (Q1[s, a] - Q0[s, a]) + R[1, c] * (Q1[s, a + 1] - Q0[s, a + 1])

@@ -20,15 +20,16 @@ import numpy as np
 from types import MappingProxyType
 
 from .errors import InputError
-from .joints import FREE_COORDS, FREE_RATES, FREEFLYER, NQ, NV, PRISMATIC, REVOLUTE, TYPE_NAMES, motion_subspace
+from .joints import (BALL, COORDS, FREEFLYER, NQ, NV, OMEGA_AT, PRISMATIC, QUAT_AT, RATES, REVOLUTE, TYPE_NAMES,
+                     motion_subspace)
 
 __all__ = ["Model", "KernelForm", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
-           "FREEFLYER", "QUAT_TOL",
+           "FREEFLYER", "BALL", "QUAT_TOL",
            "JOINT_DYNAMICS", "FRICTION_EPS", "check_joint_dynamics", "with_joint_dynamics"]
 
 JOINT_DYNAMICS = ("armature", "damping", "friction")   # the per-velocity joint parameters of a Model
 FRICTION_EPS = 1e-3      # rad/s (m/s): the Coulomb friction's regularisation, friction ⊙ tanh(q̇ / FRICTION_EPS)
-QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's q (integrate's output: ~1e-16)
+QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's or ball joint's q (integrate's output: ~1e-16)
 
 
 def check_joint_dynamics(x, key, nv, where, names=None) -> np.ndarray:
@@ -187,16 +188,16 @@ class Model:
     joint_names: tuple     # (nb,) joints in q order
     body_names: tuple      # (nb,) child link of each joint (the body's frame)
     parent: np.ndarray     # (nb,) int, parent body, -1 = fixed base; parent[i] < i
-    kind: np.ndarray       # (nb,) int, joints.REVOLUTE, PRISMATIC or FREEFLYER
+    kind: np.ndarray       # (nb,) int, joints.REVOLUTE, PRISMATIC, FREEFLYER or BALL
     continuous: np.ndarray  # (nb,) bool, revolute joint without limits (Pinocchio: nq = 2)
-    axis: np.ndarray       # (nb, 3) unit joint axis in body i's frame (free flyer: unused, zeros)
+    axis: np.ndarray       # (nb, 3) unit joint axis in body i's frame (free flyer, ball: unused, zeros)
     R0: np.ndarray         # (nb, 3, 3) joint i's frame in its parent body's frame, at q = 0
     p0: np.ndarray         # (nb, 3) joint i's origin in its parent body's frame
     mass: np.ndarray       # (nb,) merged body mass, kg
     com: np.ndarray        # (nb, 3) merged centre of mass in the body frame, m
     inertia: np.ndarray    # (nb, 3, 3) merged inertia about the CoM, body axes, kg m²
-    lower: np.ndarray      # (nb,) joint lower limit (-inf if none; free flyer: -inf)
-    upper: np.ndarray      # (nb,) joint upper limit (+inf if none; free flyer: +inf)
+    lower: np.ndarray      # (nb,) joint lower limit (-inf if none; free flyer, ball: -inf)
+    upper: np.ndarray      # (nb,) joint upper limit (+inf if none; free flyer, ball: +inf)
     effort: np.ndarray     # (nb,) effort limit (inf if none)
     velocity: np.ndarray   # (nb,) velocity limit (inf if none)
     gravity: np.ndarray    # (3,) gravity acceleration in the base frame, m/s²
@@ -228,11 +229,25 @@ class Model:
         free = [self.joint_names[i] for i in range(self.njoints) if self.kind[i] == FREEFLYER and self.parent[i] >= 0]
         if free:
             raise InputError(f"model {self.name!r}: a free flyer must be the root joint; {free[0]!r} is not")
+        for c in self.constraints:                            # a coupling row sums joint angles and displacements
+            a, b = (c.parent, c.child) if c.type == "coupling" else (-1, -1)
+            while a != b:
+                if a < b:
+                    a, b = b, a
+                if self.kind[a] in (FREEFLYER, BALL):
+                    raise InputError(f"model {self.name!r}: coupling {c.name!r}: joint {self.joint_names[a]!r} on "
+                                     f"its loop is a {TYPE_NAMES[int(self.kind[a])]} joint; a coupling relates "
+                                     f"revolute and prismatic joints only")
+                a = self.parent[a]
         nqs, nvs = _frozen([NQ[int(k)] for k in self.kind]), _frozen([NV[int(k)] for k in self.kind])
         derived = dict(nqs=nqs, nvs=nvs, idx_q=_frozen(np.concatenate([[0], np.cumsum(nqs)[:-1]]) if len(nqs) else []),
                        idx_v=_frozen(np.concatenate([[0], np.cumsum(nvs)[:-1]]) if len(nvs) else []),
                        nq=int(np.sum(nqs)), nv=int(np.sum(nvs)), v_joint=_frozen(np.repeat(np.arange(len(nvs)), nvs)),
-                       q_names=_dof_names(self, FREE_COORDS), v_names=_dof_names(self, FREE_RATES))
+                       q_names=_dof_names(self, COORDS), v_names=_dof_names(self, RATES))
+        qi, vi = derived["idx_q"], derived["idx_v"]
+        rot = [i for i in range(len(nqs)) if QUAT_AT[int(self.kind[i])] >= 0]
+        derived.update(quat_q=_frozen([qi[i] + QUAT_AT[int(self.kind[i])] for i in rot]),
+                       quat_v=_frozen([vi[i] + OMEGA_AT[int(self.kind[i])] for i in rot]))
         for key, value in derived.items():
             object.__setattr__(self, key, value)
         for key in JOINT_DYNAMICS:                           # (nv,) each, zeros when not given
@@ -252,6 +267,8 @@ class Model:
     q_names: tuple = field(init=False, repr=False)      # (nq,) the joint's name, or "root_joint.qx" for a free flyer's
     v_names: tuple = field(init=False, repr=False)      # (nv,) the joint's name, or "root_joint.wx" for a free flyer's
     v_joint: np.ndarray = field(init=False, repr=False)  # (nv,) the joint each entry of v belongs to
+    quat_q: np.ndarray = field(init=False, repr=False)  # (k,) q index of every unit quaternion's qx (free flyer, ball)
+    quat_v: np.ndarray = field(init=False, repr=False)  # (k,) v index of the matching body-frame ω's wx
     kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
     passive: bool = field(init=False, repr=False)       # a damping or friction entry is nonzero (joint torques)
 
@@ -307,6 +324,8 @@ class Model:
             how = f"axis {np.round(self.axis[i], 4).tolist()}"
             if self.kind[i] == FREEFLYER:      # the root body moves freely: q = [x y z qx qy qz qw]
                 par, how = "world", "q = [x y z qx qy qz qw], v = [linear; angular] (body frame)"
+            elif self.kind[i] == BALL:
+                how = "q = [qx qy qz qw], v = angular velocity (body frame)"
             lines.append(f"  q[{self.idx_q[i]}] {j:<28} {kind:<10} {how} "
                          f"{par} -> {self.body_names[i]}  mass {self.mass[i]:.6g} kg")
         for body, links in self.merged.items():
@@ -425,10 +444,11 @@ def _frozen(x) -> np.ndarray:
     return a
 
 
-def _dof_names(model, free_names) -> tuple:
+def _dof_names(model, names) -> tuple:
+    """q_names (names = joints.COORDS) or v_names (joints.RATES): a 1-dof joint's name, "joint.qx" etc. else."""
     out = []
     for i, j in enumerate(model.joint_names):
-        out += [f"{j}.{c}" for c in free_names] if model.kind[i] == FREEFLYER else [j]
+        out += [f"{j}.{c}" for c in names[int(model.kind[i])]] or [j]
     return tuple(out)
 
 

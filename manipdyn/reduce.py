@@ -20,8 +20,8 @@ import dataclasses
 import numpy as np
 
 from .errors import InputError, ModelError
-from .joints import NQ, joint_placement
-from .model import FREEFLYER, QUAT_TOL, Constraint, Frame
+from .joints import NQ, QUAT_AT, joint_placement
+from .model import QUAT_TOL, Constraint, Frame
 from .spatial import combine_inertias
 
 
@@ -45,25 +45,26 @@ def reduce(model, *, locked=None, root=None, tips=None, prune=False):
 
 def _lock_value(model, i, value):
     """The value joint i is locked at, as a q block (nq_i,) float array: None gives the neutral value (0;
-    a free flyer's neutral pose [0 0 0 0 0 0 1]). InputError names the joint and the value at fault."""
-    name, nq = model.joint_names[i], NQ[int(model.kind[i])]
+    a free flyer's neutral pose [0 0 0 0 0 0 1]; a ball joint's [0 0 0 1]). InputError names the joint and the
+    value at fault."""
+    name, nq, at = model.joint_names[i], NQ[int(model.kind[i])], QUAT_AT[int(model.kind[i])]
     if value is None:
-        return np.array([0.0] * 6 + [1.0]) if model.kind[i] == FREEFLYER else np.zeros(1)
+        return np.eye(nq)[-1] if nq > 1 else np.zeros(1)
     try:
         x = np.asarray(value)
     except (TypeError, ValueError):
         x = None
-    want = "a pose [x y z qx qy qz qw] (7,)" if nq == 7 else "a real number"
-    if x is None or x.dtype.kind not in "fiu" or x.size != nq or x.ndim > 1 or (nq == 7 and x.ndim != 1):
+    want = {7: "a pose [x y z qx qy qz qw] (7,)", 4: "a quaternion [qx qy qz qw] (4,)"}.get(nq, "a real number")
+    if x is None or x.dtype.kind not in "fiu" or x.size != nq or x.ndim > 1 or (nq > 1 and x.ndim != 1):
         raise InputError(f"locked value of joint {name!r} is {value!r}: expected {want}")
     x = x.astype(float).reshape(nq)
     if not np.all(np.isfinite(x)):
         raise InputError(f"locked value of joint {name!r} is {value!r}: must be finite")
-    if nq == 7 and abs(np.linalg.norm(x[3:]) - 1.0) > QUAT_TOL:
-        raise InputError(f"locked value of joint {name!r}: the quaternion (qx qy qz qw) = {x[3:].tolist()} "
-                         f"has norm {np.linalg.norm(x[3:]):.12g}, not 1 (within {QUAT_TOL:g})")
-    if nq == 7:                                    # a rotation exactly (the placement reads it as one)
-        x[3:] /= np.linalg.norm(x[3:])
+    if at >= 0 and abs(np.linalg.norm(x[at:]) - 1.0) > QUAT_TOL:
+        raise InputError(f"locked value of joint {name!r}: the quaternion (qx qy qz qw) = {x[at:].tolist()} "
+                         f"has norm {np.linalg.norm(x[at:]):.12g}, not 1 (within {QUAT_TOL:g})")
+    if at >= 0:                                    # a rotation exactly (the placement reads it as one)
+        x[at:] /= np.linalg.norm(x[at:])
     return x
 
 

@@ -6,9 +6,11 @@ closures after every step). The fixed-step integrators take a batch (N, nv) at o
 
 Configurations move by the joint model's ``integrate`` (q ⊕ ξ), never by q + ξ: for revolute and
 prismatic joints the two are the same, for a free-flyer root ξ is a body-frame twist and q ⊕ ξ =
-M(q) exp6(ξ). RK4 is then the Runge–Kutta–Munthe-Kaas method: the stages live in the tangent space at
-q_k, where ξ̇ = dexp⁻¹_{−ξ}(v) = v + ½ [ξ, v] + 1/12 [ξ, [ξ, v]] (fourth order; the brackets vanish for
-1-dof joints). The adaptive reference integrates q̇ = (R v_lin, ½ quat ⊗ ω) for a free flyer.
+M(q) exp6(ξ), for a ball joint a body-frame rotation vector and q ⊕ ξ = quat ⊗ exp(ξ). RK4 is then the
+Runge–Kutta–Munthe-Kaas method: the stages live in the tangent space at q_k, where ξ̇ = dexp⁻¹_{−ξ}(v) =
+v + ½ [ξ, v] + 1/12 [ξ, [ξ, v]] (fourth order; the brackets vanish for 1-dof joints; se(3)'s for a free
+flyer, ξ × v for a ball joint). The adaptive reference integrates q̇ = (R v_lin, ½ quat ⊗ ω) for a free
+flyer, ½ quat ⊗ ω for a ball joint.
 
 This module sits above dynamics/ and constraints/ (it calls both), so neither of them imports it.
 """
@@ -24,6 +26,7 @@ from .constraints import constrained_forward_dynamics, project
 from .dynamics.aba import forward_dynamics, passive_torques
 from .dynamics.state import as_batch, as_real, check_finite, check_scalar
 from .errors import DivergenceError, InputError, NumericalError
+from .joints import BALL, FREEFLYER, quat_rotation
 
 
 @dataclass(frozen=True)
@@ -112,10 +115,11 @@ def _step(integrator, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
 
 
 def _group_ops(model):
-    """(plus, dexpinv) of the configuration space: (np.add, None) without a free flyer; else q ⊕ ξ by
+    """(plus, dexpinv) of the configuration space: (np.add, None) without a quaternion; else q ⊕ ξ by
     the joint model's integrate and ξ̇ = v + ½ ad_ξ v + 1/12 ad_ξ² v on the free flyer's 6 entries
-    (ad_ξ w = [ξ_ω × w_v + ξ_v × w_ω; ξ_ω × w_ω], twists [linear; angular])."""
-    if not model.floating:
+    (ad_ξ w = [ξ_ω × w_v + ξ_v × w_ω; ξ_ω × w_ω], twists [linear; angular]) and on each ball joint's 3
+    (ad_ξ w = ξ × w)."""
+    if not model.quat_q.size:
         return np.add, None
     from .configuration import _arrays
     from .joints import integrate_kernel
@@ -126,14 +130,20 @@ def _group_ops(model):
         integrate_kernel(kind, iq, iv, np.ascontiguousarray(Q), np.ascontiguousarray(X), out)
         return out
 
+    blocks = [slice(int(b), int(b) + (3 if k == BALL else 6)) for k, b in zip(model.kind, model.idx_v)
+              if k == BALL or k == FREEFLYER]
+
     def ad(xi, w):
+        if xi.shape[1] == 3:
+            return np.cross(xi, w)
         return np.concatenate([np.cross(xi[:, 3:6], w[:, :3]) + np.cross(xi[:, :3], w[:, 3:6]),
                                np.cross(xi[:, 3:6], w[:, 3:6])], axis=1)
 
     def dexpinv(xi, v):
         out = v.copy()
-        a1 = ad(xi, v[:, :6])
-        out[:, :6] += 0.5 * a1 + ad(xi, a1) / 12.0
+        for b in blocks:
+            a1 = ad(xi[:, b], v[:, b])
+            out[:, b] += 0.5 * a1 + ad(xi[:, b], a1) / 12.0
         return out
     return plus, dexpinv
 
@@ -291,12 +301,13 @@ def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol, max_steps, watch
     bounds) and counted (at most max_steps); returns every accepted step as solve_ivp does."""
     nq = model.nq
     qdot = _qdot(model)
+    quats = model.quat_q[:, None] + np.arange(4)                 # (k, 4): every quaternion's q indices
 
     def rhs(t, x):
         q, v = x[:nq], x[nq:]
-        if model.floating:                                   # the solver's q drifts off ‖quat‖ = 1
+        if quats.size:                                       # the solver's q drifts off ‖quat‖ = 1
             q = q.copy()
-            q[3:7] /= np.linalg.norm(q[3:7])
+            q[quats] /= np.linalg.norm(q[quats], axis=1, keepdims=True)
         try:
             a = accel(q, v, torque(t, q[None], v[None])[0])
         except _TorqueError as exc:
@@ -327,27 +338,28 @@ def _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch):
         ts.append(solver.t)
         ys.append(solver.y.copy())
     Y = np.array(ys)
-    if model.floating:
-        Y[:, 3:7] /= np.linalg.norm(Y[:, 3:7], axis=1, keepdims=True)
+    for k in model.quat_q:
+        Y[:, k:k + 4] /= np.linalg.norm(Y[:, k:k + 4], axis=1, keepdims=True)
     return np.array(ts), Y[:, :nq], Y[:, nq:]
 
 
 def _qdot(model):
-    """q̇(q, v) (nq,): v for 1-dof joints; a free-flyer root's position moves with R v_lin (world axes),
-    its quaternion with ½ quat ⊗ (ω, 0) (body-frame ω)."""
-    if not model.floating:
+    """q̇(q, v) (nq,): v for 1-dof joints; a free-flyer root's position moves with R v_lin (world axes); every
+    quaternion (free flyer, ball joint) with ½ quat ⊗ (ω, 0) (body-frame ω)."""
+    if not model.quat_q.size:
         return lambda q, v: v
+    one = np.flatnonzero(model.nqs == 1)
+    one_q, one_v = model.idx_q[one], model.idx_v[one]
 
     def qdot(q, v):
         out = np.empty(model.nq)
-        out[7:] = v[6:]
-        x, y, z, w = q[3:7]
-        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-        out[:3] = R @ v[:3]
-        a, b, c = v[3:6]
-        out[3:7] = 0.5 * np.array([w * a + y * c - z * b, w * b + z * a - x * c,
-                                   w * c + x * b - y * a, -(x * a + y * b + z * c)])
+        out[one_q] = v[one_v]
+        if model.floating:
+            out[:3] = np.array(quat_rotation(*q[3:7])).reshape(3, 3) @ v[:3]
+        for k, r in zip(model.quat_q, model.quat_v):
+            x, y, z, w = q[k:k + 4]
+            a, b, c = v[r:r + 3]
+            out[k:k + 4] = 0.5 * np.array([w * a + y * c - z * b, w * b + z * a - x * c,
+                                           w * c + x * b - y * a, -(x * a + y * b + z * c)])
         return out
     return qdot

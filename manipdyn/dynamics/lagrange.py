@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
+from ..joints import BALL, FREEFLYER
 from ..spatial import first_nonfinite, first_nonfinite_entry, sandwich3, skew
 from .core import fk_pass, kernel_arrays, unpack
 from .kinematics import body_point, com_jacobians, point_jacobian, supports
@@ -156,8 +157,8 @@ def christoffel_coriolis(model, q, v):
     dM = mass_matrix_derivatives(model, Q, terms)            # dM[n, k, i, j] = ∂M_ij/∂q_k
     C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
                - np.einsum("nijk,nk->nij", dM, V))
-    if model.floating:
-        C += _bracket_terms(_lagrange_mass_matrix(model, *terms[1:]), V)
+    if model.quat_q.size:
+        C += _bracket_terms(model, _lagrange_mass_matrix(model, *terms[1:]), V)
     return unbatch(check_output("christoffel_coriolis", "C", C, model, dict(q=Q, v=V)), single)
 
 
@@ -169,20 +170,29 @@ def _ad(x):
     return out
 
 
-def _bracket_terms(M, V):
-    """½ Σ_i v_i (⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩) as a matrix [k, j], the root
-    directions X_0..X_5 being the only ones that do not commute: with ξ = v[:6], f = (M v)[:6],
-      first:  M[:, :6] ad_ξ  (columns j of the root)
-      second: ⟨f, [e_k, e_j]⟩ = [[0, −[f_v]×], [−[f_v]×, −[f_ω]×]]  (root block)
-      third:  −ad_ξᵀ M[:6, :]  (rows k of the root)."""
+def _bracket_terms(model, M, V):
+    """½ Σ_i v_i (⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩) as a matrix [k, j]. Only the
+    directions of one free flyer or one ball joint fail to commute (directions of different joints act on
+    different factors of q); for each such block b, with ξ = v[b], f = (M v)[b]:
+      first:  M[:, b] ad_ξ  (columns j of the block)
+      second: ⟨f, [e_k, e_j]⟩: free flyer [[0, −[f_v]×], [−[f_v]×, −[f_ω]×]]; ball −[f]×  (the block itself)
+      third:  −ad_ξᵀ M[b, :]  (rows k of the block),
+    ad_ξ the free flyer's se(3) ``_ad``, a ball joint's so(3) [ξ]×."""
     N, nv = V.shape
-    xi, f = V[:, :6], np.einsum("nij,nj->ni", M[:, :6], V)
     out = np.zeros((N, nv, nv))
-    ad = _ad(xi)
-    out[:, :, :6] += M[:, :, :6] @ ad
-    Fv, Fw = skew(f[:, :3]), skew(f[:, 3:])
-    out[:, :3, 3:6] -= Fv
-    out[:, 3:6, :3] -= Fv
-    out[:, 3:6, 3:6] -= Fw
-    out[:, :6, :] -= np.swapaxes(ad, 1, 2) @ M[:, :6, :]
+    for kind, a in zip(model.kind, model.idx_v):
+        if kind not in (FREEFLYER, BALL):
+            continue
+        b = slice(a, a + (6 if kind == FREEFLYER else 3))
+        xi, f = V[:, b], np.einsum("nij,nj->ni", M[:, b], V)
+        ad = _ad(xi) if kind == FREEFLYER else skew(xi)
+        out[:, :, b] += M[:, :, b] @ ad
+        if kind == FREEFLYER:
+            Fv, Fw = skew(f[:, :3]), skew(f[:, 3:])
+            out[:, a:a + 3, a + 3:a + 6] -= Fv
+            out[:, a + 3:a + 6, a:a + 3] -= Fv
+            out[:, a + 3:a + 6, a + 3:a + 6] -= Fw
+        else:
+            out[:, b, b] -= skew(f)
+        out[:, b, :] -= np.swapaxes(ad, 1, 2) @ M[:, b, :]
     return 0.5 * out

@@ -13,7 +13,8 @@ What is written (MuJoCo's XML reference, "MJCF"), so that MuJoCo's open-tree dyn
   continuous one); the model's nonzero ``armature``, ``damping`` and ``friction`` as ``armature``, ``damping``,
   ``frictionloss`` (MuJoCo applies frictionloss as a soft constraint: docs/design.md §3, Joint dynamics). A free-flyer
   root becomes ``<freejoint>`` (MuJoCo's q is [x y z qw qx qy qz], its v [linear (world); angular (body)]
-  and its linear acceleration the origin's p̈, not ours: map states before comparing).
+  and its linear acceleration the origin's p̈, not ours: map states before comparing); a ball joint
+  ``<joint type="ball">`` at the body origin (MuJoCo's q [qw qx qy qz], ours [qx qy qz qw]; v the same).
 - ``<option gravity>``: the Model's gravity.
 - Closures (``Model.constraints``) as ``<equality>`` elements between sites placed on the closure frames, so
   no assumption is made about q = 0 (MuJoCo computes a ``connect``'s or ``weld``'s relative pose at qpos0
@@ -39,7 +40,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import ModelError
-from ..model import FREEFLYER, PRISMATIC, MimicModel
+from ..model import BALL, FREEFLYER, PRISMATIC, MimicModel
 
 __all__ = ["to_mjcf", "REVOLUTE_ARM", "EQ_SOLREF", "EQ_SOLIMP"]
 
@@ -98,6 +99,9 @@ def _body(parent_el, model, i) -> ET.Element:
         else:
             ET.SubElement(b, "freejoint", name=model.joint_names[i])
         return b
+    if model.kind[i] == BALL:
+        ET.SubElement(b, "joint", name=model.joint_names[i], type="ball", **dyn)
+        return b
     j = ET.SubElement(b, "joint", name=model.joint_names[i],
                       type="slide" if model.kind[i] == PRISMATIC else "hinge", axis=_vec(model.axis[i]), **dyn)
     lo, hi = model.lower[i], model.upper[i]
@@ -108,7 +112,7 @@ def _body(parent_el, model, i) -> ET.Element:
 
 def _joint_dynamics(model, i) -> dict:
     """Joint i's nonzero armature, damping, friction as MuJoCo's ``armature``, ``damping``, ``frictionloss`` (one
-    number per joint: a free flyer's six entries must be equal; ModelError otherwise)."""
+    number per joint: a free flyer's six, a ball joint's three entries must be equal; ModelError otherwise)."""
     out = {}
     for key, attr in (("armature", "armature"), ("damping", "damping"), ("friction", "frictionloss")):
         x = getattr(model, key)[model.idx_v[i]:model.idx_v[i] + model.nvs[i]]

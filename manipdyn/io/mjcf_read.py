@@ -17,7 +17,9 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   ``<inertial>``, ``<geom>`` and ``<site>`` (geoms and sites also ``fromto``: the z axis from → to).
 - Joints: ``hinge`` -> REVOLUTE, ``slide`` -> PRISMATIC about ``axis`` through ``pos`` (body frame; the
   model's body frame is then the joint frame, and the MJCF body's frame a Frame offset by −pos in it);
-  ``free`` / ``<freejoint>`` -> the model's free flyer (joint 0; only the first joint of the tree, on a
+  ``ball`` -> BALL, turning the body about ``pos`` (its ``axis``, ``ref`` and ``range`` are not read, as by
+  MuJoCo's dynamics: a ball's range is a cone limit of the contact solver; q = MuJoCo's qpos reordered to
+  x y z w); ``free`` / ``<freejoint>`` -> the model's free flyer (joint 0; only the first joint of the tree, on a
   top-level body alone). Several joints in one body are applied in order, as MuJoCo's ``mj_kinematics``:
   each but the last carries a massless body at its anchor (named ``"<body>:<joint>"``). A body without a
   joint is welded to its parent (merged, as URDF fixed links; ``Model.merged`` names them). A hinge's
@@ -70,11 +72,10 @@ Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, `
 ``<sensor>``, ``<visual>``, ``<statistic>``, ``<size>``, ``<keyframe>``, ``<custom>``, ``<extension>``, cameras
 and lights, a geom's contact and visual attributes, geoms that do not give mass, fixed tendons without armature.
 
-Refused (MJCFError naming the file, the element and what is not supported): ``ball`` joints ("ball joint: not
-supported yet"), a free joint below the root or beside another joint, a free joint's ``align`` (or ``<compiler
+Refused (MJCFError naming the file, the element and what is not supported): a free joint below the root or beside another joint, a free joint's ``align`` (or ``<compiler
 alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
 quadratic or higher ``polycoef`` terms, with an offset (c0 + ref1 − c1 ref2 ≠ 0: the coupling row has none), between
-joints that do not hang from the same body, or on a free joint, an equality whose two sides are one rigid body,
+joints that do not hang from the same body, or on a free or ball joint, an equality whose two sides are one rigid body,
 tendons with ``armature``, ``mesh``, ``hfield``,
 ``plane`` and ``sdf`` geoms that would give mass, ``shellinertia``, ``fromto`` on boxes and ellipsoids,
 ``<composite>``, ``<flexcomp>``, ``<replicate>``, ``<attach>``, ``<plugin>`` in a body,
@@ -86,7 +87,7 @@ the file and its includes, one number grammar, exact vector lengths, finite valu
 bounds, counts bounded (``MAX_BODIES``, ``MAX_INCLUDES``, ``MAX_INCLUDE_DEPTH``), an iterative tree walk.
 
 Conventions converted here, never in the kernels (docs/design.md §3, §4e): MuJoCo's quaternions are
-(w, x, y, z), the model's free flyer q is [x y z qx qy qz qw]; MuJoCo's free-joint ``qvel`` is [linear in the
+(w, x, y, z), the model's free flyer q is [x y z qx qy qz qw] and a ball joint's [qx qy qz qw]; MuJoCo's free-joint ``qvel`` is [linear in the
 world frame; angular in the body frame], the model's v is [linear; angular] both in the body frame; angles
 default to degrees in MJCF.
 """
@@ -99,7 +100,8 @@ import os
 import numpy as np
 
 from ..errors import MJCFError, QuirkWarning
-from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, Model, Quirk, check_gravity,
+from ..joints import NV
+from ..model import (BALL, FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, Model, Quirk, check_gravity,
                      with_joint_dynamics)
 from ..spatial import combine_inertias
 from .urdf import (MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, _LIST, _NUMBER, _SPACE, _check_psd, _parse_xml,
@@ -621,9 +623,7 @@ class _Reader:
         self.jnames.add(jname)
         kind = "free" if j.tag == "freejoint" else (self.attr(j, "type", jcls) or "hinge")
         jw = f"joint {jname!r} (in body {body!r})"
-        if kind == "ball":
-            raise MJCFError(f"{src}: {jw}: ball joint: not supported yet")
-        if kind not in ("hinge", "slide", "free"):
+        if kind not in ("hinge", "slide", "ball", "free"):
             raise MJCFError(f"{src}: {jw}: type {_show(kind)}: unknown joint type (hinge, slide, ball, free)")
         if kind == "free" and (j.get("align") or self.alignfree) in ("true",):
             raise MJCFError(f"{src}: {jw}: align / <compiler alignfree> (the free body's frame moved to its inertial "
@@ -637,6 +637,13 @@ class _Reader:
                                dyn=self.joint_quirks(j, jcls, jname, jw, kind)))
             return 0, np.eye(3), np.zeros(3), np.zeros(3)
         a = self.bounded(self.num(j, "pos", jcls, jw, (3,), (0, 0, 0)), MAX_LENGTH, "coordinate", j, "pos", jw)
+        if kind == "ball":          # turns the body about its anchor, quaternion in the body's axes (mj_kinematics):
+            a = pf + Rf @ a         # our joint frame at the anchor with the body's axes, R_J = R(quat); MuJoCo reads
+            R0, p0 = (R, p + R @ a) if anchor is None else (np.eye(3), a - anchor)   # no axis, ref or range for it
+            joints.append(dict(name=jname, body=body if k == n - 1 else f"{body}:{jname}", kind=BALL, parent=b,
+                               R0=R0, p0=p0, axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False, q0=0.0,
+                               dyn=self.joint_quirks(j, jcls, jname, jw, kind)))
+            return len(joints) - 1, np.eye(3), -a, a
         u = self.num(j, "axis", jcls, jw, (3,), (0, 0, 1))
         if not np.any(u):
             raise MJCFError(f"{src}: {jw}: <joint axis={_show(self.attr(j, 'axis', jcls))}> has no direction")
@@ -820,9 +827,10 @@ class _Reader:
                 continue
             if n not in idx:
                 raise MJCFError(f"{self.source}: {where}: {key}={_show(n)}: no such joint")
-            if joints[idx[n]]["kind"] == FREEFLYER:
-                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)} is a free joint; a joint equality relates "
-                                f"hinge and slide joints")
+            if joints[idx[n]]["kind"] in (FREEFLYER, BALL):
+                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)} is a "
+                                f"{'free' if joints[idx[n]]['kind'] == FREEFLYER else 'ball'} joint; a joint equality "
+                                f"relates hinge and slide joints")
             ids.append(idx[n])
         i1, i2 = ids
         poly = self.nums(c, "polycoef", (5,), where, get("polycoef"))
@@ -975,7 +983,7 @@ class _Reader:
             gravity=np.array(gravity, float).reshape(3), frames=frames,
             merged={k: tuple(v) for k, v in merged.items()}, mimic=(), source=src, notes=(), constraints=constraints,
             quirks=tuple(sorted(self.quirks, key=lambda q: order.index(q.kind))),
-            **{key: np.array([j["dyn"][k] for j in joints for _ in range(6 if j["kind"] == FREEFLYER else 1)], float)
+            **{key: np.array([j["dyn"][k] for j in joints for _ in range(NV[j["kind"]])], float)
                for k, key in enumerate(("armature", "damping", "friction"))})
 
 
@@ -1010,6 +1018,9 @@ def _poses_at_qpos0(joints):
         Rp, pp = (np.eye(3), np.zeros(3)) if j["parent"] < 0 else out[j["parent"]]
         if j["kind"] == FREEFLYER:
             out.append(j["q0"])
+            continue
+        if j["kind"] == BALL:                                  # qpos0: the identity quaternion
+            out.append((Rp @ j["R0"], pp + Rp @ j["p0"]))
             continue
         R, p = Rp @ j["R0"], pp + Rp @ j["p0"]                 # the joint frame; then the joint's motion by q0
         out.append((R @ _axis_R(j["axis"], j["q0"]), p) if j["kind"] == REVOLUTE

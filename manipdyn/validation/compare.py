@@ -102,16 +102,19 @@ class Report:
 
 def random_states(model, n, rng):
     """Seeded random (q (n, nq), q̇ (n, nv), q̈ (n, nv)), following docs/design.md §3 (see the module docstring)."""
-    one = np.flatnonzero(model.kind != FREEFLYER)           # 1-dof joints
+    one = np.flatnonzero(model.nqs == 1)                    # 1-dof joints
     kind, lower, upper = model.kind[one], model.lower[one], model.upper[one]
     lo = np.where(kind == PRISMATIC, np.where(np.isfinite(lower), lower, -0.5), -np.pi)
     hi = np.where(kind == PRISMATIC, np.where(np.isfinite(upper), upper, 0.5), np.pi)
     q = np.empty((n, model.nq))
     q[:, model.idx_q[one]] = rng.uniform(lo, hi, (n, one.size))
-    for k in model.idx_q[model.kind == FREEFLYER]:          # position in a cube, orientation uniform
-        q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 3))
+    for i in np.flatnonzero(model.nqs > 1):                # free flyer: position in a cube; orientations uniform
+        k = model.idx_q[i]
+        if model.kind[i] == FREEFLYER:
+            q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 3))
+            k += 3
         u = rng.normal(size=(n, 4))
-        q[:, k + 3:k + 7] = u / np.linalg.norm(u, axis=1, keepdims=True)
+        q[:, k:k + 4] = u / np.linalg.norm(u, axis=1, keepdims=True)
     return q, rng.normal(0.0, 2.0, (n, model.nv)), rng.normal(0.0, 5.0, (n, model.nv))
 
 

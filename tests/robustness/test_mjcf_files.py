@@ -83,7 +83,10 @@ def test_bounds_and_signs():
 # ---- structure -----------------------------------------------------------------------------------------------
 
 def test_joint_types_by_name():
-    refused(doc(joint='<joint name="j" type="ball"/>'), "joint 'j'", "ball joint: not supported yet")
+    ball = load_mjcf_string(doc(joint='<joint name="j" type="ball" axis="0 0 0" range="0 1" ref="2"/>'))
+    assert ball.q_names == ("j.qx", "j.qy", "j.qz", "j.qw") and ball.v_names == ("j.wx", "j.wy", "j.wz")
+    refused(doc(joint='<joint name="j" type="ball"/><joint name="h" axis="0 1 0"/>',
+                top='<equality><joint joint1="j" joint2="h"/></equality>'), "joint1='j' is a ball joint")
     refused(doc(joint='<joint name="j" type="screw"/>'), "joint 'j'", "unknown joint type")
     refused(doc(body='<body name="c"><freejoint name="f"/></body>'), "joint 'f'", "free joint")
     refused(doc(joint='<freejoint name="f"/><joint name="j"/>'), "joint 'f'", "free joint")
