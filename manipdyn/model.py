@@ -115,6 +115,10 @@ QUIRK_KINDS = {
     "version": "<robot version> that urdfdom 6 (Pinocchio 4.1's reader) refuses; manipdyn loads the file",
     "xml_version": "an XML declaration whose version is not 1.x (<?xml version=\"0.0\"?>): read as XML 1.0, as "
                    "urdfdom (Pinocchio), MuJoCo, PyBullet and Drake ignore it",
+    "xml_text": "whitespace before the XML declaration, or NUL bytes (a C string's terminator) after the document: "
+                "removed before parsing, as urdfdom (Pinocchio), MuJoCo and PyBullet read such files",
+    "inverted_limits": "a joint <limit> with lower > upper: read as no position limit (PyBullet's reading; urdfdom "
+                       "keeps the numbers); limits never enter the dynamics (load_urdf strict=True refuses it)",
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
     "joint_dynamics": "an MJCF joint's stiffness, springref or springdamper is nonzero: read, not applied yet (its "
                       "armature, damping and frictionloss are applied: Model.armature, damping, friction)",
