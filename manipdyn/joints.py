@@ -175,7 +175,8 @@ def _Vinv_coeff(th2):
 @njit(cache=True, inline="always")
 def _turn_quat(Q, s, a, wx, wy, wz, out):
     """out[s, a:a+4] = Q[s, a:a+4] ⊗ exp(ω): the unit quaternion turned by the body-frame rotation vector ω,
-    of the sign nearest the start (as Pinocchio), normalised."""
+    of the sign nearest the start (as Pinocchio's free flyer; its ball joint keeps the product's sign: the same
+    rotation), normalised."""
     x0, y0, z0, w0 = Q[s, a], Q[s, a + 1], Q[s, a + 2], Q[s, a + 3]
     ex, ey, ez, ew = _exp_quat(wx, wy, wz)
     x = w0 * ex + x0 * ew + y0 * ez - z0 * ey

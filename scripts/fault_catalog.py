@@ -38,6 +38,7 @@ AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "inte
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
 _FAST = "tests/batch/test_fast_paths.py"
+_BALL = "tests/crosscheck/test_ball_joint.py"
 _ENGINES = "tests/crosscheck/test_engines.py"
 _ABA = "tests/crosscheck/test_aba.py"
 _CRBA = "tests/crosscheck/test_crba.py"
@@ -608,7 +609,24 @@ FAULTS = (
           "        a1 += S[r, 4] * xr\n",
           "        a1 += S[r, 3] * xr\n",
           ("tests/crosscheck/test_rnea_kernel.py", _TERMS), "joints.joint_velocity: S q̇'s angular y from S's x column"),
-    # ---------------------------------------------------------------- floating base (joints.py, configuration.py)
+    # ---------------------------------------------------------------- ball joint (joints.py, lagrange.py)
+    Fault("ball-placement-quaternion-wxyz", "kinematics", "manipdyn/joints.py",
+          "quat_rotation(q0, q1, q2, q3)", "quat_rotation(q3, q0, q1, q2)",
+          (_BALL,), "joint_placement reads a ball's quaternion as [w x y z] (MuJoCo's qpos order; ours is x y z w)"),
+    Fault("ball-motion-subspace-rows-swapped", "kinematics", "manipdyn/joints.py",
+          "return np.eye(6)[3:]", "return np.eye(6)[[3, 5, 4]]",
+          (_BALL,), "motion_subspace(BALL): the columns of ω_y and ω_z swapped"),
+    Fault("ball-integrate-rates-swapped", "integrators", "manipdyn/joints.py",
+          "_turn_quat(Q, s, a, V[s, b], V[s, b + 1], V[s, b + 2], out)",
+          "_turn_quat(Q, s, a, V[s, b], V[s, b + 2], V[s, b + 1], out)",
+          (_BALL,), "integrate turns a ball's quaternion by (ω_x, ω_z, ω_y)"),
+    Fault("ball-difference-reversed", "integrators", "manipdyn/joints.py",
+          "out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q0, Q1, s, a)",
+          "out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q1, Q0, s, a)",
+          (_BALL,), "difference of a ball: log(quat1⁻¹ quat0), q0 ⊖ q1 instead of q1 ⊖ q0"),
+    Fault("ball-christoffel-bracket-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
+          "ad = _ad(xi) if kind == FREEFLYER else skew(xi)", "ad = _ad(xi) if kind == FREEFLYER else -skew(xi)",
+          (_BALL,), "christoffel_coriolis: a ball's so(3) bracket [e_i, e_j] of the wrong sign"),
     Fault("ff-log6-coefficient-cancels", "integrators", "manipdyn/joints.py",
           "return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2",
           "return (1.0 - th * np.sin(th) / (2.0 * (1.0 - np.cos(th)))) / th2",

@@ -100,12 +100,12 @@ def lagrange_mass_kernel(I, F, Q, M):
     return -1
 
 
-def _lagrange_mass_matrix(model, J, Iw):
-    """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3) (numpy:
-    the Christoffel route's own M)."""
+def _links_mass_matrix(model, J, Iw):
+    """The links' M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3)
+    (numpy: the bracket terms' M). Without diag(armature): rnea adds armature ⊙ q̈ alone, and so do coriolis_matrix
+    and Pinocchio; a ball's armature a (a 1₃ in its block) would add bracket terms ½ a [ξ]× (C q̇ the same: ξ × ξ = 0)."""
     Jv, Jw = J[:, :, :3], J[:, :, 3:]
-    return (np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
-            + np.diag(model.armature))                 # + diag(armature): constant, so C is unchanged
+    return np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
 
 
 def mass_matrix_derivatives(model, Q, terms=None):
@@ -158,7 +158,7 @@ def christoffel_coriolis(model, q, v):
     C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
                - np.einsum("nijk,nk->nij", dM, V))
     if model.quat_q.size:
-        C += _bracket_terms(model, _lagrange_mass_matrix(model, *terms[1:]), V)
+        C += _bracket_terms(model, _links_mass_matrix(model, *terms[1:]), V)
     return unbatch(check_output("christoffel_coriolis", "C", C, model, dict(q=Q, v=V)), single)
 
 
