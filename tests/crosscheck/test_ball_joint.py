@@ -8,8 +8,9 @@ the text. Pinocchio's: buildModelFromMJCF of the same tree written with one join
 joints of a body become nested bodies at the body's pose, the first ones massless, named as our reader names
 them, "body:joint"), so every ball is a JointModelSpherical and every body is one of ours. (Pinocchio reads
 several joints in one body as a JointModelComposite: its rnea, crba and aba agree with ours, but its
-computeCoriolisMatrix, computeRNEADerivatives and getFrameJacobianTimeVariation are off by O(1) from central
-differences of rnea, which ours match to 1e-9.) pm.armature is set from ours.
+computeCoriolisMatrix, computeRNEADerivatives and getFrameJacobianTimeVariation differ from ours by O(1), while
+our RNEA derivatives equal central differences of rnea to 1e-9 and our C q̇ + g equals nonlinear_effects.)
+pm.armature is set from ours.
 
 Compared: the configuration helpers (neutral, integrate, difference, normalize, random_configuration) against
 pin.neutral / integrate / difference; rnea (with f_ext on a ball-jointed body and on a site of one), every
@@ -20,7 +21,7 @@ computeRNEADerivatives / computeABADerivatives, joint_torque_regressor against c
 (and Y π = τ − armature ⊙ q̈), frame placements, Jacobians and their time variation (both references) of every
 body and site, kinetic and potential energy. Batches equal one-state calls; threads=2 equals threads=1.
 
-Measured (this VM, seeds 0-7, 4 states each), conftest's err: ≤ 4.3e-16 (configuration), ≤ 1.2e-14 (τ, per-link
+Measured (this VM, seeds 0-7, 4 states each), conftest's err: ≤ 4.3e-16 (configuration), ≤ 1.8e-14 (τ, per-link
 terms, M, q̈, C, J, J̇, Y, energies), ≤ 3.6e-14 (derivatives of q̈); batches and threads equal single calls exactly.
 Tolerances (TOL) beside the worst value each.
 """
