@@ -53,3 +53,47 @@ def random_tree(seed, kinds="BHBHBH", gravity=(0.0, 0.0, -9.81)):
     g = " ".join(str(x) for x in gravity)
     return (f'<mujoco model="ball_tree_{seed}"><option gravity="{g}"/><worldbody>'
             + "".join(write(c) for c in bodies[-1]) + "</worldbody></mujoco>")
+
+
+# A spatial four-bar (RSSR): crank (hinge z) — coupler (ball at the crank's tip) — rocker (hinge x), the coupler's
+# far end tied to the rocker's tip by a connect (a spherical closure); 2 degrees of freedom: the crank and the
+# coupler's spin about the line through its two spherical joints. {d}: the equality's solimp impedance.
+RSSR = """<mujoco model="rssr"><option gravity="0 0 -9.81"/>
+<worldbody>
+ <body name="crank"><joint name="crank" axis="0 0 1"/>
+  <inertial pos="0.15 0 0" mass="1.0" diaginertia="0.002 0.01 0.01"/>
+  <body name="coupler" pos="0.3 0 0"><joint name="cball" type="ball"/>
+   <inertial pos="0.15 0.25 0.2" mass="0.7" fullinertia="0.02 0.015 0.012 0.003 -0.002 0.001"/></body></body>
+ <body name="rocker" pos="0.6 0.5 0"><joint name="rocker" axis="1 0 0"/>
+  <inertial pos="0 0 0.2" mass="0.5" diaginertia="0.008 0.008 0.001"/></body>
+</worldbody>
+<equality><connect name="loop" body1="coupler" body2="rocker" anchor="0.3 0.5 0.4" solimp="{d} {d} 0.001 0.5 2"/>
+</equality></mujoco>"""
+
+# A Stewart-like leg hanging from a ball hip, a knee hinge, its foot tied to a world point by a connect; 1 degree
+# of freedom (the leg's spin about the hip-foot line) plus a second, ball-jointed leg on the foot's body.
+LEG = """<mujoco model="ball_leg"><option gravity="0 0 -9.81"/>
+<worldbody>
+ <body name="thigh" pos="0 0 1"><joint name="hip" type="ball"/>
+  <inertial pos="0.02 0.01 -0.2" mass="1.2" fullinertia="0.03 0.028 0.004 0.001 0.002 -0.001"/>
+  <body name="shank" pos="0.05 0 -0.45"><joint name="knee" axis="0 1 0"/>
+   <inertial pos="0.1 0 -0.15" mass="0.8" diaginertia="0.015 0.014 0.002"/>
+   <body name="foot" pos="0.25 0.05 -0.3" euler="0.2 0.1 0"><joint name="ankle" type="ball" pos="0 0 0.02"/>
+    <inertial pos="0.05 0.02 -0.03" mass="0.3" fullinertia="0.002 0.003 0.0025 0.0002 0.0001 -0.0003"/>
+   </body></body></body>
+</worldbody>
+<equality><connect name="toe" body1="shank" anchor="0.25 0.05 -0.3" solimp="{d} {d} 0.001 0.5 2"/>
+</equality></mujoco>"""
+
+
+def mujoco_state(model, m, q, v):
+    """MuJoCo's (qpos, qvel) for our (q, v) and iv, MuJoCo's dof index of each entry of our v, joints matched by
+    name: a ball's qpos is [w x y z] (ours x y z w), its qvel the same body-frame ω."""
+    qpos, qvel, iv = np.empty(m.nq), np.empty(m.nv), np.empty(model.nv, int)
+    for i, name in enumerate(model.joint_names):
+        j = m.joint(name).id
+        a, b, k, r, n = m.jnt_qposadr[j], m.jnt_dofadr[j], model.idx_q[i], model.idx_v[i], model.nvs[i]
+        qpos[a:a + model.nqs[i]] = np.r_[q[k + 3], q[k:k + 3]] if model.nqs[i] == 4 else q[k]
+        qvel[b:b + n] = v[r:r + n]
+        iv[r:r + n] = np.arange(b, b + n)
+    return qpos, qvel, iv
