@@ -23,14 +23,15 @@ def _rotation(rng):
     return Q * np.sign(np.linalg.det(Q))
 
 
-def random_tree(seed, kinds="BHBHBH", gravity=(0.0, 0.0, -9.81)):
+def random_tree(seed, kinds="BHBHBH", gravity=(0.0, 0.0, -9.81), one_root=False):
     """MJCF text of a tree: body k (joint 'j{k}', type ball for 'B', hinge for 'H') hangs on a random earlier
     body, at a random offset, with a random hinge axis, mass in [0.5, 2] and a full inertia tensor R diag Rᵀ
-    whose principal moments obey the triangle inequality."""
+    whose principal moments obey the triangle inequality. one_root: every body below body 0 (Pinocchio's
+    buildModelFromMJCF reads only the first body under <worldbody>)."""
     rng = np.random.default_rng(seed)
     bodies = {-1: []}
     for k, kind in enumerate(kinds):
-        parent = int(rng.integers(-1, k)) if k else -1
+        parent = int(rng.integers(0 if one_root else -1, k)) if k else -1
         pos = " ".join(f"{x:.6f}" for x in rng.uniform(-0.3, 0.3, 3))
         com = " ".join(f"{x:.6f}" for x in rng.uniform(-0.2, 0.2, 3))
         d = rng.uniform(0.01, 0.05, 3)
