@@ -63,6 +63,9 @@ _MJCF = "tests/crosscheck/test_mjcf_import.py"
 _MJCF = "tests/crosscheck/test_mjcf_export.py"
 _MJCF_EQ = "tests/crosscheck/test_mjcf_equality.py"
 _ENGINES_FLOAT = "tests/crosscheck/test_engines_floating.py"
+_BALL_SIM = "tests/unit/test_ball_simulation.py"
+_BALL_LOOPS = "tests/crosscheck/test_ball_closures.py"
+_BALL_VIZ = "tests/viz/test_ball_playback.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -200,10 +203,10 @@ FAULTS = (
           "fx = m * (ay * c[2] - az * c[1])",
           (_CRBA,), "CRBA: F = I^c s drops the x component of s's linear part (prismatic joints, free flyer)"),
     Fault("lagrange-free-flyer-bracket-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
-          "    out[:, :6, :] -= np.swapaxes(ad, 1, 2) @ M[:, :6, :]\n",
+          "        out[:, b, :] -= np.swapaxes(ad, 1, 2) @ M[:, b, :]\n",
           "",
-          (_TERMS + "::test_coriolis_two_routes_and_its_identities", _FLOAT), "free-flyer C without the third bracket term −ad_ξᵀ M (Christoffel symbols as if the root's "
-          "directions commuted)"),
+          (_TERMS + "::test_coriolis_two_routes_and_its_identities", _FLOAT), "free-flyer (and ball) C without the third bracket term −ad_ξᵀ M (Christoffel symbols as if "
+          "the quaternion blocks' directions commuted)"),
     Fault("lagrange-dM-lift-rule-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
           "            dJ[:, :3, lift] = np.cross(np.swapaxes(a[:, lift], 1, 2), Jv[:, :, k, None], axis=1)\n",
           "",
@@ -513,9 +516,30 @@ FAULTS = (
           "v + h / 6 * (k1v + k2v + 2 * k3v + 2 * k4v)",
           ("tests/unit/test_integrate.py",), "RK4 velocity update with weights 1, 1, 2, 2 (still consistent, wrong order)"),
     Fault("integrate-rkmk-bracket-sign", "integrators", "manipdyn/simulation.py",
-          "out[:, :6] += 0.5 * a1 + ad(xi, a1) / 12.0",
-          "out[:, :6] += -0.5 * a1 + ad(xi, a1) / 12.0",
-          ("tests/unit/test_floating_simulate.py",), "RK4 on a free flyer with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+          "out[:, b] += 0.5 * a1 + ad(xi[:, b], a1) / 12.0",
+          "out[:, b] += -0.5 * a1 + ad(xi[:, b], a1) / 12.0",
+          ("tests/unit/test_floating_simulate.py", _BALL_SIM),
+          "RK4 on a free flyer or a ball joint with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+    Fault("integrate-rkmk-ball-block-dropped", "integrators", "manipdyn/simulation.py",
+          "              if k == BALL or k == FREEFLYER]",
+          "              if k == FREEFLYER]",
+          (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
+          "RKMK without a ball joint's dexp⁻¹ block (ξ̇ = v on the ball's 3 entries): second order"),
+    Fault("integrate-rkmk-ball-bracket-order", "integrators", "manipdyn/simulation.py",
+          "            return np.cross(xi, w)",
+          "            return np.cross(w, xi)",
+          (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
+          "the ball block's so(3) bracket [ξ, w] taken as w × ξ (both dexp⁻¹ terms' signs flipped): second order"),
+    Fault("integrate-adaptive-quaternion-not-renormalised", "integrators", "manipdyn/simulation.py",
+          "        Y[:, k:k + 4] /= np.linalg.norm(Y[:, k:k + 4], axis=1, keepdims=True)",
+          "        pass",
+          (_BALL_SIM + "::test_quaternions_stay_unit_and_energy_is_conserved",),
+          "the adaptive integrator returns its quaternions as DOP853 leaves them (off unit norm by its tolerance)"),
+    Fault("closure-ball-held-in-assembly", "constraints", "manipdyn/constraints/dynamics.py",
+          "and (world or model.kind[j] != FREEFLYER)])",
+          "and (world or model.nqs[j] == 1)])",
+          (_BALL_LOOPS + "::test_closure_holds_at_qpos0_and_after_assembly",),
+          "assembly and projection hold ball joints as they hold a free-flyer root (only 1-dof joints move)"),
     # ---------------------------------------------------------------- the chapter's SPM model (examples/spm.py)
     Fault("spm-eq59a-drop-term", "spm", "manipdyn/examples/spm.py",
           "Ad = np.cross(vd, L.w) + np.cross(L.v, wd)",
@@ -621,6 +645,17 @@ FAULTS = (
           "            pass",
           ("tests/viz/test_play_signals.py",),
           "a closed chain's passive rates taken from finite differences instead of the closures"),
+    Fault("viz-quaternion-nlerp", "viz", "manipdyn/viz/scene.py",
+          "    Qf[:, quats] = turned[:, quats]",
+          "    Qf[:, quats] = normalize(model, Qf)[:, quats]",
+          (_BALL_VIZ + "::test_ball_quaternion_turns_along_the_shorter_arc",),
+          "playback interpolates quaternions by normalised lerp of the samples (lags a 2.5 rad turn by 0.068 rad, "
+          "takes the long way to a sample given as −q)"),
+    Fault("viz-ball-rates-by-gradient", "viz", "manipdyn/viz/plots.py",
+          "    if model.quat_q.size:\n        lo, hi",
+          "    if model.floating:\n        lo, hi",
+          (_BALL_VIZ + "::test_rates_of_a_uniform_rotation_and_the_plot_labels",),
+          "a ball joint's rates by differences of its quaternion entries (nq columns) instead of q ⊖ q (body ω)"),
     Fault("viz-slider-does-not-seek", "viz", "manipdyn/viz/page.py",
           'slider.addEventListener("input", function () { pause(); seek(parseFloat(slider.value)); });',
           'slider.addEventListener("input", function () { pause(); });',
@@ -721,8 +756,8 @@ FAULTS = (
           "ms * (0.4 * r * r)",
           (_MJCF,), "a capsule's hemispheres given their own inertia but not their offset from the centre"),
     Fault("mjcf-joint-anchor-ignored", "loader", "manipdyn/io/mjcf_read.py",
-          "R0, p0 = (R, p + R @ a) if anchor is None",
-          "R0, p0 = (R, p) if anchor is None",
+          "the frame the previous joints left\n        R0, p0 = (R, p + R @ a) if anchor is None",
+          "the frame the previous joints left\n        R0, p0 = (R, p) if anchor is None",
           (_MJCF,), "a joint's pos (its anchor in the body) ignored: the joint turns about the body origin"),
     Fault("mjcf-connect-anchor-in-body2", "loader", "manipdyn/io/mjcf_read.py",
           "p1, R1, p2, R2 = anchor, np.eye(3), T2[0].T @ (x - T2[1]), np.eye(3)",
