@@ -131,12 +131,17 @@ def _referee(args) -> int:
         return _referee_zoo(args, engines, states)
     if _sweep_mode(args):
         return _referee_zoo(args, engines, states, given=True)
+    from .io.load import robot_format
+    from .io.mjcf_read import load_mjcf
     from .io.urdf import load_urdf
     reports = []
     for path in [Path(p) for p in args.urdf] or bundled_models():
+        mjcf = robot_format(path) == "mjcf"             # an MJCF file (ball joints, its own free joint) as written
+        if mjcf and args.root_joint:
+            raise InputError(f"{path}: an MJCF file: its free joint, if any, is in the file (no --root-joint)")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            model = load_urdf(path, root_joint=args.root_joint)
+            model = load_mjcf(path) if mjcf else load_urdf(path, root_joint=args.root_joint)
         rep = referee(model, path, engines, n_states=states, seed=args.seed)
         reports.append(rep)
         print(format_referee(rep))
@@ -463,7 +468,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.commands = sub.choices              # name -> subcommand parser (for errors in its own name)
     v = sub.add_parser("validate", help="compare every Newton-Euler term with Pinocchio")
     v.add_argument("urdf", nargs="*", help="URDF files (default: the bundled models in urdf/); with --against, "
-                                           "also folders (searched for *.urdf)")
+                                           "also folders (searched for *.urdf) and MJCF files (ball joints: "
+                                           "pinocchio and mujoco)")
     v.add_argument("--zoo", action="store_true",
                    help="also validate example-robot-data's arms (fixed base) and its legged robots, humanoids "
                         "and drones (free-flyer root, whatever --root-joint says)")

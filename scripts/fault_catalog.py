@@ -60,7 +60,9 @@ _DERIV = "tests/crosscheck/test_derivatives.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
 _JD = "tests/crosscheck/test_joint_dynamics.py"
 _MJCF = "tests/crosscheck/test_mjcf_import.py"
-_MJCF = "tests/crosscheck/test_mjcf_export.py"
+_MJCF_EXPORT = "tests/crosscheck/test_mjcf_export.py"
+_MJCF_BALL = "tests/crosscheck/test_mjcf_ball_humanoid.py"
+_ENGINES_MJCF = "tests/crosscheck/test_engines_mjcf.py"
 _MJCF_EQ = "tests/crosscheck/test_mjcf_equality.py"
 _ENGINES_FLOAT = "tests/crosscheck/test_engines_floating.py"
 _BALL_SIM = "tests/unit/test_ball_simulation.py"
@@ -88,6 +90,20 @@ AREA_TESTS = {
 
 FAULTS = (
     # ---------------------------------------------------------------- loader (io/urdf.py, spatial.py)
+    Fault("urdf-spherical-damping-one-entry", "loader", "manipdyn/io/urdf.py",
+          'out += [float(x or 0.0)] * (3 if j.type == "spherical" else 1)',
+          'out += [float(x or 0.0)] * (1 if j.type == "spherical" else 1)',
+          ("tests/crosscheck/test_urdf_spherical.py",), "a spherical joint's <dynamics damping> on one of its three "
+          "velocities: the model's damping (nv,) has the wrong length"),
+    Fault("urdf-inverted-limits-kept", "loader", "manipdyn/io/urdf.py",
+          '        e.set("lower", "-inf")', '        e.set("lower", e.get("lower", "0"))',
+          ("tests/robustness/test_urdf_structure.py",), "a <limit> with lower > upper keeps its lower bound while the "
+          "quirk says no limit"),
+    Fault("urdf-trailing-nul-kept", "loader", "manipdyn/io/urdf.py",
+          'data.rstrip(b" \\t\\r\\n").endswith(b"\\0")', 'data.rstrip(b" \\t\\r\\n").endswith(b"\\0\\0\\0")',
+          ("tests/robustness/test_urdf_structure.py", "tests/crosscheck/test_urdf_spherical.py"),
+          "NUL bytes after the document are removed only in threes: one NUL (pybullet_data's humanoid.urdf) is "
+          "malformed XML again"),
     Fault("urdf-q-order-by-link-name", "loader", "manipdyn/io/urdf.py",
           "for j in sorted(robot.joints, key=lambda j: j.name):",
           "for j in sorted(robot.joints, key=lambda j: j.child):",
@@ -520,6 +536,11 @@ FAULTS = (
           "out[:, b] += -0.5 * a1 + ad(xi[:, b], a1) / 12.0",
           ("tests/unit/test_floating_simulate.py", _BALL_SIM),
           "RK4 on a free flyer or a ball joint with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+    Fault("adaptive-free-position-body-frame", "integrators", "manipdyn/simulation.py",
+          "out[k:k + 3] = np.array(quat_rotation(*q[k + 3:k + 7])).reshape(3, 3) @ v[r:r + 3]",
+          "out[k:k + 3] = v[r:r + 3]",
+          ("tests/unit/test_free_bodies.py",), "the adaptive reference moves a free body's position by its body-frame "
+          "linear velocity (q̇ = v), not R v"),
     Fault("integrate-rkmk-ball-block-dropped", "integrators", "manipdyn/simulation.py",
           "              if k == BALL or k == FREEFLYER]",
           "              if k == FREEFLYER]",
@@ -756,9 +777,17 @@ FAULTS = (
           "ms * (0.4 * r * r)",
           (_MJCF,), "a capsule's hemispheres given their own inertia but not their offset from the centre"),
     Fault("mjcf-joint-anchor-ignored", "loader", "manipdyn/io/mjcf_read.py",
-          "the frame the previous joints left\n        R0, p0 = (R, p + R @ a) if anchor is None",
-          "the frame the previous joints left\n        R0, p0 = (R, p) if anchor is None",
+          "previous joints left\n        R0, p0 = (R, p + R @ a) if anchor is None",
+          "previous joints left\n        R0, p0 = (R, p) if anchor is None",
           (_MJCF,), "a joint's pos (its anchor in the body) ignored: the joint turns about the body origin"),
+    Fault("mjcf-ball-anchor-sign", "loader", "manipdyn/io/mjcf_read.py",
+          "R0, p0 = (R, p + R @ a) if anchor is None else (np.eye(3), a - anchor)   # no axis",
+          "R0, p0 = (R, p - R @ a) if anchor is None else (np.eye(3), a - anchor)   # no axis",
+          (_MJCF, _MJCF_BALL), "a ball joint's anchor (its pos) taken on the wrong side of the body origin"),
+    Fault("mjcf-ball-later-anchor-dropped", "loader", "manipdyn/io/mjcf_read.py",
+          "(np.eye(3), a - anchor)   # no axis", "(np.eye(3), 0 * a - anchor)   # no axis",
+          (_MJCF,), "a ball joint after other joints of its body turns about the previous joint's anchor, not "
+                    "its own pos"),
     Fault("mjcf-connect-anchor-in-body2", "loader", "manipdyn/io/mjcf_read.py",
           "p1, R1, p2, R2 = anchor, np.eye(3), T2[0].T @ (x - T2[1]), np.eye(3)",
           "p1, R1, p2, R2 = T2[0].T @ (x - T2[1]), np.eye(3), anchor, np.eye(3)",
@@ -865,12 +894,23 @@ FAULTS = (
     Fault("mjcf-fullinertia-products-swapped", "validation", "manipdyn/io/mjcf.py",
           'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))',
           'el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]))',
-          (_MJCF,), "the MJCF export writes ixz and iyz in each other's place (MuJoCo's order is ixx iyy izz "
+          (_MJCF_EXPORT,), "the MJCF export writes ixz and iyz in each other's place (MuJoCo's order is ixx iyy izz "
                     "ixy ixz iyz)"),
     Fault("mjcf-revolute-axis-wrong-frame", "validation", "manipdyn/io/mjcf.py",
-          "c.pc + s * revolute_arm * c.axis_c)", "c.pc + s * revolute_arm * c.axis_p)",
-          (_MJCF,), "the MJCF export places a revolute closure's child-side axis point along the parent's "
+          "c.pc + s * revolute_arm * c.axis_c, off=off)", "c.pc + s * revolute_arm * c.axis_p, off=off)",
+          (_MJCF_EXPORT,), "the MJCF export places a revolute closure's child-side axis point along the parent's "
                     "axis vector (parent-frame coordinates read in the child's frame)"),
+    Fault("mjcf-export-joint-offsets-not-summed", "validation", "manipdyn/io/mjcf.py",
+          "host[i], off[i] = host[a], off[a] + model.p0[i]", "host[i], off[i] = host[a], model.p0[i]",
+          (_MJCF_EXPORT,), "the MJCF export writes a body's third joint at its offset from the second, not from the "
+                           "body's frame (several joints of one MJCF body)"),
+    Fault("engines-mujoco-ball-quaternion-order", "validation", "manipdyn/validation/engines.py",
+          "q[a:a + n] if n == 1 else np.roll(q[a:a + n], 1)", "q[a:a + n]",
+          (_ENGINES_MJCF,), "the MuJoCo referee sets a ball joint's qpos to our (x, y, z, w), not MuJoCo's (w, x, y, z)"),
+    Fault("engines-ball-armature-first-dof-only", "validation", "manipdyn/validation/engines.py",
+          "k = slice(model.idx_v[j], model.idx_v[j] + model.nvs[j])     # a ball: its three dofs",
+          "k = slice(model.idx_v[j], model.idx_v[j] + 1)     # a ball: its three dofs",
+          (_ENGINES_MJCF,), "the referee compares a ball joint's armature on its first dof only"),
     Fault("deriv-minv-upper-triangle", "derivatives", "manipdyn/spatial.py",
           "            x = L[r, m]\n            for c in range(m + 1):\n                M[r, c] -= x * M[m, c]",
           "            x = L[m, r]\n            for c in range(m + 1):\n                M[r, c] -= x * M[m, c]",

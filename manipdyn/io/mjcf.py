@@ -15,6 +15,9 @@ What is written (MuJoCo's XML reference, "MJCF"), so that MuJoCo's open-tree dyn
   root becomes ``<freejoint>`` (MuJoCo's q is [x y z qw qx qy qz], its v [linear (world); angular (body)]
   and its linear acceleration the origin's p̈, not ours: map states before comparing); a ball joint
   ``<joint type="ball">`` at the body origin (MuJoCo's q [qw qx qy qz], ours [qx qy qz qw]; v the same).
+  Several joints of one MJCF body, which the MJCF reader makes a chain of massless bodies named
+  ``"<body>:<joint>"`` (each the one child's parent, at R0 = 1), are written back as that one body with its joints
+  at their anchors (``pos``), as read (MuJoCo refuses a massless moving body).
 - ``<option gravity>``: the Model's gravity.
 - Closures (``Model.constraints``) as ``<equality>`` elements between sites placed on the closure frames, so
   no assumption is made about q = 0 (MuJoCo computes a ``connect``'s or ``weld``'s relative pose at qpos0
@@ -78,12 +81,39 @@ def _quat(R) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
-def _body(parent_el, model, i) -> ET.Element:
-    """Body i: frame, inertial, joint."""
-    b = ET.SubElement(parent_el, "body", name=model.body_names[i], pos=_vec(model.p0[i]),
-                      quat=_vec(_quat(model.R0[i])))
+def _hosts(model):
+    """(host, off): the joint host[i] whose MJCF body holds body i's joint, and body i's origin off[i] in that body's
+    frame. A chain the MJCF reader made of several joints of one body (each but the last a massless body named
+    ``"<body>:<joint>"``, its one child at R0 = 1) is written back as that one body with several joints; every other
+    body is its own host (off 0)."""
+    nb = model.njoints
+    children = np.bincount(model.parent[model.parent >= 0], minlength=nb)
+    host, off = list(range(nb)), [np.zeros(3) for _ in range(nb)]
+    names, joints = model.body_names, model.joint_names
+    for i in range(nb):
+        a = model.parent[i]
+        stem = names[a][:-len(joints[a]) - 1] if a >= 0 and names[a].endswith(f":{joints[a]}") else None
+        if (stem and names[i] in (stem, f"{stem}:{joints[i]}") and children[a] == 1 and model.mass[a] == 0 and not np.any(model.inertia[a]) and np.array_equal(model.R0[i], np.eye(3))
+                and FREEFLYER not in (model.kind[a], model.kind[i])):
+            host[i], off[i] = host[a], off[a] + model.p0[i]
+    return host, off
+
+
+def _body(parent_el, model, i, pos) -> ET.Element:
+    """Body i: frame (its joint frame at pos in parent_el's body frame), inertial, joint."""
+    b = ET.SubElement(parent_el, "body", name=model.body_names[i], pos=_vec(pos), quat=_vec(_quat(model.R0[i])))
+    _contents(b, model, i, np.zeros(3))
+    return b
+
+
+def _contents(b, model, i, off):
+    """Body i's inertial and joint in the MJCF body b, in whose frame body i's origin is off (a later joint of b)."""
+    if b.find("inertial") is not None:               # a later joint: b is named after its last body, holds its mass
+        b.set("name", model.body_names[i])
+        for el in b.findall("inertial"):
+            b.remove(el)
     I = model.inertia[i]
-    el = ET.SubElement(b, "inertial", pos=_vec(model.com[i]), mass=_num(model.mass[i]))
+    el = ET.SubElement(b, "inertial", pos=_vec(off + model.com[i]), mass=_num(model.mass[i]))
     moments, axes = np.linalg.eigh(I)
     if moments[0] > 0:                               # MuJoCo diagonalises fullinertia itself
         el.set("fullinertia", _vec([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]))
@@ -93,21 +123,21 @@ def _body(parent_el, model, i) -> ET.Element:
         el.set("quat", _vec(_quat(axes)))
         el.set("diaginertia", _vec(np.maximum(moments, 0.0)))
     dyn = _joint_dynamics(model, i)
+    at = {"pos": _vec(off)} if off.any() else {}
     if model.kind[i] == FREEFLYER:
         if dyn:                                      # <freejoint> takes none: a free <joint> does, one per joint
             ET.SubElement(b, "joint", name=model.joint_names[i], type="free", **dyn)
         else:
             ET.SubElement(b, "freejoint", name=model.joint_names[i])
-        return b
+        return
     if model.kind[i] == BALL:
-        ET.SubElement(b, "joint", name=model.joint_names[i], type="ball", **dyn)
-        return b
+        ET.SubElement(b, "joint", name=model.joint_names[i], type="ball", **at, **dyn)
+        return
     j = ET.SubElement(b, "joint", name=model.joint_names[i],
-                      type="slide" if model.kind[i] == PRISMATIC else "hinge", axis=_vec(model.axis[i]), **dyn)
+                      type="slide" if model.kind[i] == PRISMATIC else "hinge", **at, axis=_vec(model.axis[i]), **dyn)
     lo, hi = model.lower[i], model.upper[i]
     if not model.continuous[i] and np.isfinite(lo) and np.isfinite(hi):
         j.set("range", _vec([lo, hi]))
-    return b
 
 
 def _joint_dynamics(model, i) -> dict:
@@ -124,8 +154,10 @@ def _joint_dynamics(model, i) -> dict:
     return out
 
 
-def _site(bodies, worldbody, body, name, pos, R=None):
-    el = ET.SubElement(worldbody if body < 0 else bodies[body], "site", name=name, pos=_vec(pos))
+def _site(bodies, worldbody, body, name, pos, R=None, off=None):
+    """A site at (pos, R) in body's frame (-1: the world); off[body]: that frame's origin in its MJCF body's."""
+    el = ET.SubElement(worldbody if body < 0 else bodies[body], "site", name=name,
+                       pos=_vec(pos if body < 0 else off[body] + pos))
     if R is not None:
         el.set("quat", _vec(_quat(R)))
 
@@ -178,27 +210,32 @@ def to_mjcf(model, *, axis_sign=None, solref=EQ_SOLREF, solimp=EQ_SOLIMP, revolu
                   balanceinertia="false")
     ET.SubElement(root, "option", gravity=_vec(model.gravity))
     world = ET.SubElement(root, "worldbody")
-    bodies = []
+    bodies, (host, off) = [], _hosts(model)
     for i in range(model.njoints):                   # parent[i] < i: every parent is written before its child
-        bodies.append(_body(world if model.parent[i] < 0 else bodies[model.parent[i]], model, i))
+        a = model.parent[i]
+        if host[i] != i:                             # a later joint of its parent's MJCF body
+            bodies.append(bodies[a])
+            _contents(bodies[a], model, i, off[i])
+        else:
+            bodies.append(_body(world if a < 0 else bodies[a], model, i, model.p0[i] + (off[a] if a >= 0 else 0)))
     attrs = dict(solref=_vec(solref), solimp=_vec(solimp))
     eq = ET.Element("equality")
     sign = dict(axis_sign or {})
     for k, c in enumerate(model.constraints):
         tag = f"{c.name}#{k}"                        # site names: unique whatever the closure names are
         if c.type in ("spherical", "revolute"):
-            _site(bodies, world, c.parent, f"{tag}:parent", c.pp)
-            _site(bodies, world, c.child, f"{tag}:child", c.pc)
+            _site(bodies, world, c.parent, f"{tag}:parent", c.pp, off=off)
+            _site(bodies, world, c.child, f"{tag}:child", c.pc, off=off)
             ET.SubElement(eq, "connect", name=c.name, site1=f"{tag}:parent", site2=f"{tag}:child", **attrs)
         if c.type == "revolute":
             s = float(sign.get(c.name, 1.0))
-            _site(bodies, world, c.parent, f"{tag}:parent_axis", c.pp + revolute_arm * c.axis_p)
-            _site(bodies, world, c.child, f"{tag}:child_axis", c.pc + s * revolute_arm * c.axis_c)
+            _site(bodies, world, c.parent, f"{tag}:parent_axis", c.pp + revolute_arm * c.axis_p, off=off)
+            _site(bodies, world, c.child, f"{tag}:child_axis", c.pc + s * revolute_arm * c.axis_c, off=off)
             ET.SubElement(eq, "connect", name=f"{c.name}:axis", site1=f"{tag}:parent_axis",
                           site2=f"{tag}:child_axis", **attrs)
         elif c.type == "fixed":
-            _site(bodies, world, c.parent, f"{tag}:parent", c.pp, c.Rp)
-            _site(bodies, world, c.child, f"{tag}:child", c.pc, c.Rc)
+            _site(bodies, world, c.parent, f"{tag}:parent", c.pp, c.Rp, off=off)
+            _site(bodies, world, c.child, f"{tag}:child", c.pc, c.Rc, off=off)
             ET.SubElement(eq, "weld", name=c.name, site1=f"{tag}:parent", site2=f"{tag}:child", **attrs)
         elif c.type == "coupling":
             _coupling(eq, model, c, attrs)

@@ -16,7 +16,7 @@ What the loader refuses (URDFError naming the file, the link or joint, the attri
   keep every computation of the model finite) and negative masses or effort/velocity limits;
 - joint axes that are zero (an axis that is not unit is normalised, with a note);
 - revolute/prismatic joints without ``<limit effort= velocity=>`` (urdfdom refuses them too; a missing
-  lower/upper is 0, as the URDF specification and urdfdom say), limits with lower > upper;
+  lower/upper is 0, as the URDF specification and urdfdom say), with ``strict=True`` limits with lower > upper;
 - mimic joints naming a joint that does not exist, or themselves;
 - files larger than ``max_bytes`` (default ``MAX_BYTES``);
 - inertias that are not positive semi-definite beyond round-off (per body after merging), unless
@@ -24,7 +24,10 @@ What the loader refuses (URDFError naming the file, the link or joint, the attri
 
 What the loader reads as other engines do, with a quirk (see model.QUIRK_KINDS): an XML declaration whose version
 is not 1.x (``<?xml version="0.0"?>``, which libxml2 refuses) is read as XML 1.0 ("xml_version"); an ``<inertial>``
-with ``<mass>`` but no ``<inertia>`` is a point mass at its ``<origin>`` ("point_mass", Pinocchio 4.1's reading).
+with ``<mass>`` but no ``<inertia>`` is a point mass at its ``<origin>`` ("point_mass", Pinocchio 4.1's reading);
+whitespace before the XML declaration and NUL bytes after the document (a C string's terminator), both of which
+libxml2 refuses, are removed ("xml_text"); a ``<limit>`` with lower > upper is read as no position limit
+("inverted_limits", PyBullet's reading; limits never enter the dynamics).
 
 The root link (docs/design.md §3): by default it is the fixed base, body −1; its mass and inertia (with the links
 fixed to it) move with no joint, so they have no effect on the dynamics — Pinocchio's buildModelFromUrdf
@@ -53,15 +56,17 @@ import yourdfpy
 from lxml import etree
 
 from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
-from ..model import (FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, MimicModel, Model, Quirk,
+from ..model import (BALL, FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, MimicModel, Model, Quirk,
                      check_gravity, with_joint_dynamics)
 from ..spatial import combine_inertias, rpy_matrix
 
-MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
+MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC,
+          "spherical": BALL}                 # PyBullet's and MuJoCo's URDF extension: a ball joint at the origin
 SUPPORTED = set(MOVING) | {"fixed"}
 ROOT_JOINTS = (None, "free_flyer")   # accepted values of root_joint
 ROOT_JOINT_NAME = "root_joint"       # the free flyer's name (Pinocchio's)
 _KIND = {**MOVING, "free_flyer": FREEFLYER}
+_NO_AXIS = ("free_flyer", "spherical")     # joints without an axis or position limits
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 # The URDF number grammar: optional sign, digits with an optional fraction (or a fraction alone), an
@@ -206,6 +211,14 @@ def _parse_xml(data: bytes, source: str, quirks=None, root_tag="robot", error=UR
     malformed XML."""
     if b"<!ENTITY" in data:                   # before parsing: nothing is expanded or fetched
         raise error(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
+    lead = len(data) - len(data.lstrip(b" \t\r\n"))         # before a declaration: libxml2 refuses it
+    spaced, nul = lead > 0 and data[lead:].startswith(b"<?xml"), data.rstrip(b" \t\r\n").endswith(b"\0")
+    if spaced or nul:
+        what = ["whitespace before the XML declaration"] * spaced + ["NUL bytes after the document"] * nul
+        if quirks is not None:
+            quirks.append(Quirk("xml_text", "<?xml?>", f"{' and '.join(what)}: removed (libxml2 refuses them; "
+                                f"urdfdom, MuJoCo and PyBullet read the file)"))
+        data = data[lead if spaced else 0:].rstrip(b"\0 \t\r\n") if nul else data[lead:]
     m = _DECLARED_VERSION.match(data)
     if m and not _XML_1.fullmatch(m.group(2)):
         version = m.group(2).decode("ascii")
@@ -365,7 +378,13 @@ def _check_xml(root, source, strict=False, quirks=None):
     names = {j.get("name") for j in joints}
     for j in joints:
         _dangling_mimic(j, names, source, strict, quirks)
-        _check_joint(j, names, source)
+        _check_joint(j, names, source, strict, quirks)
+    balls = {j.get("name") for j in joints if j.get("type") == "spherical"}
+    for j in joints:
+        for e in j.findall("mimic"):
+            if e.get("joint") in balls:
+                raise URDFError(f"{source}: joint {j.get('name')!r}: <mimic joint={e.get('joint')!r}> names a "
+                                f"spherical joint (a mimic relates angles or displacements)")
     for link in links:
         _check_link(link, source)
 
@@ -381,7 +400,7 @@ def _check_names(joints, links, source):
             raise URDFError(f"{source}: duplicate {kind} name(s): {', '.join(dup[:20])}")
 
 
-def _check_joint(j, joint_names, source):
+def _check_joint(j, joint_names, source, strict=False, quirks=None):
     """One <joint>: links, type, origin, axis, limit and mimic, as urdfdom requires them."""
     name, kind = j.get("name"), j.get("type")
     where = f"joint {name!r}"
@@ -398,15 +417,18 @@ def _check_joint(j, joint_names, source):
     for e in j.findall("origin"):
         _check_origin(e, where, source)
     for e in j.findall("axis"):
-        _check_axis(e, where, source, moving=kind != "fixed")
+        _check_axis(e, where, source, moving=kind not in ("fixed", "spherical"))
     limits = j.findall("limit")
     if not limits and kind in ("revolute", "prismatic"):
         raise URDFError(f"{source}: {where}: a {kind} joint needs <limit effort=... velocity=...> "
                         f"(URDF specification; Pinocchio's reader refuses it too)")
     for e in limits:
-        _check_limit(e, where, kind, source)
+        _check_limit(e, where, kind, source, strict, quirks)
     for e in j.findall("mimic"):
         _check_mimic(e, name, joint_names, source)
+        if kind == "spherical":
+            raise URDFError(f"{source}: {where}: a spherical joint cannot be a <mimic> joint (a mimic relates angles "
+                            f"or displacements)")
     for e in j.findall("dynamics"):            # Model.damping, Model.friction (docs/design.md §3, Joint dynamics)
         for k in ("damping", "friction"):
             x = _numbers(e, k, 1, where, source)
@@ -423,8 +445,9 @@ def _check_axis(e, where, source, moving):
         raise URDFError(f"{source}: {where}: <axis xyz={_show(e.get('xyz'))}> has no direction")
 
 
-def _check_limit(e, where, kind, source):
-    """<limit>: effort and velocity given and >= 0; lower <= upper; prismatic limits within MAX_LENGTH."""
+def _check_limit(e, where, kind, source, strict=False, quirks=None):
+    """<limit>: effort and velocity given and >= 0; prismatic limits within MAX_LENGTH; lower > upper is read as no
+    limit with an "inverted_limits" quirk (PyBullet's reading; urdfdom keeps the numbers), an error with strict."""
     values = {k: _numbers(e, k, 1, where, source) for k in ("lower", "upper", "effort", "velocity")}
     for k in ("effort", "velocity"):
         if values[k] is None:
@@ -432,12 +455,17 @@ def _check_limit(e, where, kind, source):
         if values[k][0] < 0:
             raise URDFError(f"{source}: {where}: <limit {k}={_show(e.get(k))}>: must be >= 0")
     lo, hi = (values[k][0] if values[k] else 0.0 for k in ("lower", "upper"))   # URDF default: 0
-    if lo > hi:
-        raise URDFError(f"{source}: {where}: <limit lower={_show(e.get('lower', '0'))} "
-                        f"upper={_show(e.get('upper', '0'))}>: lower > upper")
     if kind == "prismatic":
         for k in ("lower", "upper"):
             _bounded(values[k], MAX_LENGTH, "limit", e, k, where, source)
+    if lo > hi:
+        detail = f"<limit lower={_show(e.get('lower', '0'))} upper={_show(e.get('upper', '0'))}>: lower > upper"
+        if strict or quirks is None:
+            raise URDFError(f"{source}: {where}: {detail} (strict=True; by default it is read as no limit)")
+        quirks.append(Quirk("inverted_limits", where.split(" ", 1)[1].strip("'"),
+                            f"{detail}: read as no position limit, as PyBullet reads it"))
+        e.set("lower", "-inf")                 # what yourdfpy's float() then reads; the grammar checks ran above
+        e.set("upper", "inf")
 
 
 def _dangling_mimic(j, joint_names, source, strict, quirks):
@@ -697,22 +725,23 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
 
 
 def _dynamics(joints, key):
-    """<dynamics damping|friction> per velocity (nv,): 0 where absent; a free flyer's six entries are 0."""
+    """<dynamics damping|friction> per velocity (nv,): 0 where absent; a free flyer's six entries are 0, a spherical
+    joint's three take its value."""
     out = []
     for j, *_ in joints:
         if j.type == "free_flyer":
             out += [0.0] * 6
         else:
             x = getattr(j.dynamics, key, None) if j.dynamics is not None else None
-            out.append(float(x or 0.0))
+            out += [float(x or 0.0)] * (3 if j.type == "spherical" else 1)
     return np.array(out, float)
 
 
 def _unit_axis(j, source, notes):
     """The joint's unit axis (3,); scaled by its largest component first, so 1e200 or 1e-200 cannot
-    overflow or underflow the norm. A zero axis is refused (checked on the XML already). A free flyer has
-    none (zeros)."""
-    if j.type == "free_flyer":
+    overflow or underflow the norm. A zero axis is refused (checked on the XML already). A free flyer and a
+    spherical joint have none (zeros)."""
+    if j.type in _NO_AXIS:
         return np.zeros(3)
     a = np.asarray(j.axis if j.axis is not None else (1.0, 0.0, 0.0), float)
     scale = np.max(np.abs(a)) if a.shape == (3,) else 0.0
@@ -728,8 +757,8 @@ def _unit_axis(j, source, notes):
 def _limits(j):
     """(lower, upper, effort, velocity): continuous joints are unbounded, a missing lower/upper is 0 (the
     URDF default, as urdfdom reads it), a continuous joint without <limit> has unbounded effort/velocity, a
-    free flyer is unbounded."""
-    if j.type == "free_flyer":
+    free flyer and a spherical joint are unbounded."""
+    if j.type in _NO_AXIS:
         return -np.inf, np.inf, np.inf, np.inf
     L = j.limit
     get = lambda v, d: d if (L is None or v is None) else float(v)  # noqa: E731

@@ -35,6 +35,13 @@ the quirk; ``referee`` then rebuilds our model with the engine's parameters (``d
 mass/com/inertia, the engine's armature and damping added analytically) and compares again: what remains is the
 engine's precision.
 
+An MJCF file (``robot_format``: root element ``<mujoco>``) is refereed as written: MuJoCo compiles the file (its
+free joint, ball joints, armature and damping; joint springs, which the model holds as quirks, turned off), each
+joint mapped by name — a ball's qpos (w, x, y, z) against our (x, y, z, w), its qvel the body-frame ω as ours;
+Pinocchio reads it with ``buildModelFromMJCF`` (refused by name where it makes one body's joints a composite
+joint); the PyBullet and Drake adapters load URDF and refuse, naming the ball joints (or the MJCF file). The
+causes then compare the engine's bodies with the model's (``explain``; no per-link URDF ``<inertial>``).
+
 Engines are imported here only, lazily, inside the adapters: ``import manipdyn`` loads none of them.
 """
 from __future__ import annotations
@@ -56,7 +63,8 @@ from ..dynamics.crba import mass_matrix
 from ..dynamics.rnea import rnea
 from ..errors import InputError, ManipdynError, MissingExtraError
 from ..extras import install_command, require
-from ..model import FREEFLYER
+from ..io.load import robot_format
+from ..model import BALL, FREEFLYER, PRISMATIC, REVOLUTE
 from ..spatial import combine_inertias, rpy_matrix
 from .compare import random_states
 from .measure import error
@@ -148,6 +156,7 @@ class Adapter:
 
     def __init__(self, model, path):
         self.model, self.path = model, Path(path)
+        self.mjcf = robot_format(path) == "mjcf"
         self.notes = []
         self.links = {}                          # link name -> (mass, com (3,), inertia about com (3, 3))
         self.armature = np.zeros(model.nv)       # added to M's diagonal by the engine
@@ -161,7 +170,7 @@ class Adapter:
         return contextlib.nullcontext()
 
     def _perm(self, names, where):
-        """Index in the engine's dof vector of each of our 1-dof joints (by name; a free-flyer root excluded)."""
+        """Index in the engine's joint list of each of our moving joints (by name; a free-flyer root excluded)."""
         ours = self._one_dof()
         pos = {n: i for i, n in enumerate(names)}
         missing = [j for j in ours if j not in pos]
@@ -172,6 +181,16 @@ class Adapter:
 
     def _one_dof(self):
         return self.model.joint_names[1:] if self.model.floating else self.model.joint_names
+
+    def _urdf_only(self):
+        """EngineRefused for what this adapter does not take: ball joints (named), an MJCF file."""
+        balls = [self.model.joint_names[i] for i in range(self.model.njoints) if self.model.kind[i] == BALL]
+        if balls:
+            raise EngineRefused(f"{self.name}: ball joints ({', '.join(map(repr, balls))}): not supported by this "
+                                f"adapter (it loads the URDF, which has no ball joint; refereed by pinocchio and "
+                                f"mujoco)")
+        if self.mjcf:
+            raise EngineRefused(f"{self.name}: an MJCF file: this adapter loads URDF only (MJCF: pinocchio, mujoco)")
 
 
 def _rotation_xyzw(quat):
@@ -235,9 +254,13 @@ class PinocchioAdapter(Adapter):
             raise EngineRefused(f"pinocchio: {_one_line(exc)}") from exc
         pm = self.ref.pm
         self.armature = np.asarray(pm.armature, float).copy()
-        for i, body in enumerate(model.body_names):
-            Y = pm.inertias[i + 1]
-            self.links[body] = (float(Y.mass), np.array(Y.lever), np.array(Y.inertia))
+        for i, body in enumerate(model.body_names):   # per body, in our body frame; held in the frame of the
+            Y = pm.inertias[i + 1]                     # body's name (an MJCF body's frame: offset from the joint's
+            m, c, I = float(Y.mass), np.array(Y.lever), np.array(Y.inertia)     # anchor), where body_params reads it
+            fr = model.frames.get(body)
+            if fr is not None and fr.body == i:
+                c, I = fr.R.T @ (c - fr.p), fr.R.T @ I @ fr.R
+            self.links[body] = (m, c, I)
 
     def tau(self, q, v, a):
         P = _import("pinocchio")
@@ -253,6 +276,10 @@ class PinocchioAdapter(Adapter):
         return P.aba(self.ref.pm, self.ref.pd, self.ref.to_pin_q(q), v, tau).copy()
 
 
+_MJ_KIND = {0: FREEFLYER, 1: BALL, 2: PRISMATIC, 3: REVOLUTE}      # mjtJoint: free, ball, slide, hinge
+_KIND_NAME = {FREEFLYER: "free", BALL: "ball", PRISMATIC: "slide", REVOLUTE: "hinge"}
+
+
 class MujocoAdapter(Adapter):
     name = "mujoco"
 
@@ -260,15 +287,16 @@ class MujocoAdapter(Adapter):
         super().__init__(model, path)
         mj = _import("mujoco")
         self.mj = mj
-        text = stripped_urdf(path)
-        if "<mujoco" in text:
-            self.notes.append("the file carries its own <mujoco> element: removed, ours used")
-            text = re.sub(r"<mujoco\b.*?</mujoco\s*>", "", text, flags=re.S)
-        text = re.sub(r"</robot\s*>\s*$", MUJOCO_COMPILER + "</robot>", text.rstrip())
+        if not self.mjcf:
+            text = stripped_urdf(path)
+            if "<mujoco" in text:
+                self.notes.append("the file carries its own <mujoco> element: removed, ours used")
+                text = re.sub(r"<mujoco\b.*?</mujoco\s*>", "", text, flags=re.S)
+            text = re.sub(r"</robot\s*>\s*$", MUJOCO_COMPILER + "</robot>", text.rstrip())
         heard, before = [], mj.get_mju_user_warning()
         mj.set_mju_user_warning(heard.append)    # else MuJoCo appends its warnings to ./MUJOCO_LOG.TXT
-        try:
-            m = self._compile(mj, text, model)
+        try:                                     # an MJCF file: MuJoCo compiles it as written (its includes too)
+            m = mj.MjModel.from_xml_path(str(path)) if self.mjcf else self._compile(mj, text, model)
         except EngineRefused:
             raise
         except Exception as exc:
@@ -278,15 +306,22 @@ class MujocoAdapter(Adapter):
         self.notes += [f"mujoco warned: {_one_line(w)}" for w in list(dict.fromkeys(heard))[:5]]
         self.m, self.d = m, mj.MjData(m)
         m.opt.disableflags |= int(mj.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mj.mjtDisableBit.mjDSBL_CONTACT)
+        if np.any(m.jnt_stiffness):              # joint springs: read by manipdyn as quirks, not applied
+            m.opt.disableflags |= int(mj.mjtDisableBit.mjDSBL_SPRING)
+            self.notes.append("joint stiffness (springs) turned off: manipdyn reads it as a quirk, not applied")
         m.opt.gravity[:] = model.gravity
         free = [j for j in range(m.njnt) if m.jnt_type[j] == 0]                       # mjJNT_FREE
-        names = [m.joint(j).name for j in range(m.njnt) if m.jnt_type[j] in (2, 3)]   # hinge, slide
-        if any(m.jnt_type[j] not in (0, 2, 3) for j in range(m.njnt)) or len(free) != int(model.floating):
-            raise EngineRefused("mujoco: the model has ball joints, or free joints other than our free-flyer root")
-        self._perm(names, "joint names")          # refuses unless the moving joints are ours
-        one = self._one_dof()
-        self.iq = np.array([m.jnt_qposadr[m.joint(n).id] for n in one], int)
-        iv = np.array([m.jnt_dofadr[m.joint(n).id] for n in one], int)
+        if len(free) != int(model.floating):
+            raise EngineRefused("mujoco: the model has free joints other than our free-flyer root")
+        self._perm([m.joint(j).name for j in range(m.njnt) if m.jnt_type[j] != 0], "joint names")
+        ours, ids = [model.joint_index(n) for n in self._one_dof()], [m.joint(n).id for n in self._one_dof()]
+        for i, j in zip(ours, ids):
+            if _MJ_KIND[int(m.jnt_type[j])] != model.kind[i]:
+                raise EngineRefused(f"mujoco: joint {model.joint_names[i]!r} is a {_KIND_NAME[_MJ_KIND[int(m.jnt_type[j])]]}"
+                                    f" joint there, a {_KIND_NAME[int(model.kind[i])]} joint here")
+        # (our q index, its length, MuJoCo's qpos index) per joint; the dofs of each joint in our order
+        self.qmap = [(int(model.idx_q[i]), int(model.nqs[i]), int(m.jnt_qposadr[j])) for i, j in zip(ours, ids)]
+        iv = np.array([int(m.jnt_dofadr[j]) + k for i, j in zip(ours, ids) for k in range(model.nvs[i])], int)
         self.fb = None
         if model.floating:                        # qpos [x y z qw qx qy qz], qvel [linear (world); angular (body)]
             self.fq, fv = int(m.jnt_qposadr[free[0]]), int(m.jnt_dofadr[free[0]])
@@ -294,10 +329,10 @@ class MujocoAdapter(Adapter):
             iv = np.concatenate([np.arange(fv, fv + 6), iv])
         self.iv = iv
         self.armature, self.damping = m.dof_armature[self.iv].copy(), m.dof_damping[self.iv].copy()
-        for b in range(1, m.nbody):
+        for b in range(1, m.nbody):              # an unnamed body: the MJCF reader's name for it
             R = _quat_matrix(m.body_iquat[b])
-            self.links[m.body(b).name] = (float(m.body_mass[b]), m.body_ipos[b].copy(),
-                                          R @ np.diag(m.body_inertia[b]) @ R.T)
+            self.links[m.body(b).name or f"body{b}"] = (float(m.body_mass[b]), m.body_ipos[b].copy(),
+                                                        R @ np.diag(m.body_inertia[b]) @ R.T)
 
     @contextlib.contextmanager
     def session(self):
@@ -324,10 +359,11 @@ class MujocoAdapter(Adapter):
         return spec.compile()
 
     def _set(self, q, v):
+        for a, n, b in self.qmap:                # a ball's quaternion: ours (x, y, z, w), MuJoCo's (w, x, y, z)
+            self.d.qpos[b:b + n] = q[a:a + n] if n == 1 else np.roll(q[a:a + n], 1)
         if self.fb is None:
-            self.d.qpos[self.iq], self.d.qvel[self.iv] = q, v
+            self.d.qvel[self.iv] = v
             return
-        self.d.qpos[self.iq] = q[7:]
         self.d.qpos[self.fq:self.fq + 7] = np.concatenate([q[:3], q[6:7], q[3:6]])   # (w, x, y, z) first
         self.d.qvel[:] = self.fb.P(q) @ v
 
@@ -376,6 +412,7 @@ class PybulletAdapter(Adapter):
     def __init__(self, model, path):
         super().__init__(model, path)
         p = _import("pybullet")
+        self._urdf_only()
         self.p = p
         self.cid = p.connect(p.DIRECT)
         try:
@@ -450,6 +487,7 @@ class DrakeAdapter(Adapter):
     def __init__(self, model, path):
         super().__init__(model, path)
         _import("pydrake")
+        self._urdf_only()
         from pydrake.multibody.parsing import Parser
         from pydrake.multibody.plant import MultibodyPlant
         from pydrake.multibody.tree import MultibodyForces
@@ -673,17 +711,23 @@ def explain(model, adapter, inertials) -> list:
             f"{np.trace(eI[i]):.6g}; ours {model.mass[i]:.6g} kg, {np.trace(model.inertia[i]):.6g}"
             + (f" — the file's {'; '.join(quirks)}" if quirks else ""))))
     for j, name in enumerate(model.joint_names):    # ours: model.armature, model.damping (per dof, docs/design.md §3)
-        if model.nvs[j] != 1:                          # a free-flyer root: no armature or damping of its own
+        if model.kind[j] == FREEFLYER:                 # a free-flyer root: no armature or damping of its own
             continue
-        k = model.idx_v[j]
-        if _differs(adapter.armature[k], model.armature[k]):
-            causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {adapter.armature[k]:g} "
-                               f"kg m² to joint {name!r} (M's diagonal); ours {model.armature[k]:g}"))
-        if adapter.damping[k] and _differs(adapter.damping[k], model.damping[k]):
-            causes.append(dict(link=name, kind="damping", text=f"{e} applies joint damping "
-                               f"{adapter.damping[k]:g} N m s/rad to joint {name!r} (from <dynamics>); ours "
-                               f"{model.damping[k]:g}"))
+        k = slice(model.idx_v[j], model.idx_v[j] + model.nvs[j])     # a ball: its three dofs
+        a, d = adapter.armature[k], adapter.damping[k]
+        if _differs(a, model.armature[k]):
+            causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {_g(a)} kg m² to joint {name!r} "
+                               f"(M's diagonal); ours {_g(model.armature[k])}"))
+        if np.any(d) and _differs(d, model.damping[k]):
+            causes.append(dict(link=name, kind="damping", text=f"{e} applies joint damping {_g(d)} N m s/rad to "
+                               f"joint {name!r} (from <dynamics>); ours {_g(model.damping[k])}"))
     return causes
+
+
+def _g(x) -> str:
+    """A joint's per-dof values: one number when they are one (a 1-dof joint, a ball's three equal entries)."""
+    x = np.asarray(x, float)
+    return f"{x[0]:g}" if np.all(x == x[0]) else "[" + ", ".join(f"{t:g}" for t in x) + "]"
 
 
 def applied_damping(model, adapter):
@@ -849,8 +893,12 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
     Q, V, A = random_states(model, n_states, rng)
     T = rng.normal(0.0, 5.0, V.shape)
     ours = None if model.nv == 0 else _our_terms(model, Q, V, A, T, np.zeros(model.nv), np.zeros(model.nv))
-    inertials = urdf_inertials(path)
+    mjcf = robot_format(path) == "mjcf"
+    inertials = {} if mjcf else urdf_inertials(path)
     rep = RefereeReport(model.name, str(path), model.nv, n_states, seed, [])
+    if mjcf:
+        rep.notes.append("an MJCF file: each engine's bodies are compared with the model's (no per-link URDF "
+                         "<inertial> to diff against)")
     if model.nv == 0:
         rep.notes.append("no moving joint: nothing to compare")
         return rep

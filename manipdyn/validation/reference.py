@@ -28,11 +28,19 @@ class Reference:
     """A Pinocchio model of the same URDF, checked to have our joint order."""
 
     def __init__(self, model, urdf_path):
+        from ..io.load import robot_format
         P = pin()
         self.model = model
         free = model.floating or any(np.ndim(v) == 1 for v in model.locked.values())   # a locked free flyer:
         root = (P.JointModelFreeFlyer(),) if free else ()                               # its pose (7,)
-        self.pm = P.buildModelFromUrdf(str(urdf_path), *root)
+        if robot_format(urdf_path) == "mjcf":          # an MJCF file: its free joint, if any, is in the file
+            self.pm = P.buildModelFromMJCF(str(urdf_path))
+            composite = [n for n, j in zip(self.pm.names[1:], self.pm.joints[1:]) if j.shortname() == "JointModelComposite"]
+            if composite:
+                raise ManipdynError(f"{urdf_path}: Pinocchio's buildModelFromMJCF makes the joints of one body one "
+                                    f"composite joint ({', '.join(composite)}): its joints are not ours one by one")
+        else:
+            self.pm = P.buildModelFromUrdf(str(urdf_path), *root)
         if model.locked:                      # a reduced model: compare with Pinocchio's reduced model
             self.pm = P.buildReducedModel(self.pm, [self.pm.getJointId(j) for j in model.locked],
                                           self._locked_q(model.locked))

@@ -16,6 +16,9 @@ evaluated at δ = 0 (rigid constraints) agrees with ours to ≤ 3.5e-10 (four-ba
 2.4e-7 (rusr_revolute), 2.5e-5 (weld7, two_loops: the largest δ·κ) — RIGID = 1e-3, and the extrapolation
 must shrink the error at least GAIN = 100 times (measured ≥ 750 times). MuJoCo 4 includes −J̇q̇ in its
 reference acceleration (efc_aref), so moving states agree as well as states at rest.
+Ball joints (the MJCF reader's models: hand-written, under a free flyer, random trees with several joints per body,
+armature and damping): to_mjcf -> MuJoCo M and τ ≤ 1.9e-15, -> load_mjcf_string the same joints and bodies (one
+MJCF body with several joints again), parameters ≤ 5.6e-16, M and τ ≤ 1.1e-15 — OPEN.
 """
 from __future__ import annotations
 
@@ -211,3 +214,55 @@ def test_free_flyer_root_at_identity_orientation(stem):
         worst = max(worst, err(d.qfrc_inverse, md.rnea(model, q, v, a)), err(mujoco_full_m(m, d), md.mass_matrix(model, q)))
     print(f"\n{stem}: free-flyer root, M and τ against MuJoCo: {worst:.1e}")
     assert worst <= OPEN, f"{stem}: {worst:.2e}"
+
+
+# ---- ball joints: the MJCF reader's models written back ----------------------------------------------------------
+
+def _ball_cases():
+    from test_mjcf_import import BALLS, FREE_BALL, random_mjcf
+    return {"balls": BALLS, "free_ball": FREE_BALL, "random3": random_mjcf(3), "random5": random_mjcf(5)}
+
+
+@pytest.mark.parametrize("name", ["balls", "free_ball", "random3", "random5"])
+def test_ball_joints_round_trip_and_mujoco(name):
+    # a model with ball joints (armature, damping) -> to_mjcf -> MuJoCo's M and τ are ours (test_mjcf_import's
+    # conventions: ball qpos [qw qx qy qz], qvel the body-frame ω as ours), and -> load_mjcf_string -> the same model
+    from test_mjcf_import import mujoco_errors, random_state
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_mjcf_string(_ball_cases()[name])
+        text = to_mjcf(model)
+        back = md.load_mjcf_string(text)
+    assert np.any(model.kind == md.BALL)
+    assert back.joint_names == model.joint_names and np.array_equal(back.kind, model.kind)
+    assert (back.nq, back.nv) == (model.nq, model.nv) and np.array_equal(back.quat_q, model.quat_q)
+    for key in ("armature", "damping", "friction"):          # a ball's three entries: one number in the file
+        assert np.array_equal(getattr(back, key), getattr(model, key)), key
+    assert back.body_names == model.body_names               # several joints of one body: one body again
+    same = max(err(getattr(back, k), getattr(model, k)) for k in ("mass", "com", "inertia", "R0", "p0", "axis"))
+    rng, worst = np.random.default_rng(0), 0.0
+    for _ in range(10):
+        q, v, a = random_state(model, rng)
+        worst = max(worst, err(md.mass_matrix(back, q), md.mass_matrix(model, q)),
+                    err(md.rnea(back, q, v, a), md.rnea(model, q, v, a)))
+    m = mujoco.MjModel.from_xml_string(text)
+    iv = np.concatenate([np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + model.nvs[j]) for j in range(m.njnt)])
+    assert np.array_equal(m.dof_armature[iv], model.armature) and np.array_equal(m.dof_damping[iv], model.damping)
+    e = mujoco_errors(back, m)
+    print(f"\n{name}: ball joints, round trip: parameters {same:.1e}, M, τ {worst:.1e}; MuJoCo on the export {e:.1e}")
+    assert max(same, worst, e) <= OPEN       # measured ≤ 5.6e-16 (parameters), 1.1e-15 (M, τ), 1.9e-15 (MuJoCo)
+
+
+def test_ball_joint_dynamics_are_one_number_per_joint():
+    import dataclasses
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_mjcf_string(_ball_cases()["balls"])
+    k = model.idx_v[model.joint_index("shoulder")]
+    assert model.armature[k:k + 3].tolist() == [0.2] * 3 and model.damping[k:k + 3].tolist() == [1.0] * 3
+    el = [e for e in to_mjcf(model).splitlines() if 'name="shoulder"' in e]
+    assert len(el) == 1 and 'type="ball"' in el[0] and 'armature="0.2"' in el[0] and 'damping="1.0"' in el[0]
+    arm = model.armature.copy()
+    arm[k + 2] = 0.3
+    with pytest.raises(md.ModelError, match=r"'shoulder': armature \[0.2, 0.2, 0.3\] differs"):
+        to_mjcf(dataclasses.replace(model, armature=arm))

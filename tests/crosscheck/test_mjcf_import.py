@@ -9,11 +9,14 @@ Measured (this VM, MuJoCo 4.0, Pinocchio 4.1), §3 error measure:
 - round trip (aau_arm, ur5, panda, kinova, baxter, a random tree, solo12 with a free flyer): ≤ 2.2e-15 (the random
   tree; solo12 0: the text carries every number exactly) — RT = 5e-14;
 - MuJoCo, hand-written snippets (defaults, the five orientations, eulerseq, fullinertia, every primitive's inertia,
-  several joints per body, ref, a free joint, sites, <frame>) and the exports: M and τ ≤ 2.0e-15; 12 random MJCF
-  trees drawing every feature at random (random_mjcf): ≤ 4.9e-15 — MJ = 1e-13;
+  several joints per body, ref, a free joint, sites, <frame>, ball joints alone and after a slide in one body, under
+  a free flyer, with armature) and the exports: M and τ ≤ 2.0e-15; 12 random MJCF trees drawing every feature at
+  random (random_mjcf: 26 ball joints among them, 21 sharing a body with other joints): ≤ 3.8e-15 — MJ = 1e-13;
   masses, CoMs and inertias of each primitive and orientation against MuJoCo's body_* arrays ≤ 1.9e-15 —
-  MASS = 5e-14; sites and bodies against site_xpos/site_xmat, xpos/xmat ≤ 1.3e-15 (random trees) — SITE = 5e-14;
-- Pinocchio's buildModelFromMJCF on the exports and on snippets it reads as MuJoCo does: ≤ 8.9e-16 — PIN = 5e-14;
+  MASS = 5e-14; sites and bodies against site_xpos/site_xmat, xpos/xmat ≤ 2.0e-15 (random trees) — SITE = 5e-14;
+- Pinocchio's buildModelFromMJCF (its JointModelSpherical for a ball, q [x y z w] as ours) on the exports, on
+  snippets it reads as MuJoCo does and on 8 random trees of the features it reads as MuJoCo (random_mjcf(pin=True),
+  11 ball joints): ≤ 4.3e-15 — PIN = 5e-14;
 - third-party files (gymnasium's MuJoCo assets, pybullet_data/mjcf): tests/crosscheck/test_mjcf_third_party.py, docs/mjcf.md.
 """
 from __future__ import annotations
@@ -32,10 +35,10 @@ from manipdyn.validation.zoo import arm_paths, floating_paths
 mujoco = pytest.importorskip("mujoco")
 
 RT = 5e-14      # measured ≤ 2.2e-15 (round trip, M and τ)
-MJ = 1e-13      # measured ≤ 4.9e-15 (M, τ against MuJoCo; random_mjcf seed 6)
+MJ = 1e-13      # measured ≤ 3.8e-15 (M, τ against MuJoCo; random_mjcf seed 7, 2 balls)
 MASS = 5e-14    # measured ≤ 1.9e-15 (mass, CoM, inertia against MuJoCo's body arrays)
-SITE = 5e-14    # measured ≤ 1.3e-15 (site and body placements against MuJoCo; random_mjcf seed 5)
-PIN = 5e-14     # measured ≤ 8.9e-16 (M, τ against Pinocchio's buildModelFromMJCF)
+SITE = 5e-14    # measured ≤ 2.0e-15 (site and body placements against MuJoCo; random_mjcf seed 11)
+PIN = 5e-14     # measured ≤ 4.3e-15 (M, τ against Pinocchio's buildModelFromMJCF; random_mjcf(0, pin=True))
 
 
 def quiet(f, *a, **kw):
@@ -45,19 +48,38 @@ def quiet(f, *a, **kw):
 
 
 def random_state(model, rng):
-    """q (free flyer: position, unit quaternion x y z w; else uniform in [−π, π]), v, a ~ N(0, 1)."""
+    """q (free flyer: position ~ N(0, 1); every quaternion x y z w (free flyer, ball) uniform on S³; the rest
+    uniform in [−π, π]), v, a ~ N(0, 1)."""
     q = rng.uniform(-np.pi, np.pi, model.nq)
     if model.floating:
+        q[:3] = rng.normal(size=3)
+    for k in model.quat_q:
         quat = rng.normal(size=4)
-        q[:7] = np.concatenate([rng.normal(size=3), quat / np.linalg.norm(quat)])
+        q[k:k + 4] = quat / np.linalg.norm(quat)
     return q, rng.normal(size=model.nv), rng.normal(size=model.nv)
+
+
+def mujoco_qpos(model, m, q):
+    """MuJoCo's qpos of our q, joint by joint (the reader's order is MuJoCo's): quaternions w x y z first (ours
+    x y z w: a free joint [x y z qw qx qy qz], a ball [qw qx qy qz]); hinge and slide the same number."""
+    qpos = np.zeros(m.nq)
+    for j in range(m.njnt):
+        iq_, oq = m.jnt_qposadr[j], model.idx_q[j]
+        if model.kind[j] == md.FREEFLYER:
+            qpos[iq_:iq_ + 7] = np.concatenate([q[oq:oq + 3], [q[oq + 6]], q[oq + 3:oq + 6]])
+        elif model.kind[j] == md.BALL:
+            qpos[iq_:iq_ + 4] = np.concatenate([[q[oq + 3]], q[oq:oq + 3]])
+        else:
+            qpos[iq_] = q[oq]
+    return qpos
 
 
 def mujoco_errors(model, m, n=5, seed=0):
     """Worst err of our M and τ against MuJoCo's (M = mj_fullM, τ = mj_rne with q̈ + armature ⊙ q̈) over n random
     states, MuJoCo's conventions converted here: free joint qpos [x y z qw qx qy qz], qvel [R v_lin (world);
     ω (body)], qacc's linear part the origin's world acceleration R (a_lin + ω × v_lin), its generalized force
-    and M rows for the linear dofs in world axes (τ_mj = Tᵀ τ, M_mj = Tᵀ M T with v = T v_mj)."""
+    and M rows for the linear dofs in world axes (τ_mj = Tᵀ τ, M_mj = Tᵀ M T with v = T v_mj); a ball joint's
+    qpos [qw qx qy qz], its qvel and qacc the body-frame ω, ω̇ as ours."""
     names = [m.joint(j).name or f"joint{j}" for j in range(m.njnt)]         # the reader's names of unnamed ones
     assert names == list(model.joint_names), (names, model.joint_names)
     if not model.nv:
@@ -67,22 +89,20 @@ def mujoco_errors(model, m, n=5, seed=0):
         if m.njnt else np.zeros(0, int)
     for _ in range(n):
         q, v, a = random_state(model, rng)
-        qpos, qvel, qacc = np.zeros(m.nq), np.zeros(m.nv), np.zeros(m.nv)
+        qpos, qvel, qacc = mujoco_qpos(model, m, q), np.zeros(m.nv), np.zeros(m.nv)
         for j in range(m.njnt):
-            i, iq_, iv_ = j, m.jnt_qposadr[j], m.jnt_dofadr[j]
-            oq, ov = model.idx_q[i], model.idx_v[i]
-            if model.kind[i] == md.FREEFLYER:
-                qpos[iq_:iq_ + 7] = np.concatenate([q[oq:oq + 3], [q[oq + 6]], q[oq + 3:oq + 6]])
-            else:
-                qpos[iq_], qvel[iv_], qacc[iv_] = q[oq], v[ov], a[ov]
+            if model.kind[j] != md.FREEFLYER:
+                iv_, ov, n = m.jnt_dofadr[j], model.idx_v[j], model.nvs[j]
+                qvel[iv_:iv_ + n], qacc[iv_:iv_ + n] = v[ov:ov + n], a[ov:ov + n]
         T = np.eye(model.nv)
-        if model.floating:
-            d.qpos[:] = qpos
-            mujoco.mj_kinematics(m, d)
-            R = d.xmat[m.jnt_bodyid[0]].reshape(3, 3)
-            T[:3, :3] = R.T
-            qvel[:3], qvel[3:6] = R @ v[:3], v[3:6]
-            qacc[:3], qacc[3:6] = R @ (a[:3] + np.cross(v[3:6], v[:3])), a[3:6]
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        for j in np.flatnonzero(model.kind == md.FREEFLYER):    # every free body (objects beside a robot too)
+            R, o, k = d.xmat[m.jnt_bodyid[j]].reshape(3, 3), model.idx_v[j], m.jnt_dofadr[j]
+            T[o:o + 3, o:o + 3] = R.T
+            w, x = v[o + 3:o + 6], v[o:o + 3]
+            qvel[k:k + 3], qvel[k + 3:k + 6] = R @ x, w
+            qacc[k:k + 3], qacc[k + 3:k + 6] = R @ (a[o:o + 3] + np.cross(w, x)), a[o + 3:o + 6]
         d.qpos[:], d.qvel[:] = qpos, qvel
         mujoco.mj_forward(m, d)
         d.qacc[:] = qacc
@@ -91,6 +111,9 @@ def mujoco_errors(model, m, n=5, seed=0):
         M_mj = mujoco_full_m(m, d)                            # with MuJoCo's armature, as ours (model.armature)
         tau_mj += m.dof_armature * qacc                # mj_rne leaves it out; rnea has it (Pinocchio's)
         tau, M = md.rnea(model, q, v, a), md.mass_matrix(model, q)
+        for o in model.idx_v[model.kind == md.FREEFLYER]:     # MuJoCo's armature acts on d/dt of the world-frame
+            arm = model.armature[o:o + 3]                     # linear velocity, ours (Pinocchio's) on the body
+            tau[o:o + 3] += arm * np.cross(v[o + 3:o + 6], v[o:o + 3])   # frame's: quirk "free_armature"
         worst = max(worst, err(T.T @ tau, tau_mj[iv]), err(T.T @ M @ T, M_mj[np.ix_(iv, iv)]))
     return worst
 
@@ -252,7 +275,29 @@ FRAMES = """<mujoco model="frames"><compiler angle="degree"/>
    <joint name="jd" axis="0 1 1" pos="0 0 0.1"/></frame></body>
 </worldbody></mujoco>"""
 
-SNIPPETS = {"frames": FRAMES, "primitives": PRIMITIVES, "orientations": ORIENTATIONS, "defaults": DEFAULTS, "multi": MULTI,
+BALLS = """<mujoco model="balls"><compiler angle="radian"/>
+<worldbody>
+ <body name="upper" pos="0 0 1" euler="0.2 -0.1 0.3"><joint name="yaw" axis="0 0 1" armature="0.05"/>
+  <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+  <body name="arm" pos="0.3 0 0" quat="0.9 0.1 -0.2 0.3"><joint name="shoulder" type="ball" pos="0.02 0.01 -0.03"
+    armature="0.2" damping="1"/>
+   <geom type="box" size="0.15 0.03 0.02" pos="0.15 0 0"/><site name="elbow_site" pos="0.3 0 0" euler="0 0.5 0"/>
+   <body name="forearm" pos="0.3 0 0"><joint name="slide" type="slide" axis="1 0.2 0"/>
+    <joint name="wrist" type="ball" pos="0 0.05 0" armature="0.01"/>
+    <inertial pos="0.1 0.02 0" quat="0.8 0.2 0 0.1" mass="0.7" diaginertia="0.01 0.02 0.025"/>
+    <site name="hand" pos="0.2 0 0" zaxis="1 1 0"/></body></body></body>
+</worldbody></mujoco>"""
+
+FREE_BALL = """<mujoco model="free_ball">
+<worldbody>
+ <body name="free" pos="1 0 1" euler="10 20 30"><freejoint name="root"/><geom type="sphere" size="0.1"/>
+  <body name="pendulum" pos="0 0 -0.1"><joint name="pivot" type="ball" pos="0 0 0.05" armature="0.3"/>
+   <geom type="cylinder" fromto="0 0 0 0 0.1 -0.3" size="0.02"/><site name="tip" pos="0 0.1 -0.3"/>
+   <body name="bob" pos="0 0.1 -0.3"><joint name="spin" type="ball"/><geom type="box" size="0.05 0.02 0.01"/>
+   </body></body></body>
+</worldbody></mujoco>"""
+
+SNIPPETS = {"balls": BALLS, "free_ball": FREE_BALL, "frames": FRAMES, "primitives": PRIMITIVES, "orientations": ORIENTATIONS, "defaults": DEFAULTS, "multi": MULTI,
             "free": FREE}
 
 
@@ -276,8 +321,10 @@ _UNIT = " ".join(repr(float(x)) for x in (np.array([1.0, 2.0, 3.0]) / np.sqrt(14
 
 # Pinocchio 4.1's buildModelFromMJCF, where it differs from MuJoCo 4.0 (found here; MuJoCo is the reference):
 # it reads only the first top-level body, does not normalise an axisangle's axis, ignores eulerseq, <option
-# gravity> and joint ref, and stops (IndexError) on childclass / class="main". Its cases avoid those features.
+# gravity> and joint ref, stops (IndexError) on childclass / class="main", and leaves out the bodies inside a <frame>
+# (a "No such node (body)" error, or fewer joints). Its cases avoid those features.
 PIN_CASES = {
+    "balls": BALLS, "free_ball": FREE_BALL,
     "orientations": ORIENTATIONS.replace(' eulerseq="zYx"', "").replace('axisangle="1 2 3 50"', f'axisangle="{_UNIT} 50"'),
     "multi": MULTI.split('<body name="welded"')[0].replace(' ref="0.3"', "").replace(' ref="-0.4"', "")
                   .replace(' ref="0.05"', "") + "</worldbody></mujoco>",
@@ -319,17 +366,14 @@ def test_body_inertias_against_mujoco(name):
     assert worst <= MASS
 
 
-@pytest.mark.parametrize("name", ["multi", "free", "frames"])
+@pytest.mark.parametrize("name", ["multi", "free", "frames", "balls", "free_ball"])
 def test_sites_and_bodies_are_frames_at_mujocos_placements(name):
     ours = quiet(md.load_mjcf_string, SNIPPETS[name])
     m = mujoco.MjModel.from_xml_string(SNIPPETS[name])
     d, rng, worst = mujoco.MjData(m), np.random.default_rng(2), 0.0
     for _ in range(3):
         q, _, _ = random_state(ours, rng)
-        qpos = q.copy()
-        if ours.floating:
-            qpos[3:7] = np.concatenate([[q[6]], q[3:6]])
-        d.qpos[:] = qpos
+        d.qpos[:] = mujoco_qpos(ours, m, q)
         mujoco.mj_kinematics(m, d)
         for k in range(m.nsite):
             R, p = md.frame_placement(ours, q, m.site(k).name)
@@ -445,63 +489,69 @@ def _n(rng, k, s=1.0):
     return " ".join(repr(float(x)) for x in rng.normal(size=k) * s)
 
 
-def _orientation(rng, deg):
-    kind = rng.choice(["none", "quat", "euler", "axisangle", "xyaxes", "zaxis"])
+def _orientation(rng, deg, pin=False):
+    kind = rng.choice(["none", "quat", "euler", "xyaxes", "zaxis"] + ([] if pin else ["axisangle"]))
     ang = lambda: repr(float(rng.uniform(-180, 180) if deg else rng.uniform(-3, 3)))  # noqa: E731
     return {"none": "", "quat": f'quat="{_n(rng, 4)}"', "euler": f'euler="{ang()} {ang()} {ang()}"',
             "axisangle": f'axisangle="{_n(rng, 3)} {ang()}"', "xyaxes": f'xyaxes="{_n(rng, 6)}"',
             "zaxis": f'zaxis="{_n(rng, 3)}"'}[kind]
 
 
-def _geom(rng, deg):
+def _geom(rng, deg, pin=False):
     kind = rng.choice(["sphere", "capsule", "cylinder", "box", "ellipsoid"])
     size = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}[kind]
     size = " ".join(repr(float(x)) for x in rng.uniform(0.02, 0.2, size))
     mass = f' mass="{_f(rng.uniform(0.1, 3))}"' if rng.random() < 0.3 else ""
     if kind in ("capsule", "cylinder") and rng.random() < 0.5:
         return f'<geom type="{kind}" size="{size.split()[0]}" fromto="{_n(rng, 6, 0.2)}"{mass}/>'
-    return f'<geom type="{kind}" size="{size}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}{mass}/>'
+    return f'<geom type="{kind}" size="{size}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg, pin)}{mass}/>'
 
 
-def random_mjcf(seed, n=7):
+def random_mjcf(seed, n=7, pin=False):
     """An MJCF tree of n bodies drawing each feature at random: angle unit, eulerseq, every orientation form, defaults
-    with childclass, <frame>, 0-3 hinge/slide joints per body with anchors and ref, <inertial> diag or full or the
-    geoms' inertia, sites."""
+    with childclass, <frame>, 0-3 hinge/slide/ball joints per body with anchors, ref and armature, <inertial> diag or
+    full or the geoms' inertia, sites. pin=True: without what Pinocchio 4.1's buildModelFromMJCF reads otherwise
+    than MuJoCo (PIN_CASES below: eulerseq, ref, childclass, axisangle; one top-level body; and <frame>, whose
+    bodies it leaves out)."""
     rng = np.random.default_rng(seed)
     deg = bool(rng.random() < 0.5)
     seq = "".join(rng.choice(list("xyzXYZ"), 3))
-    out = [f'<mujoco model="random{seed}"><compiler angle="{"degree" if deg else "radian"}" eulerseq="{seq}"/>',
+    out = [f'<mujoco model="random{seed}"><compiler angle="{"degree" if deg else "radian"}"'
+           + ("/>" if pin else f' eulerseq="{seq}"/>'),
            f'<default><geom density="{_f(rng.uniform(300, 3000))}"/><default class="c"><joint axis="{_n(rng, 3)}"/>'
            f'<geom type="box" size="0.05 0.06 0.07"/></default></default><worldbody>']
     close = []
     for k in range(n):
-        depth_back = int(rng.integers(0, len(close) + 1)) if k else 0
+        depth_back = int(rng.integers(0, len(close) + (0 if pin else 1))) if k else 0
         for _ in range(depth_back):
             out.append(close.pop())
-        cc = ' childclass="c"' if rng.random() < 0.2 else ""
-        if rng.random() < 0.2:
-            out.append(f'<frame pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}>')
+        cc = ' childclass="c"' if rng.random() < 0.2 and not pin else ""
+        if rng.random() < 0.2 and not pin:
+            out.append(f'<frame pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg, pin)}>')
             close.append("</frame>")
-        out.append(f'<body name="b{k}" pos="{_n(rng, 3, 0.3)}" {_orientation(rng, deg)}{cc}>')
+        out.append(f'<body name="b{k}" pos="{_n(rng, 3, 0.3)}" {_orientation(rng, deg, pin)}{cc}>')
         close.append("</body>")
+        ball = False                  # MuJoCo refuses a rotation after a ball in one body, and over 6 dofs in one
         for j in range(int(rng.integers(0 if k else 1, 4))):
-            kind = "slide" if rng.random() < 0.3 else "hinge"
-            ref = f' ref="{_f(rng.uniform(-1, 1))}"' if rng.random() < 0.2 else ""
+            kind = "slide" if ball else str(rng.choice(["hinge", "hinge", "slide", "ball"]))
+            ball = ball or kind == "ball"
+            ref = f' ref="{_f(rng.uniform(-1, 1))}"' if rng.random() < 0.2 and not pin else ""
             axis = "" if cc and rng.random() < 0.5 else f' axis="{_n(rng, 3)}"'
-            out.append(f'<joint name="j{k}_{j}" type="{kind}" pos="{_n(rng, 3, 0.1)}"{axis}{ref}/>')
+            arm = f' armature="{_f(rng.uniform(0, 0.5))}"' if rng.random() < 0.3 else ""
+            out.append(f'<joint name="j{k}_{j}" type="{kind}" pos="{_n(rng, 3, 0.1)}"{axis}{ref}{arm}/>')
         r = rng.random()
         if r < 0.3:
             I = rng.uniform(0.05, 0.1, 3)                                         # the triangle inequality holds
-            out.append(f'<inertial pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)} mass="{_f(rng.uniform(0.5, 3))}" '
+            out.append(f'<inertial pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg, pin)} mass="{_f(rng.uniform(0.5, 3))}" '
                        f'diaginertia="{_f(I[0])} {_f(I[1])} {_f((I[0] + I[1]) * 0.7)}"/>')
         elif r < 0.45:
             Q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
             I = Q @ np.diag(rng.uniform(0.05, 0.1, 3)) @ Q.T                       # principal moments: a triangle
             out.append(f'<inertial pos="{_n(rng, 3, 0.1)}" mass="{_f(rng.uniform(0.5, 3))}" fullinertia="'
                        + " ".join(repr(float(x)) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])) + '"/>')
-        out += [_geom(rng, deg) for _ in range(int(rng.integers(1, 3)))]
+        out += [_geom(rng, deg, pin) for _ in range(int(rng.integers(1, 3)))]
         if rng.random() < 0.5:
-            out.append(f'<site name="s{k}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg)}/>')
+            out.append(f'<site name="s{k}" pos="{_n(rng, 3, 0.1)}" {_orientation(rng, deg, pin)}/>')
     out += close[::-1] + ["</worldbody></mujoco>"]
     return "\n".join(out)
 
@@ -513,10 +563,29 @@ def test_random_mjcf_against_mujoco(seed):
     e = mujoco_errors(ours, m, seed=seed)
     d, rng, placed = mujoco.MjData(m), np.random.default_rng(seed), 0.0
     q, _, _ = random_state(ours, rng)
-    d.qpos[:] = q
+    d.qpos[:] = mujoco_qpos(ours, m, q)
     mujoco.mj_kinematics(m, d)
     for k in range(m.nsite):
         R, p = md.frame_placement(ours, q, m.site(k).name)
         placed = max(placed, err(p, d.site_xpos[k]), err(R, d.site_xmat[k].reshape(3, 3)))
     print(f"\nrandom MJCF {seed} (nv = {ours.nv}): M, τ {e:.1e}, sites {placed:.1e}")
     assert e <= MJ and placed <= SITE
+
+
+def test_random_mjcf_draws_ball_joints_alone_and_with_others_in_one_body():
+    # the random trees cover what the ball tests are for: a ball alone in its body and after other joints in one
+    models = [quiet(md.load_mjcf_string, random_mjcf(s)) for s in range(12)]
+    balls = [(m, i) for m in models for i in range(m.njoints) if m.kind[i] == md.BALL]
+    shared = [(m, i) for m, i in balls if ":" in m.body_names[i] or f"{m.body_names[i]}:" in " ".join(m.body_names)]
+    assert len(balls) >= 20 and len(shared) >= 10 and len(balls) > len(shared)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_mjcf_against_pinocchio(seed, tmp_path):
+    pytest.importorskip("pinocchio")
+    text = random_mjcf(seed, pin=True)
+    ours = quiet(md.load_mjcf_string, text)
+    e = pin_errors(ours, _write(tmp_path, f"random{seed}", text), seed=seed)
+    print(f"\nrandom MJCF {seed} (Pinocchio's subset, nv = {ours.nv}, {int(np.sum(ours.kind == md.BALL))} ball(s)): "
+          f"M, τ against Pinocchio {e:.1e}")
+    assert e <= PIN

@@ -102,13 +102,6 @@ REFUSED.update({
                                      j1_limit='<limit lower="-1e7" upper="1" effort="1" velocity="1"/>'),
                                ["joint 'j1'", "<limit lower='-1e7'>", "beyond"]),
     # limits
-    "limit-lower-above-upper": (robot(j1_limit='<limit lower="1" upper="-1" effort="1" velocity="1"/>'),
-                                ["joint 'j1'", "lower > upper"]),
-    "limit-default-upper-below-lower": (robot(j1_limit='<limit lower="0.5" effort="1" velocity="1"/>'),
-                                        ["joint 'j1'", "lower > upper"]),
-    "limit-prismatic-ordering": (robot(j1_type="prismatic",
-                                       j1_limit='<limit lower="0.2" upper="0.1" effort="1" velocity="1"/>'),
-                                 ["joint 'j1'", "lower > upper"]),
     "limit-negative-effort": (robot(j1_limit='<limit lower="-1" upper="1" effort="-1" velocity="1"/>'),
                               ["joint 'j1'", "<limit effort='-1'>", ">= 0"]),
     "limit-negative-velocity": (robot(j1_limit='<limit lower="-1" upper="1" effort="1" velocity="-0.5"/>'),
@@ -119,9 +112,6 @@ REFUSED.update({
                           ["joint 'j1'", "<limit> has no velocity"]),
     "limit-missing-revolute": (robot(j1_limit=""), ["joint 'j1'", "revolute joint needs <limit"]),
     "limit-missing-prismatic": (robot(j1_type="prismatic", j1_limit=""), ["joint 'j1'", "prismatic joint needs <limit"]),
-    "limit-continuous-ordering": (robot(j1_type="continuous",
-                                        j1_limit='<limit lower="3" upper="-3" effort="1" velocity="1"/>'),
-                                  ["joint 'j1'", "lower > upper"]),
     # mimic
     "mimic-self": (robot(j1='<mimic joint="j1"/>'), ["joint 'j1'", "mimics itself"]),
     "mimic-no-joint-attribute": (robot(j1='<mimic multiplier="2"/>'), ["joint 'j1'", "<mimic joint=None>"]),
@@ -145,6 +135,43 @@ def test_refused_with_a_named_error(case):
     assert msg.startswith("structure.urdf: "), msg
     for w in words:
         assert w in msg, f"{w!r} not in {msg!r}"
+
+
+INVERTED = {       # <limit> with lower > upper: PyBullet reads no limit, urdfdom keeps the numbers, strict refuses
+    "revolute": dict(j1_limit='<limit lower="1" upper="-1" effort="1" velocity="1"/>'),
+    "default-upper": dict(j1_limit='<limit lower="0.5" effort="1" velocity="1"/>'),
+    "prismatic": dict(j1_type="prismatic", j1_limit='<limit lower="0.2" upper="0.1" effort="1" velocity="1"/>'),
+    "continuous": dict(j1_type="continuous", j1_limit='<limit lower="3" upper="-3" effort="1" velocity="1"/>'),
+}
+
+
+@pytest.mark.parametrize("case", list(INVERTED))
+def test_inverted_limits_are_no_limit_with_a_quirk_or_refused_when_strict(case):
+    text = robot(**INVERTED[case])
+    with pytest.warns(UserWarning, match="lower > upper"):
+        model = load_urdf_string(text, source="structure.urdf")
+    assert [(k.kind, k.name) for k in model.quirks if k.kind == "inverted_limits"] == [("inverted_limits", "j1")]
+    assert (model.lower[0], model.upper[0]) == (-np.inf, np.inf)
+    free = load_urdf_string(robot(**{**INVERTED[case], "j1_limit": LIMIT}), source="structure.urdf")
+    q, v, a = np.array([0.3, -0.7]), np.array([1.0, 2.0]), np.array([-0.5, 0.4])
+    assert np.array_equal(rnea(model, q, v, a), rnea(free, q, v, a))     # limits never enter the dynamics
+    with pytest.raises(URDFError, match=r"joint 'j1': <limit lower=.*lower > upper \(strict=True"):
+        load_urdf_string(text, source="structure.urdf", strict=True)
+
+
+@pytest.mark.parametrize("before,after", [("\n  \t", ""), ("", "\0"), ("\r\n", "\n\0\0\n")])
+def test_space_before_the_declaration_and_trailing_nul_are_read_with_a_quirk(before, after):
+    """libxml2 refuses both; urdfdom, MuJoCo and PyBullet read such files (pybullet_data's diff_ring.urdf and
+    humanoid.urdf): the bytes are removed, the model is the clean file's."""
+    with pytest.warns(UserWarning, match="removed"):
+        model = load_urdf_string((before + robot() + after).encode(), source="structure.urdf")
+    assert [k.kind for k in model.quirks] == ["xml_text"]
+    clean = load_urdf_string(robot(), source="structure.urdf")
+    assert np.array_equal(model.mass, clean.mass) and np.array_equal(model.p0, clean.p0)
+    refused = {"text before the declaration": "x" + robot(), "NUL inside": robot().replace("<link", "\0<link", 1)}
+    for text in refused.values():
+        with pytest.raises(URDFError, match="malformed XML"):
+            load_urdf_string(text, source="structure.urdf")
 
 
 @pytest.mark.parametrize("target", ["nowhere", "l2"])          # no such joint; a link's name

@@ -235,7 +235,7 @@ def test_xml_declaration_version_is_ignored_as_pinocchio_does(declaration, quirk
 @pytest.mark.parametrize("declaration, words", [
     ('<?xml version=?>', "malformed XML"), ('<?xml version=""?>', "malformed XML"),
     ('<?xml encoding="UTF-8"?>', "malformed XML"), ('<?xml version="0.0" standalone="maybe"?>', "malformed XML"),
-    ('<?xml version="0.0" encoding="bogus"?>', "malformed XML"), (' <?xml version="0.0"?>', "malformed XML"),
+    ('<?xml version="0.0" encoding="bogus"?>', "malformed XML"), ('x <?xml version="0.0"?>', "malformed XML"),
     ('<?xml version="0.0"?><!DOCTYPE robot>', "DOCTYPE/ENTITY declarations are refused"),
     ('<?xml version="0.0"?><!DOCTYPE r [<!ENTITY a "aaaa">]>', "DOCTYPE/ENTITY declarations are refused")])
 def test_other_malformed_declarations_stay_refused(declaration, words):
