@@ -122,6 +122,9 @@ QUIRK_KINDS = {
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
     "joint_dynamics": "an MJCF joint's stiffness, springref or springdamper is nonzero: read, not applied yet (its "
                       "armature, damping and frictionloss are applied: Model.armature, damping, friction)",
+    "free_armature": "an MJCF free joint's armature: applied as Pinocchio applies model.armature, armature ⊙ v̇ with v the "
+                     "body-frame twist; MuJoCo adds it to d/dt of its world-frame linear velocity, so its τ differs "
+                     "by armature · R (ω × v_lin) on the linear rows (M and the energy are the same)",
     "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
                  "qpos and q = 0 is not the pose drawn in the file",
     "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
@@ -232,7 +235,8 @@ class Model:
                 value.setflags(write=False)
         free = [self.joint_names[i] for i in range(self.njoints) if self.kind[i] == FREEFLYER and self.parent[i] >= 0]
         if free:
-            raise InputError(f"model {self.name!r}: a free flyer must be the root joint; {free[0]!r} is not")
+            raise InputError(f"model {self.name!r}: a free flyer hangs from the base (a free body); {free[0]!r} has a "
+                             f"parent body")
         for c in self.constraints:                            # a coupling row sums joint angles and displacements
             a, b = (c.parent, c.child) if c.type == "coupling" else (-1, -1)
             while a != b:
@@ -295,7 +299,8 @@ class Model:
 
     @property
     def floating(self) -> bool:
-        """True when the root joint is a free flyer (nq ≠ nv)."""
+        """True when the root joint (joint 0) is a free flyer: a floating-base robot. Further free bodies (MJCF
+        objects beside a robot) are free flyers hanging from the base too, without making the model floating."""
         return bool(self.njoints and self.kind[0] == FREEFLYER)
 
     def frame(self, name: str) -> Frame:

@@ -344,18 +344,20 @@ def _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch):
 
 
 def _qdot(model):
-    """q̇(q, v) (nq,): v for 1-dof joints; a free-flyer root's position moves with R v_lin (world axes); every
+    """q̇(q, v) (nq,): v for 1-dof joints; a free flyer's position moves with R v_lin (world axes); every
     quaternion (free flyer, ball joint) with ½ quat ⊗ (ω, 0) (body-frame ω)."""
     if not model.quat_q.size:
         return lambda q, v: v
     one = np.flatnonzero(model.nqs == 1)
     one_q, one_v = model.idx_q[one], model.idx_v[one]
+    free = np.flatnonzero(model.kind == FREEFLYER)
+    free_q, free_v = model.idx_q[free], model.idx_v[free]
 
     def qdot(q, v):
         out = np.empty(model.nq)
         out[one_q] = v[one_v]
-        if model.floating:
-            out[:3] = np.array(quat_rotation(*q[3:7])).reshape(3, 3) @ v[:3]
+        for k, r in zip(free_q, free_v):
+            out[k:k + 3] = np.array(quat_rotation(*q[k + 3:k + 7])).reshape(3, 3) @ v[r:r + 3]
         for k, r in zip(model.quat_q, model.quat_v):
             x, y, z, w = q[k:k + 4]
             a, b, c = v[r:r + 3]

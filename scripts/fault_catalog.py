@@ -66,6 +66,9 @@ _MJCF_BALL = "tests/crosscheck/test_mjcf_ball_humanoid.py"
 _ENGINES_MJCF = "tests/crosscheck/test_engines_mjcf.py"
 _MJCF_EQ = "tests/crosscheck/test_mjcf_equality.py"
 _ENGINES_FLOAT = "tests/crosscheck/test_engines_floating.py"
+_BALL_SIM = "tests/unit/test_ball_simulation.py"
+_BALL_LOOPS = "tests/crosscheck/test_ball_closures.py"
+_BALL_VIZ = "tests/viz/test_ball_playback.py"
 
 # The tests written to hold each area to an independent reference, run right after a fault's own tests.
 AREA_TESTS = {
@@ -219,8 +222,8 @@ FAULTS = (
     Fault("lagrange-free-flyer-bracket-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
           "        out[:, b, :] -= np.swapaxes(ad, 1, 2) @ M[:, b, :]\n",
           "",
-          (_TERMS + "::test_coriolis_two_routes_and_its_identities", _FLOAT), "free-flyer C without the third bracket term −ad_ξᵀ M (Christoffel symbols as if the root's "
-          "directions commuted)"),
+          (_TERMS + "::test_coriolis_two_routes_and_its_identities", _FLOAT), "free-flyer (and ball) C without the third bracket term −ad_ξᵀ M (Christoffel symbols as if "
+          "the quaternion blocks' directions commuted)"),
     Fault("lagrange-dM-lift-rule-dropped", "lagrange", "manipdyn/dynamics/lagrange.py",
           "            dJ[:, :3, lift] = np.cross(np.swapaxes(a[:, lift], 1, 2), Jv[:, :, k, None], axis=1)\n",
           "",
@@ -532,7 +535,33 @@ FAULTS = (
     Fault("integrate-rkmk-bracket-sign", "integrators", "manipdyn/simulation.py",
           "out[:, b] += 0.5 * a1 + ad(xi[:, b], a1) / 12.0",
           "out[:, b] += -0.5 * a1 + ad(xi[:, b], a1) / 12.0",
-          ("tests/unit/test_floating_simulate.py",), "RK4 on a free flyer with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+          ("tests/unit/test_floating_simulate.py", _BALL_SIM),
+          "RK4 on a free flyer or a ball joint with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+    Fault("adaptive-free-position-body-frame", "integrators", "manipdyn/simulation.py",
+          "out[k:k + 3] = np.array(quat_rotation(*q[k + 3:k + 7])).reshape(3, 3) @ v[r:r + 3]",
+          "out[k:k + 3] = v[r:r + 3]",
+          ("tests/unit/test_free_bodies.py",), "the adaptive reference moves a free body's position by its body-frame "
+          "linear velocity (q̇ = v), not R v"),
+    Fault("integrate-rkmk-ball-block-dropped", "integrators", "manipdyn/simulation.py",
+          "              if k == BALL or k == FREEFLYER]",
+          "              if k == FREEFLYER]",
+          (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
+          "RKMK without a ball joint's dexp⁻¹ block (ξ̇ = v on the ball's 3 entries): second order"),
+    Fault("integrate-rkmk-ball-bracket-order", "integrators", "manipdyn/simulation.py",
+          "            return np.cross(xi, w)",
+          "            return np.cross(w, xi)",
+          (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
+          "the ball block's so(3) bracket [ξ, w] taken as w × ξ (both dexp⁻¹ terms' signs flipped): second order"),
+    Fault("integrate-adaptive-quaternion-not-renormalised", "integrators", "manipdyn/simulation.py",
+          "        Y[:, k:k + 4] /= np.linalg.norm(Y[:, k:k + 4], axis=1, keepdims=True)",
+          "        pass",
+          (_BALL_SIM + "::test_quaternions_stay_unit_and_energy_is_conserved",),
+          "the adaptive integrator returns its quaternions as DOP853 leaves them (off unit norm by its tolerance)"),
+    Fault("closure-ball-held-in-assembly", "constraints", "manipdyn/constraints/dynamics.py",
+          "and (world or model.kind[j] != FREEFLYER)])",
+          "and (world or model.nqs[j] == 1)])",
+          (_BALL_LOOPS + "::test_closure_holds_at_qpos0_and_after_assembly",),
+          "assembly and projection hold ball joints as they hold a free-flyer root (only 1-dof joints move)"),
     # ---------------------------------------------------------------- the chapter's SPM model (examples/spm.py)
     Fault("spm-eq59a-drop-term", "spm", "manipdyn/examples/spm.py",
           "Ad = np.cross(vd, L.w) + np.cross(L.v, wd)",
@@ -655,6 +684,17 @@ FAULTS = (
           "            pass",
           ("tests/viz/test_play_signals.py",),
           "a closed chain's passive rates taken from finite differences instead of the closures"),
+    Fault("viz-quaternion-nlerp", "viz", "manipdyn/viz/scene.py",
+          "    Qf[:, quats] = turned[:, quats]",
+          "    Qf[:, quats] = normalize(model, Qf)[:, quats]",
+          (_BALL_VIZ + "::test_ball_quaternion_turns_along_the_shorter_arc",),
+          "playback interpolates quaternions by normalised lerp of the samples (lags a 2.5 rad turn by 0.068 rad, "
+          "takes the long way to a sample given as −q)"),
+    Fault("viz-ball-rates-by-gradient", "viz", "manipdyn/viz/plots.py",
+          "    if model.quat_q.size:\n        lo, hi",
+          "    if model.floating:\n        lo, hi",
+          (_BALL_VIZ + "::test_rates_of_a_uniform_rotation_and_the_plot_labels",),
+          "a ball joint's rates by differences of its quaternion entries (nq columns) instead of q ⊖ q (body ω)"),
     Fault("viz-slider-does-not-seek", "viz", "manipdyn/viz/page.py",
           'slider.addEventListener("input", function () { pause(); seek(parseFloat(slider.value)); });',
           'slider.addEventListener("input", function () { pause(); });',

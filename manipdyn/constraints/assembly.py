@@ -5,7 +5,8 @@ coordinates being solved for; they raise a clear error (or, with ``damping``, ta
 steps and flag the result) — never a silent NaN.
 
 Every step is taken in the tangent space: Φ_q (m, nv) maps v-space steps δ, and q moves by q ⊕ δ
-(``configuration.integrate``), which on a free-flyer root is the SE(3) exponential (q + δ on 1-dof joints).
+(``configuration.integrate``), which on a free-flyer root is the SE(3) exponential, on a ball joint quat ⊗ exp(δ)
+(q + δ on 1-dof joints).
 A free flyer takes no part in the steps unless a closure ties a body to the world (``dynamics.moving_dofs``):
 closures inside the robot hold whatever the base pose, so the base stays where the caller put it.
 """
@@ -131,8 +132,8 @@ def _assemble_one(model, q, free, opts, restarts, seed):
 
 
 def _spread(model):
-    """(nv,) scale of a restart's perturbation per entry of v: 1 rad for rotations, 0.1 m for translations
-    (prismatic joints, a free flyer's linear part)."""
+    """(nv,) scale of a restart's perturbation per entry of v: 1 rad for rotations (a ball joint's three
+    included), 0.1 m for translations (prismatic joints, a free flyer's linear part)."""
     out = np.where(model.kind[model.v_joint] == PRISMATIC, 0.1, 1.0)
     for j in np.flatnonzero(model.kind == FREEFLYER):
         out[model.idx_v[j]:model.idx_v[j] + 3] = 0.1
@@ -226,8 +227,8 @@ def complete_state(model, q_guess, v_act, a_act, *, actuated=None, **assemble_kw
     q_guess (nq,) with v_act, a_act (n_act,) gives q (nq,), q̇, q̈ (nv,) and one Assembly; a batch q_guess
     (N, nq) with v_act, a_act (N, n_act) (or (n_act,) for every row) is completed row by row and gives
     (N, nq), (N, nv) arrays and one Assembly of (N, nq) and (N,) arrays, as ``assemble`` on the batch.
-    n_act counts entries of v: one per actuated 1-dof joint, six for a free flyer listed in ``actuated``
-    (its body-frame [linear; angular] rates).
+    n_act counts entries of v: one per actuated 1-dof joint, three for a ball joint (body-frame ω), six for a
+    free flyer listed in ``actuated`` (its body-frame [linear; angular] rates).
     A free-flyer root not listed stays at the guess and at rest (q̇ = q̈ = 0 on its entries): under
     closures internal to the robot the passive rates do not depend on the base's."""
     (Q,), single = as_batch(model, q=q_guess)

@@ -150,13 +150,14 @@ def actuation(model, actuated=None):
 
 def dofs(model, joints):
     """The entries of v (and q̇, q̈, τ) of the given joint indices, in order: one per 1-dof joint, six for a
-    free flyer (v = [linear; angular]). On a fixed-base model they are the joint indices themselves."""
+    free flyer (v = [linear; angular]), three for a ball joint (body-frame ω). On a model of 1-dof joints
+    they are the joint indices themselves."""
     return [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]
 
 
 def moving_dofs(model, held=()):
     """The entries of v that assembly and projection move: every joint not in ``held`` (joint indices) —
-    but a free flyer only when a closure ties a body to the world (body −1). Otherwise every closure is
+    but a free flyer only when a closure ties a body to the world (body −1); a ball joint moves as any joint. Otherwise every closure is
     internal to the robot: it holds whatever the base pose (on the closures its columns of Φ_q vanish), so
     the base stays where the caller put it instead of taking a share of the minimum-norm steps."""
     world = any(c.parent < 0 or c.child < 0 for c in model.constraints)

@@ -19,8 +19,9 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   model's body frame is then the joint frame, and the MJCF body's frame a Frame offset by −pos in it);
   ``ball`` -> BALL, turning the body about ``pos`` (its ``axis``, ``ref`` and ``range`` are not read, as by
   MuJoCo's dynamics: a ball's range is a cone limit of the contact solver; q = MuJoCo's qpos reordered to
-  x y z w); ``free`` / ``<freejoint>`` -> the model's free flyer (joint 0; only the first joint of the tree, on a
-  top-level body alone). Several joints in one body are applied in order, as MuJoCo's ``mj_kinematics``:
+  x y z w); ``free`` / ``<freejoint>`` -> a free flyer (alone in a child of ``<worldbody>``, as MuJoCo requires;
+  the model is ``floating`` when it is joint 0, and further free bodies — objects beside a robot — are free flyers
+  hanging from the base too). Several joints in one body are applied in order, as MuJoCo's ``mj_kinematics``:
   each but the last carries a massless body at its anchor (named ``"<body>:<joint>"``). A body without a
   joint is welded to its parent (merged, as URDF fixed links; ``Model.merged`` names them). A hinge's
   ``range`` is converted from degrees when ``angle="degree"``; a hinge without limits is ``continuous``. A
@@ -72,7 +73,7 @@ Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, `
 ``<sensor>``, ``<visual>``, ``<statistic>``, ``<size>``, ``<keyframe>``, ``<custom>``, ``<extension>``, cameras
 and lights, a geom's contact and visual attributes, geoms that do not give mass, fixed tendons without armature.
 
-Refused (MJCFError naming the file, the element and what is not supported): a free joint below the root or beside another joint, a free joint's ``align`` (or ``<compiler
+Refused (MJCFError naming the file, the element and what is not supported): a free joint below a body or beside another joint, a free joint's ``align`` (or ``<compiler
 alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
 quadratic or higher ``polycoef`` terms, with an offset (c0 + ref1 − c1 ref2 ≠ 0: the coupling row has none), between
 joints that do not hang from the same body, or on a free or ball joint, an equality whose two sides are one rigid body,
@@ -166,7 +167,7 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
     violate the triangle inequality; locked / root / tips / prune as in ``manipdyn.reduce``; max_bytes bounds the
     file and its includes together; zero_mass_inertia "keep" | "drop", non_psd_inertia "refuse" | "keep" as in
     load_urdf; joint_dynamics ``{joint: dict(armature=, damping=, friction=)}`` overrides the file's armature, damping
-    and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes the model's free flyer (no ``root_joint`` keyword: the file says).
+    and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes a free flyer (no ``root_joint`` keyword: the file says).
     Raises MJCFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
@@ -629,13 +630,13 @@ class _Reader:
             raise MJCFError(f"{src}: {jw}: align / <compiler alignfree> (the free body's frame moved to its inertial "
                             f"frame): not supported yet")
         if kind == "free":                                  # q holds the body's pose in the world
-            if joints or b != -1 or n > 1:
-                raise MJCFError(f"{src}: {jw}: a free joint that is not the tree's first joint, alone in a top-level "
-                                f"body: not supported yet (the model has one free flyer, joint 0)")
+            if b != -1 or n > 1:                            # MuJoCo: only in a child of the world, and alone
+                raise MJCFError(f"{src}: {jw}: a free joint that is not alone in a child of <worldbody>: not "
+                                f"supported (MuJoCo refuses it too)")
             joints.append(dict(name=jname, body=body, kind=FREEFLYER, parent=-1, R0=np.eye(3), p0=np.zeros(3),
                                axis=np.zeros(3), lim=(-np.inf, np.inf), continuous=False, q0=(R, p),
                                dyn=self.joint_quirks(j, jcls, jname, jw, kind)))
-            return 0, np.eye(3), np.zeros(3), np.zeros(3)
+            return len(joints) - 1, np.eye(3), np.zeros(3), np.zeros(3)
         a = self.bounded(self.num(j, "pos", jcls, jw, (3,), (0, 0, 0)), MAX_LENGTH, "coordinate", j, "pos", jw)
         if kind == "ball":          # turns the body about its anchor, quaternion in the body's axes (mj_kinematics):
             a = pf + Rf @ a         # our joint frame at the anchor with the body's axes, R_J = R(quat); MuJoCo reads
@@ -701,6 +702,10 @@ class _Reader:
             found.append(f"springdamper {sd[0]:g} {sd[1]:g}")
         if found:
             self.quirks.append(Quirk("joint_dynamics", jname, ", ".join(found) + ": read, not applied yet"))
+        if kind == "free" and dyn[0] > 0:
+            self.quirks.append(Quirk("free_armature", jname, f"armature {dyn[0]:g} on a free joint: applied to the body-"
+                                     f"frame twist's derivative (Pinocchio's model.armature); MuJoCo's τ differs by "
+                                     f"armature · R (ω × v_lin) on the linear rows (M is the same)"))
         return tuple(dyn)
 
     def limits(self, j, jcls, jw, kind):

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ConstraintError, GeometryWarning, InputError, SingularError  # noqa: F401 (re-exported)
 from ..io.trajectory import read_trajectory_file
-from ..joints import REVOLUTE
+from ..joints import BALL, FREEFLYER, REVOLUTE
 from . import scene as _scene
 from .scene import MAX_FRAMES, PlaybackWarning  # noqa: F401 (re-exported)
 
@@ -48,7 +48,7 @@ def complete(model, Q, guess=None):
     """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame: Q (T, nq).
 
     Each frame starts from the previous one (the first from ``guess``, default the middle of the joint
-    ranges, a free flyer at its neutral pose); a frame that does not assemble from there is retried from
+    ranges, a free flyer and ball joints at their neutral pose); a frame that does not assemble from there is retried from
     ASSEMBLY_STARTS guesses spread over the joint ranges. A free flyer whose columns are missing stays at
     the guess's pose (closures inside the robot do not place it). Raises ConstraintError naming the frame
     and the actuated values when none assembles."""
@@ -75,7 +75,7 @@ def _mid_range(model):
 
 
 def _one_dof_q(model, x):
-    """A configuration (nq,) with the 1-dof joints at x (njoints,) and a free flyer at its neutral pose."""
+    """A configuration (nq,) with the 1-dof joints at x (njoints,), a free flyer and ball joints neutral."""
     from ..configuration import neutral
     q = neutral(model)
     one = np.flatnonzero(model.nqs == 1)
@@ -225,20 +225,25 @@ def demo_motion(model, urdf_path) -> dict:
     lo, hi = _ranges(model)
     mid, amp = 0.5 * (lo + hi), np.minimum(0.4 * (hi - lo), 0.8)
     wave = np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.njoints)))
-    if not model.floating and not model.constraints:
+    if not model.quat_q.size and not model.constraints:
         mid, amp = _upright_centre(model, lo, hi, wave)
     swing = mid + amp * wave
     if model.constraints:
         turn = (hi - lo >= 2 * np.pi - 1e-9) & (model.kind == REVOLUTE)   # a crank turns once
         swing[:, turn] = lo[turn] + np.pi + 2 * np.pi * t[:, None] / t[-1]
     Q = swing
-    if model.floating:                      # the free flyer stays at the origin; the other joints swing
-        from ..configuration import neutral
-        Q = np.tile(neutral(model), (len(t), 1))
-        Q[:, model.idx_q[1:]] = swing[:, 1:]
-    if model.constraints:                   # passive 1-dof joints completed by assembly
-        passive = [i for i in range(model.njoints) if model.nqs[i] == 1 and model.joint_names[i] not in model.actuated]
-        Q[:, model.idx_q[passive]] = np.nan
+    if model.quat_q.size:                   # a free flyer stays at the origin; a ball joint turns ±0.8 rad
+        from ..configuration import integrate, neutral        # about (1, 1, 0)/√2; 1-dof joints swing
+        turn = np.zeros((len(t), model.nv))
+        for j in np.flatnonzero(model.kind == BALL):
+            turn[:, model.idx_v[j]:model.idx_v[j] + 3] = 0.8 * np.outer(wave[:, j], [1.0, 1.0, 0.0]) / np.sqrt(2.0)
+        Q = integrate(model, np.tile(neutral(model), (len(t), 1)), turn)
+        one = np.flatnonzero(model.nqs == 1)
+        Q[:, model.idx_q[one]] = swing[:, one]
+    if model.constraints:                   # passive joints (1-dof and ball) completed by assembly
+        for i in range(model.njoints):
+            if model.kind[i] != FREEFLYER and model.joint_names[i] not in model.actuated:
+                Q[:, model.idx_q[i]:model.idx_q[i] + model.nqs[i]] = np.nan
         return dict(t=t, Q=complete(model, Q))
     return dict(t=t, Q=Q)
 

@@ -18,13 +18,14 @@ DIGITS = 5                # significant digits kept in the page
 
 
 def rates(model, t, Q):
-    """(V, A) (T, nv) by second-order finite differences of Q (T, nq) on the times t (T,); a free flyer's
-    root rate by ``difference`` of neighbouring samples (body-frame twist). One sample: zeros."""
+    """(V, A) (T, nv) by second-order finite differences of Q (T, nq) on the times t (T,); on a model with
+    quaternions (free flyer, ball joint) V by ``difference`` of neighbouring samples (body-frame twist or ω),
+    central inside, one-sided at the ends. One sample: zeros."""
     from ..configuration import difference
     T = len(t)
     if T < 2:
         return np.zeros((T, model.nv)), np.zeros((T, model.nv))
-    if model.floating:
+    if model.quat_q.size:
         lo, hi = np.r_[0, np.arange(T - 1)], np.r_[np.arange(1, T), T - 1]
         V = difference(model, Q[lo], Q[hi]) / (t[hi] - t[lo])[:, None]
     else:
@@ -33,24 +34,24 @@ def rates(model, t, Q):
 
 
 def torques(model, t, Q, V=None, A=None, f_ext=None):
-    """(τ (T, k), names (k,)) along the motion: rnea for a tree (joints after a free-flyer root), the
+    """(τ (T, k), names (k,)) along the motion: rnea for a tree (the entries of v after a free-flyer root), the
     actuator forces of the constrained inverse dynamics for a closed chain (the rates completed through
-    the closures from the actuated joints' finite differences)."""
+    the closures from the actuated joints' finite differences); names are ``model.v_names`` (a ball joint's
+    three torques: joint.wx, .wy, .wz)."""
     from ..constraints import complete_state
-    from ..constraints.dynamics import actuation, constrained_inverse_dynamics
+    from ..constraints.dynamics import actuation, constrained_inverse_dynamics, dofs
     from ..dynamics.rnea import rnea
     if V is None or A is None:
         V, A = rates(model, t, Q)
     if model.constraints:
-        act = actuation(model)
+        act = dofs(model, actuation(model))
         if V.shape[0] > 1:
             Q, V, A, _ = complete_state(model, Q, V[:, act], A[:, act])
         tau, _ = constrained_inverse_dynamics(model, Q, V, A, f_ext=f_ext, f_ext_frame="world")
-        return tau, [model.joint_names[i] for i in act]
+        return tau, [model.v_names[i] for i in act]
     tau = rnea(model, Q, V, A, f_ext=f_ext, f_ext_frame="world")
-    if model.floating:
-        return tau[:, 6:], list(model.joint_names[1:])
-    return tau, list(model.joint_names)
+    skip = 6 if model.floating else 0
+    return tau[:, skip:], list(model.v_names[skip:])
 
 
 def _round(x):
@@ -76,13 +77,14 @@ def signals(model, t, Q, V=None, A=None, tau=None, tau_names=None, marks=(), gap
             tau, tau_names = None, None
             notes.append(f"torques not shown: {exc}")
     keep = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).round().astype(int))
-    joints = range(1, model.njoints) if model.floating else range(model.njoints)
-    qi, vi = [model.idx_q[j] for j in joints], [model.idx_v[j] for j in joints]
-    names = [model.joint_names[j] for j in joints]
-    groups = [dict(key="q", title="q — joint positions [rad, m]", names=names,
-                   series=[_round(Q[keep, i]) for i in qi]),
-              dict(key="v", title="q̇ — joint rates [rad/s, m/s]", names=names,
-                   series=[_round(V[keep, i]) for i in vi])]
+    joints = range(1, model.njoints) if model.floating else range(model.njoints)     # a free flyer's not plotted
+    qi = [int(model.idx_q[j]) + k for j in joints for k in range(int(model.nqs[j]))]
+    vi = [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]
+    ball = "; ball joints: quaternion" if len(qi) > len(vi) else ""
+    groups = [dict(key="q", title=f"q — joint positions [rad, m{ball}]",
+                   names=[model.q_names[i] for i in qi], series=[_round(Q[keep, i]) for i in qi]),
+              dict(key="v", title=f"q̇ — joint rates [rad/s, m/s{ball and '; ball joints: body-frame ω'}]",
+                   names=[model.v_names[i] for i in vi], series=[_round(V[keep, i]) for i in vi])]
     if tau is not None:
         tau = np.asarray(tau, float).reshape(len(t), -1)
         groups.append(dict(key="tau", title="τ — joint torques [N·m, N]" if not model.constraints else

@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..configuration import neutral, normalize
+from ..configuration import difference, integrate, neutral, normalize
 from ..dynamics.core import forward_kinematics
 from ..errors import InputError
-from ..joints import PRISMATIC, REVOLUTE
+from ..joints import BALL, PRISMATIC, REVOLUTE
 from .geometry import load_visuals, meshcat_module
 
 ROOT = "manipdyn"
@@ -194,6 +194,8 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
         elif model.kind[b] == PRISMATIC:
             parts.append((f"{nodes[b]}/joint", g.Box([1.6 * rj, 3.0 * rj, 1.6 * rj]),
                           _T(_axis_frame(model.axis[b]), np.zeros(3)), JOINT_RGBA))
+        elif model.kind[b] == BALL:                 # a ball joint: a sphere about its centre
+            parts.append((f"{nodes[b]}/joint", g.Sphere(float(1.3 * rj)), np.eye(4), JOINT_RGBA))
         else:                                       # the free-flying root body: a hub
             parts.append((f"{nodes[b]}/joint", g.Sphere(float(1.5 * rj)), np.eye(4), BASE_RGBA))
         for k, e in enumerate(e for e in ends if np.linalg.norm(e) > 1e-9):
@@ -464,8 +466,8 @@ def frame_times(span, fps, cap):
 
 
 def animate(sc: Scene, t, Q, fps=30.0):
-    """Append the animation (real time base: frame k at time k/fps, q interpolated linearly in t) and keep
-    every body's world transform per frame in ``sc.frames`` (for checking against forward kinematics).
+    """Append the animation (real time base: frame k at time k/fps, q interpolated in t by ``interpolate``) and
+    keep every body's world transform per frame in ``sc.frames`` (for checking against forward kinematics).
 
     At most max_frames(model) frames (MAX_FRAMES = 3000): a longer motion is resampled at a lower fps, said
     in ``sc.notes`` and by a PlaybackWarning. Raises InputError for non-finite, unordered or oversized input."""
@@ -477,9 +479,7 @@ def animate(sc: Scene, t, Q, fps=30.0):
     if note:
         sc.notes.append(note)
         warnings.warn(f"playback of {sc.model.name!r}: {note}", PlaybackWarning, stacklevel=2)
-    Qf = np.column_stack([np.interp(times, t - t[0], Q[:, i]) for i in range(sc.model.nq)])
-    if sc.model.floating:                                    # a free flyer's quaternion: normalised lerp
-        Qf = normalize(sc.model, Qf)
+    Qf = interpolate(sc.model, t - t[0], Q, times)
     R, p = forward_kinematics(sc.model, Qf)
     anim = Animation(default_framerate=fps)
     gaps = _closure_gaps(sc.model, Qf)
@@ -493,6 +493,23 @@ def animate(sc: Scene, t, Q, fps=30.0):
     sc.times, sc.fps, sc.gaps, sc.t0 = times, fps, gaps, float(t[0])
     sc.commands.append(SetAnimation(anim, play=True, repetitions=1))
     return sc
+
+
+def interpolate(model, t, Q, times):
+    """q (F, nq) at ``times`` (F,) of the samples t (T,), Q (T, nq): every entry linearly in t, except each
+    quaternion (free flyer, ball joint), normalised, which turns along the shorter great arc between its two neighbouring
+    samples at a constant rate (slerp: the rotation part of q_k ⊕ s (q_{k+1} ⊖ q_k), s the fraction of the
+    interval): it stays unit, and q and −q (the same rotation) are interpolated alike."""
+    Qf = np.column_stack([np.interp(times, t, Q[:, i]) for i in range(model.nq)])
+    if not model.quat_q.size or len(t) < 2:
+        return Qf
+    Q = normalize(model, Q)                  # samples read from a file may be off unit norm (InputError if zero)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
+    s = np.clip((times - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0)
+    turned = integrate(model, Q[k], s[:, None] * difference(model, Q[k], Q[k + 1]))
+    quats = (model.quat_q[:, None] + np.arange(4)).ravel()
+    Qf[:, quats] = turned[:, quats]
+    return Qf
 
 
 class _Recorder:

@@ -95,13 +95,14 @@ def mujoco_errors(model, m, n=5, seed=0):
                 iv_, ov, n = m.jnt_dofadr[j], model.idx_v[j], model.nvs[j]
                 qvel[iv_:iv_ + n], qacc[iv_:iv_ + n] = v[ov:ov + n], a[ov:ov + n]
         T = np.eye(model.nv)
-        if model.floating:
-            d.qpos[:] = qpos
-            mujoco.mj_kinematics(m, d)
-            R = d.xmat[m.jnt_bodyid[0]].reshape(3, 3)
-            T[:3, :3] = R.T
-            qvel[:3], qvel[3:6] = R @ v[:3], v[3:6]
-            qacc[:3], qacc[3:6] = R @ (a[:3] + np.cross(v[3:6], v[:3])), a[3:6]
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        for j in np.flatnonzero(model.kind == md.FREEFLYER):    # every free body (objects beside a robot too)
+            R, o, k = d.xmat[m.jnt_bodyid[j]].reshape(3, 3), model.idx_v[j], m.jnt_dofadr[j]
+            T[o:o + 3, o:o + 3] = R.T
+            w, x = v[o + 3:o + 6], v[o:o + 3]
+            qvel[k:k + 3], qvel[k + 3:k + 6] = R @ x, w
+            qacc[k:k + 3], qacc[k + 3:k + 6] = R @ (a[o:o + 3] + np.cross(w, x)), a[o + 3:o + 6]
         d.qpos[:], d.qvel[:] = qpos, qvel
         mujoco.mj_forward(m, d)
         d.qacc[:] = qacc
@@ -110,6 +111,9 @@ def mujoco_errors(model, m, n=5, seed=0):
         M_mj = mujoco_full_m(m, d)                            # with MuJoCo's armature, as ours (model.armature)
         tau_mj += m.dof_armature * qacc                # mj_rne leaves it out; rnea has it (Pinocchio's)
         tau, M = md.rnea(model, q, v, a), md.mass_matrix(model, q)
+        for o in model.idx_v[model.kind == md.FREEFLYER]:     # MuJoCo's armature acts on d/dt of the world-frame
+            arm = model.armature[o:o + 3]                     # linear velocity, ours (Pinocchio's) on the body
+            tau[o:o + 3] += arm * np.cross(v[o + 3:o + 6], v[o:o + 3])   # frame's: quirk "free_armature"
         worst = max(worst, err(T.T @ tau, tau_mj[iv]), err(T.T @ M @ T, M_mj[np.ix_(iv, iv)]))
     return worst
 

@@ -6,8 +6,8 @@ joint, unknown attributes) is loaded or refused by an MJCFError, never another e
 table (``PYTHONPATH=. python scripts/mjcf_table.py`` writes it) and must list every file with the same outcome.
 
 Measured (gymnasium 1.4.0, pybullet 3.2.7, MuJoCo 4.0): gymnasium, all 14 load, M and τ ≤ 1.8e-15 against MuJoCo;
-pybullet_data, 16 of the 18 files MuJoCo loads load here, ≤ 5.4e-15 (humanoid_symmetric_no_ground), 2 are refused
-(striker, thrower: a second free body); of the 8 MuJoCo 4 refuses, manipdyn refuses 3 (global coordinates, a
+pybullet_data, all 18 files MuJoCo loads load here, ≤ 5.4e-15 (humanoid_symmetric_no_ground; striker and thrower hold
+a second free body, striker's with armature: the "free_armature" term added as in mujoco_errors); of the 8 MuJoCo 4 refuses, manipdyn refuses 3 (global coordinates, a
 "fixed" joint type) and loads 5 whose faults touch nothing it reads — THIRD = 1e-13.
 """
 from __future__ import annotations

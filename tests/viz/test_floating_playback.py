@@ -24,7 +24,7 @@ def solo():
 
 def test_frames_follow_forward_kinematics(solo):
     """A trajectory that turns the root half a turn: each frame's body transforms are those of
-    frame_placement at the (nlerp-interpolated, normalised) configuration."""
+    frame_placement at the interpolated configuration (at the midpoint, slerp and normalised lerp agree)."""
     path, m = solo
     t = np.array([0.0, 1.0])
     q0 = md.random_configuration(m, np.random.default_rng(0))
