@@ -270,8 +270,10 @@ def raise_kernel_error(model, code, names, batches, call="", out_name="", out=No
         idx = np.unravel_index(-2 - nb - code, res.shape)
         raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))
     if code <= -2:
-        raise SingularError(f"mass matrix is singular: joint {model.joint_names[-2 - code]!r} moves a subtree "
-                            f"without mass or inertia about its axis")
+        i = -2 - code
+        along = "in some direction of its motion" if getattr(model, "nvs", (1,) * nb)[i] > 1 else "about or along its axis"
+        raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
+                            f"without mass or inertia {along}")
     raise InputError(f"{call}: a non-finite input (kernel code {code})")
 
 
