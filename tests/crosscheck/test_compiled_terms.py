@@ -156,11 +156,11 @@ def test_forward_dynamics_cholesky_and_f_ext_one_state(name, frame):
 @pytest.mark.parametrize("frame", ["local", "world"])
 @pytest.mark.parametrize("name", ["tree4", "solo12_floating"])
 def test_forward_dynamics_cholesky_batch_across_chunks(name, frame):
-    """The Cholesky route works 16 states at a time: a batch of 37 (three chunks, the last partial) with a
-    wrench that differs per state equals Pinocchio's aba with its fext, state by state."""
+    """The Cholesky route works LANES = 64 states at a time: a batch of 150 (three chunks, the last partial) with
+    a wrench that differs per state equals Pinocchio's aba with its fext, state by state."""
     c = case(name)
     m = c.model
-    N = 37
+    N = 150
     Q, V, T = c.states(N, 61)
     fx = _wrenches(c, N, np.random.default_rng(62))
     qdd = md.forward_dynamics(m, Q, V, T, f_ext=fx, f_ext_frame=frame, method="cholesky")

@@ -196,8 +196,8 @@ ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "ener
 # What one algorithm module may take from another: an algorithm built on another one (the M⁻¹ route runs the
 # CRBA and the Newton–Euler kernel, the derivatives differentiate the ABA, the regressor reuses the outward
 # pass, the Lagrange M sums the frame Jacobians) — never a helper of the algebra, which lives in spatial.py.
-BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_one", "outward", "rnea_workspace"},
-            "crba": {"crba", "crba_kernel", "mass_matrix"},
+BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "outward", "rnea_workspace"},
+            "crba": {"crba", "crba_kernel", "crba_lanes", "mass_matrix"},
             "aba": {"aba_kernel"},
             "lagrange": {"lagrange_mass_matrix"},
             "kinematics": {"body_point", "point_jacobian", "point_jacobian_dot", "point_velocity", "com_jacobians",
