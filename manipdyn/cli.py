@@ -278,6 +278,21 @@ def reduction(args) -> dict:
     return dict(locked=locked or None, root=args.root, tips=args.tips, prune=args.prune)
 
 
+def load_robot(path, args, mimic=False):
+    """The model of a URDF or MJCF file (the reader chosen by the root element, io.load.robot_format) with the
+    command's options: an MJCF file takes the reduction options, not --root-joint or --mimic (its free joints and
+    equalities are in the file)."""
+    from .io.load import robot_format
+    if robot_format(path) == "mjcf":
+        if getattr(args, "root_joint", None) or (mimic and args.mimic):
+            raise InputError(f"{path}: an MJCF file: its free joints and joint equalities are in the file "
+                             f"(no --root-joint or --mimic)")
+        from .io.mjcf_read import load_mjcf
+        return load_mjcf(path, **reduction(args))
+    from .io.urdf import load_urdf
+    return load_urdf(path, root_joint=args.root_joint, **(dict(mimic=args.mimic) if mimic else {}), **reduction(args))
+
+
 def add_mimic_option(p):
     """--mimic: honour <mimic> joints (load_urdf mimic=True)."""
     p.add_argument("--mimic", action="store_true",
@@ -286,12 +301,11 @@ def add_mimic_option(p):
 
 
 def _inspect(args) -> int:
-    from .io.urdf import load_urdf
     from .model import QUIRK_KINDS
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = load_urdf(args.urdf, root_joint=args.root_joint, mimic=args.mimic, **reduction(args))
+        model = load_robot(args.urdf, args, mimic=True)
     messages = [str(w.message) for w in caught]
     if args.json is not None:
         text = json.dumps(inspect_dict(model, messages), indent=1, ensure_ascii=False)
@@ -340,10 +354,9 @@ def inspect_dict(model, warnings_seen=()) -> dict:
 def _export(args) -> int:
     """export URDF --mjcf OUT: the model (closures as equality constraints) as MuJoCo MJCF."""
     from .io.mjcf import to_mjcf
-    from .io.urdf import load_urdf
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = load_urdf(args.urdf, root_joint=args.root_joint, mimic=args.mimic, **reduction(args))
+        model = load_robot(args.urdf, args, mimic=True)
     text = to_mjcf(model)
     Path(args.mjcf).write_text(text, encoding="utf-8")
     for w in caught:
@@ -356,7 +369,6 @@ def _export(args) -> int:
 
 def _play(args) -> int:
     from . import viz
-    from .io.urdf import load_urdf
     from .viz.geometry import meshcat_module, parse_package_dirs
     meshcat_module()                      # MissingExtraError (exit 2) before any work starts
     package_dirs = parse_package_dirs(args.package_dir)
@@ -364,7 +376,16 @@ def _play(args) -> int:
         out = Path(args.html)
         if out.is_dir() or not out.resolve().parent.is_dir():
             raise ManipdynError(f"--html {args.html}: not a file in an existing folder")
-    model = load_urdf(args.urdf, root_joint=args.root_joint, **reduction(args))
+    with warnings.catch_warnings(record=True) as loading:             # the loader's quirks, one line each
+        warnings.simplefilter("always")
+        model = load_robot(args.urdf, args)
+    for w in loading:
+        print(f"warning: {w.message}", file=sys.stderr)
+    from .io.load import robot_format
+    visuals = None if robot_format(args.urdf) == "mjcf" else args.urdf     # MJCF geoms are not read for drawing
+    if visuals is None:
+        print("note: an MJCF file: its bodies are drawn as capsules between their joints (geoms are not drawn)",
+              file=sys.stderr)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", viz.GeometryWarning)
         warnings.simplefilter("always", viz.PlaybackWarning)
@@ -374,7 +395,7 @@ def _play(args) -> int:
         else:
             motion = viz.demo_motion(model, args.urdf)
         t = motion.pop("t")
-        sc = viz.scene_for(model, args.urdf, t, motion.pop("Q"), show_frames=args.frames,
+        sc = viz.scene_for(model, visuals, t, motion.pop("Q"), show_frames=args.frames,
                            package_dirs=package_dirs, **motion)
     for w in caught:
         print(f"{'note' if issubclass(w.category, viz.PlaybackWarning) else 'warning'}: {w.message}",
@@ -501,7 +522,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_reduction_options(v)
     v.set_defaults(func=_validate)
     i = sub.add_parser("inspect", help="show what the loader built from a URDF")
-    i.add_argument("urdf")
+    i.add_argument("urdf", help="a URDF or MJCF file (the reader chosen by its root element)")
     i.add_argument("--json", nargs="?", const="-", metavar="FILE",
                    help="write what the loader built as JSON (quirks, closures, mimic map, summary) to FILE, "
                         "or to stdout without FILE")
@@ -510,7 +531,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_reduction_options(i)
     i.set_defaults(func=_inspect)
     x = sub.add_parser("export", help="write the model in another format (MuJoCo MJCF)")
-    x.add_argument("urdf")
+    x.add_argument("urdf", help="a URDF or MJCF file (the reader chosen by its root element)")
     x.add_argument("--mjcf", required=True, metavar="FILE",
                    help="write MuJoCo MJCF to FILE (a writable file in an existing folder): merged bodies and "
                         "inertials, hinge/slide joints, closures as equality constraints (connect/weld/joint)")
@@ -519,7 +540,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_reduction_options(x)
     x.set_defaults(func=_export)
     pl = sub.add_parser("play", help="3-D playback in the browser (meshcat): live, or one HTML file")
-    pl.add_argument("urdf")
+    pl.add_argument("urdf", help="a URDF or MJCF file (the reader chosen by its root element)")
     pl.add_argument("--traj", help="CSV (t, q_<joint>...) or NPZ (t, q, joint_names); default: a built-in demo")
     pl.add_argument("--html", help="write one self-contained HTML file instead of serving live")
     pl.add_argument("--frames", action="store_true", help="draw each body's frame")
