@@ -227,6 +227,10 @@ def _validation_runs(args) -> list:
     runs = []
     for path, root_joint in _validate_paths(args):
         _check_input_file(path, "URDF")
+        from .io.load import robot_format
+        if robot_format(path) == "mjcf":
+            raise InputError(f"{path}: an MJCF file: the term-by-term validation reads URDF files (Pinocchio's "
+                             f"reference); compare an MJCF file with --against mujoco,pinocchio")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             model = load_urdf(path, root_joint=root_joint, mimic=args.mimic, **reduction(args))

@@ -59,3 +59,9 @@ def test_urdf_only_options_are_refused_for_an_mjcf_file(flag, capsys):
     assert main(["inspect", str(HUMANOID), *flag]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "an MJCF file" in err[0]
+
+
+def test_term_by_term_validation_names_the_engine_route_for_an_mjcf_file(capsys):
+    assert main(["validate", str(HUMANOID), "--states", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--against mujoco" in err[0]
