@@ -22,8 +22,8 @@ q + v dt. A ball (spherical) joint is the free flyer's rotation alone (Pinocchio
 MuJoCo's ``ball``): v = ω, the body's angular velocity relative to its parent, in the body's own frame, and q moves
 by quat ⊗ exp(ω). A continuous joint is one angle (Pinocchio stores cos/sin; ``validation`` converts); its
 ``difference`` is the shortest angle, as Pinocchio's. Fixed joints are not joints here: the loader merges
-the bodies they hold together. A free flyer hangs from the fixed base (a free body: the floating-base root, or an MJCF object beside the robot);
-a ball joint anywhere.
+the bodies they hold together. A free flyer hangs from the fixed base (a free body: the floating-base root, or
+an MJCF object beside the robot); a ball joint anywhere.
 
 Everything below that a compiled kernel calls is written for numba (``_jit.njit``): scalar loops over
 3-vectors, no allocation per call.

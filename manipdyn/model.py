@@ -122,8 +122,8 @@ QUIRK_KINDS = {
     "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
     "joint_dynamics": "an MJCF joint's stiffness, springref or springdamper is nonzero: read, not applied yet (its "
                       "armature, damping and frictionloss are applied: Model.armature, damping, friction)",
-    "free_armature": "an MJCF free joint's armature: applied as Pinocchio applies model.armature, armature ⊙ v̇ with v the "
-                     "body-frame twist; MuJoCo adds it to d/dt of its world-frame linear velocity, so its τ differs "
+    "free_armature": "an MJCF free joint's armature: applied as Pinocchio applies model.armature, armature ⊙ v̇ with v "
+                     "the body-frame twist; MuJoCo adds it to d/dt of its world-frame linear velocity, so its τ differs "
                      "by armature · R (ω × v_lin) on the linear rows (M and the energy are the same)",
     "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
                  "qpos and q = 0 is not the pose drawn in the file",

@@ -537,6 +537,11 @@ FAULTS = (
           "out[:, b] += -0.5 * a1 + ad(xi[:, b], a1) / 12.0",
           ("tests/unit/test_floating_simulate.py", _BALL_SIM),
           "RK4 on a free flyer or a ball joint with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
+    Fault("plots-free-body-plotted", "viz", "manipdyn/viz/plots.py",
+          "joints = [j for j in range(model.njoints) if model.kind[j] != FREEFLYER]",
+          "joints = [j for j in range(model.njoints) if j > 0 or not model.floating]",
+          ("tests/unit/test_free_bodies.py",), "the page plots a free body's pose beside the robot's joints (only a "
+          "floating root left out)"),
     Fault("adaptive-free-position-body-frame", "integrators", "manipdyn/simulation.py",
           "out[k:k + 3] = np.array(quat_rotation(*q[k + 3:k + 7])).reshape(3, 3) @ v[r:r + 3]",
           "out[k:k + 3] = v[r:r + 3]",

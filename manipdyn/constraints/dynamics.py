@@ -157,8 +157,8 @@ def dofs(model, joints):
 
 def moving_dofs(model, held=()):
     """The entries of v that assembly and projection move: every joint not in ``held`` (joint indices) —
-    but a free flyer only when a closure ties a body to the world (body −1); a ball joint moves as any joint. Otherwise every closure is
-    internal to the robot: it holds whatever the base pose (on the closures its columns of Φ_q vanish), so
+    but a free flyer only when a closure ties a body to the world (body −1); a ball joint moves as any joint.
+    Otherwise every closure is internal to the robot: it holds whatever the base pose (on the closures its columns of Φ_q vanish), so
     the base stays where the caller put it instead of taking a share of the minimum-norm steps."""
     world = any(c.parent < 0 or c.child < 0 for c in model.constraints)
     return dofs(model, [j for j in range(model.njoints) if j not in held

@@ -102,8 +102,9 @@ def lagrange_mass_kernel(I, F, Q, M):
 
 def _links_mass_matrix(model, J, Iw):
     """The links' M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (Eq. 23), J (nb, N, 6, nv), Iw (nb, N, 3, 3)
-    (numpy: the bracket terms' M). Without diag(armature): rnea adds armature ⊙ q̈ alone, and so do coriolis_matrix
-    and Pinocchio; a ball's armature a (a 1₃ in its block) would add bracket terms ½ a [ξ]× (C q̇ the same: ξ × ξ = 0)."""
+    (numpy: the bracket terms' M). Without diag(armature): rnea adds armature ⊙ q̈ alone, and so do
+    coriolis_matrix and Pinocchio; a ball's armature a (a 1₃ in its block) would add bracket terms ½ a [ξ]×
+    (C q̇ the same: ξ × ξ = 0)."""
     Jv, Jw = J[:, :, :3], J[:, :, 3:]
     return np.einsum("b,bnki,bnkj->nij", model.mass, Jv, Jv) + np.einsum("bnki,bnkl,bnlj->nij", Jw, Iw, Jw)
 

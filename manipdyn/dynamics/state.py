@@ -271,7 +271,8 @@ def raise_kernel_error(model, code, names, batches, call="", out_name="", out=No
         raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))
     if code <= -2:
         i = -2 - code
-        along = "in some direction of its motion" if getattr(model, "nvs", (1,) * nb)[i] > 1 else "about or along its axis"
+        multi = getattr(model, "nvs", (1,) * nb)[i] > 1
+        along = "in some direction of its motion" if multi else "about or along its axis"
         raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
                             f"without mass or inertia {along}")
     raise InputError(f"{call}: a non-finite input (kernel code {code})")

@@ -93,8 +93,9 @@ def _hosts(model):
     for i in range(nb):
         a = model.parent[i]
         stem = names[a][:-len(joints[a]) - 1] if a >= 0 and names[a].endswith(f":{joints[a]}") else None
-        if (stem and names[i] in (stem, f"{stem}:{joints[i]}") and children[a] == 1 and model.mass[a] == 0 and not np.any(model.inertia[a]) and np.array_equal(model.R0[i], np.eye(3))
-                and FREEFLYER not in (model.kind[a], model.kind[i])):
+        chained = (stem and names[i] in (stem, f"{stem}:{joints[i]}") and children[a] == 1 and model.mass[a] == 0
+                   and not np.any(model.inertia[a]) and np.array_equal(model.R0[i], np.eye(3)))
+        if chained and FREEFLYER not in (model.kind[a], model.kind[i]):
             host[i], off[i] = host[a], off[a] + model.p0[i]
     return host, off
 

@@ -73,8 +73,8 @@ Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, `
 ``<sensor>``, ``<visual>``, ``<statistic>``, ``<size>``, ``<keyframe>``, ``<custom>``, ``<extension>``, cameras
 and lights, a geom's contact and visual attributes, geoms that do not give mass, fixed tendons without armature.
 
-Refused (MJCFError naming the file, the element and what is not supported): a free joint below a body or beside another joint, a free joint's ``align`` (or ``<compiler
-alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
+Refused (MJCFError naming the file, the element and what is not supported): a free joint below a body or beside
+another joint, a free joint's ``align`` (or ``<compiler alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
 quadratic or higher ``polycoef`` terms, with an offset (c0 + ref1 − c1 ref2 ≠ 0: the coupling row has none), between
 joints that do not hang from the same body, or on a free or ball joint, an equality whose two sides are one rigid body,
 tendons with ``armature``, ``mesh``, ``hfield``,
@@ -88,8 +88,8 @@ the file and its includes, one number grammar, exact vector lengths, finite valu
 bounds, counts bounded (``MAX_BODIES``, ``MAX_INCLUDES``, ``MAX_INCLUDE_DEPTH``), an iterative tree walk.
 
 Conventions converted here, never in the kernels (docs/design.md §3, §4e): MuJoCo's quaternions are
-(w, x, y, z), the model's free flyer q is [x y z qx qy qz qw] and a ball joint's [qx qy qz qw]; MuJoCo's free-joint ``qvel`` is [linear in the
-world frame; angular in the body frame], the model's v is [linear; angular] both in the body frame; angles
+(w, x, y, z), the model's free flyer q is [x y z qx qy qz qw] and a ball joint's [qx qy qz qw]; MuJoCo's free-joint
+``qvel`` is [linear in the world frame; angular in the body frame], the model's v is [linear; angular] both in the body frame; angles
 default to degrees in MJCF.
 """
 from __future__ import annotations
@@ -167,7 +167,8 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
     violate the triangle inequality; locked / root / tips / prune as in ``manipdyn.reduce``; max_bytes bounds the
     file and its includes together; zero_mass_inertia "keep" | "drop", non_psd_inertia "refuse" | "keep" as in
     load_urdf; joint_dynamics ``{joint: dict(armature=, damping=, friction=)}`` overrides the file's armature, damping
-    and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes a free flyer (no ``root_joint`` keyword: the file says).
+    and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes a free flyer
+    (no ``root_joint`` keyword: the file says).
     Raises MJCFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
@@ -703,8 +704,8 @@ class _Reader:
         if found:
             self.quirks.append(Quirk("joint_dynamics", jname, ", ".join(found) + ": read, not applied yet"))
         if kind == "free" and dyn[0] > 0:
-            self.quirks.append(Quirk("free_armature", jname, f"armature {dyn[0]:g} on a free joint: applied to the body-"
-                                     f"frame twist's derivative (Pinocchio's model.armature); MuJoCo's τ differs by "
+            self.quirks.append(Quirk("free_armature", jname, f"armature {dyn[0]:g} on a free joint: applied to the "
+                                     f"body-frame twist's derivative (Pinocchio's model.armature); MuJoCo's τ differs by "
                                      f"armature · R (ω × v_lin) on the linear rows (M is the same)"))
         return tuple(dyn)
 

@@ -316,9 +316,10 @@ class MujocoAdapter(Adapter):
         self._perm([m.joint(j).name for j in range(m.njnt) if m.jnt_type[j] != 0], "joint names")
         ours, ids = [model.joint_index(n) for n in self._one_dof()], [m.joint(n).id for n in self._one_dof()]
         for i, j in zip(ours, ids):
-            if _MJ_KIND[int(m.jnt_type[j])] != model.kind[i]:
-                raise EngineRefused(f"mujoco: joint {model.joint_names[i]!r} is a {_KIND_NAME[_MJ_KIND[int(m.jnt_type[j])]]}"
-                                    f" joint there, a {_KIND_NAME[int(model.kind[i])]} joint here")
+            theirs = _MJ_KIND[int(m.jnt_type[j])]
+            if theirs != model.kind[i]:
+                raise EngineRefused(f"mujoco: joint {model.joint_names[i]!r} is a {_KIND_NAME[theirs]} joint there, a "
+                                    f"{_KIND_NAME[int(model.kind[i])]} joint here")
         # (our q index, its length, MuJoCo's qpos index) per joint; the dofs of each joint in our order
         self.qmap = [(int(model.idx_q[i]), int(model.nqs[i]), int(m.jnt_qposadr[j])) for i, j in zip(ours, ids)]
         iv = np.array([int(m.jnt_dofadr[j]) + k for i, j in zip(ours, ids) for k in range(model.nvs[i])], int)

@@ -35,7 +35,8 @@ class Reference:
         root = (P.JointModelFreeFlyer(),) if free else ()                               # its pose (7,)
         if robot_format(urdf_path) == "mjcf":          # an MJCF file: its free joint, if any, is in the file
             self.pm = P.buildModelFromMJCF(str(urdf_path))
-            composite = [n for n, j in zip(self.pm.names[1:], self.pm.joints[1:]) if j.shortname() == "JointModelComposite"]
+            composite = [n for n, j in zip(self.pm.names[1:], self.pm.joints[1:])
+                         if j.shortname() == "JointModelComposite"]
             if composite:
                 raise ManipdynError(f"{urdf_path}: Pinocchio's buildModelFromMJCF makes the joints of one body one "
                                     f"composite joint ({', '.join(composite)}): its joints are not ours one by one")

@@ -48,8 +48,8 @@ def complete(model, Q, guess=None):
     """Fill the passive coordinates (NaN) of a closed chain by assembly, frame after frame: Q (T, nq).
 
     Each frame starts from the previous one (the first from ``guess``, default the middle of the joint
-    ranges, a free flyer and ball joints at their neutral pose); a frame that does not assemble from there is retried from
-    ASSEMBLY_STARTS guesses spread over the joint ranges. A free flyer whose columns are missing stays at
+    ranges, a free flyer and ball joints at their neutral pose); a frame that does not assemble from there is
+    retried from ASSEMBLY_STARTS guesses spread over the joint ranges. A free flyer whose columns are missing stays at
     the guess's pose (closures inside the robot do not place it). Raises ConstraintError naming the frame
     and the actuated values when none assembles."""
     Q = np.array(Q, dtype=float)

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..errors import ManipdynError
+from ..joints import BALL, FREEFLYER
 
 MAX_POINTS = 600          # plotted samples per series at most (a panel is a few hundred pixels wide)
 DIGITS = 5                # significant digits kept in the page
@@ -34,7 +35,8 @@ def rates(model, t, Q):
 
 
 def torques(model, t, Q, V=None, A=None, f_ext=None):
-    """(τ (T, k), names (k,)) along the motion: rnea for a tree (the entries of v after a free-flyer root), the
+    """(τ (T, k), names (k,)) along the motion: rnea for a tree (the entries of v of every joint but the free
+    flyers: a free body takes no torque), the
     actuator forces of the constrained inverse dynamics for a closed chain (the rates completed through
     the closures from the actuated joints' finite differences); names are ``model.v_names`` (a ball joint's
     three torques: joint.wx, .wy, .wz)."""
@@ -50,8 +52,8 @@ def torques(model, t, Q, V=None, A=None, f_ext=None):
         tau, _ = constrained_inverse_dynamics(model, Q, V, A, f_ext=f_ext, f_ext_frame="world")
         return tau, [model.v_names[i] for i in act]
     tau = rnea(model, Q, V, A, f_ext=f_ext, f_ext_frame="world")
-    skip = 6 if model.floating else 0
-    return tau[:, skip:], list(model.v_names[skip:])
+    joint = [i for i in range(model.nv) if model.kind[model.v_joint[i]] != FREEFLYER]
+    return tau[:, joint], [model.v_names[i] for i in joint]
 
 
 def _round(x):
@@ -77,10 +79,10 @@ def signals(model, t, Q, V=None, A=None, tau=None, tau_names=None, marks=(), gap
             tau, tau_names = None, None
             notes.append(f"torques not shown: {exc}")
     keep = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).round().astype(int))
-    joints = range(1, model.njoints) if model.floating else range(model.njoints)     # a free flyer's not plotted
+    joints = [j for j in range(model.njoints) if model.kind[j] != FREEFLYER]       # free bodies' poses not plotted
     qi = [int(model.idx_q[j]) + k for j in joints for k in range(int(model.nqs[j]))]
     vi = [int(model.idx_v[j]) + k for j in joints for k in range(int(model.nvs[j]))]
-    ball = "; ball joints: quaternion" if len(qi) > len(vi) else ""
+    ball = "; ball joints: quaternion" if any(model.kind[j] == BALL for j in joints) else ""
     groups = [dict(key="q", title=f"q — joint positions [rad, m{ball}]",
                    names=[model.q_names[i] for i in qi], series=[_round(Q[keep, i]) for i in qi]),
               dict(key="v", title=f"q̇ — joint rates [rad/s, m/s{ball and '; ball joints: body-frame ω'}]",

@@ -497,8 +497,8 @@ def animate(sc: Scene, t, Q, fps=30.0):
 
 def interpolate(model, t, Q, times):
     """q (F, nq) at ``times`` (F,) of the samples t (T,), Q (T, nq): every entry linearly in t, except each
-    quaternion (free flyer, ball joint), normalised, which turns along the shorter great arc between its two neighbouring
-    samples at a constant rate (slerp: the rotation part of q_k ⊕ s (q_{k+1} ⊖ q_k), s the fraction of the
+    quaternion (free flyer, ball joint), normalised, which turns along the shorter great arc between its two
+    neighbouring samples at a constant rate (slerp: the rotation part of q_k ⊕ s (q_{k+1} ⊖ q_k), s the fraction of the
     interval): it stays unit, and q and −q (the same rotation) are interpolated alike."""
     Qf = np.column_stack([np.interp(times, t, Q[:, i]) for i in range(model.nq)])
     if not model.quat_q.size or len(t) < 2:

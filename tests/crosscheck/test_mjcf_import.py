@@ -366,6 +366,20 @@ def test_body_inertias_against_mujoco(name):
     assert worst <= MASS
 
 
+def placement_errors(ours, m, d, q, bodies=True):
+    """Worst err of our frame_placement of every MuJoCo site (and body) against MuJoCo's at q (mj_kinematics)."""
+    d.qpos[:] = mujoco_qpos(ours, m, q)
+    mujoco.mj_kinematics(m, d)
+    worst = 0.0
+    for k in range(m.nsite):
+        R, p = md.frame_placement(ours, q, m.site(k).name)
+        worst = max(worst, err(p, d.site_xpos[k]), err(R, d.site_xmat[k].reshape(3, 3)))
+    for k in range(1, m.nbody if bodies else 1):
+        R, p = md.frame_placement(ours, q, m.body(k).name)
+        worst = max(worst, err(p, d.xpos[k]), err(R, d.xmat[k].reshape(3, 3)))
+    return worst
+
+
 @pytest.mark.parametrize("name", ["multi", "free", "frames", "balls", "free_ball"])
 def test_sites_and_bodies_are_frames_at_mujocos_placements(name):
     ours = quiet(md.load_mjcf_string, SNIPPETS[name])
@@ -373,14 +387,7 @@ def test_sites_and_bodies_are_frames_at_mujocos_placements(name):
     d, rng, worst = mujoco.MjData(m), np.random.default_rng(2), 0.0
     for _ in range(3):
         q, _, _ = random_state(ours, rng)
-        d.qpos[:] = mujoco_qpos(ours, m, q)
-        mujoco.mj_kinematics(m, d)
-        for k in range(m.nsite):
-            R, p = md.frame_placement(ours, q, m.site(k).name)
-            worst = max(worst, err(p, d.site_xpos[k]), err(R, d.site_xmat[k].reshape(3, 3)))
-        for k in range(1, m.nbody):
-            R, p = md.frame_placement(ours, q, m.body(k).name)
-            worst = max(worst, err(p, d.xpos[k]), err(R, d.xmat[k].reshape(3, 3)))
+        worst = max(worst, placement_errors(ours, m, d, q))
     print(f"\n{name}: sites and bodies against MuJoCo: {worst:.1e}")
     assert worst <= SITE
 
@@ -561,13 +568,8 @@ def test_random_mjcf_against_mujoco(seed):
     text = random_mjcf(seed)
     ours, m = quiet(md.load_mjcf_string, text), mujoco.MjModel.from_xml_string(text)
     e = mujoco_errors(ours, m, seed=seed)
-    d, rng, placed = mujoco.MjData(m), np.random.default_rng(seed), 0.0
-    q, _, _ = random_state(ours, rng)
-    d.qpos[:] = mujoco_qpos(ours, m, q)
-    mujoco.mj_kinematics(m, d)
-    for k in range(m.nsite):
-        R, p = md.frame_placement(ours, q, m.site(k).name)
-        placed = max(placed, err(p, d.site_xpos[k]), err(R, d.site_xmat[k].reshape(3, 3)))
+    q, _, _ = random_state(ours, np.random.default_rng(seed))
+    placed = placement_errors(ours, m, mujoco.MjData(m), q, bodies=False)
     print(f"\nrandom MJCF {seed} (nv = {ours.nv}): M, τ {e:.1e}, sites {placed:.1e}")
     assert e <= MJ and placed <= SITE
 

@@ -60,3 +60,21 @@ def test_a_free_joint_below_a_body_is_refused():
         md.load_mjcf_string(XML.replace('<joint name="hinge" axis="0 1 0"/>',
                                         '<joint name="hinge" axis="0 1 0"/><body name="c"><freejoint name="f"/>'
                                         '<inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body>'))
+
+
+def test_playback_plots_the_arms_joints_not_the_free_body():
+    """The page's plots hold joint positions, rates and torques: a free body beside the arm (its pose, its zero
+    torque) is left out, as a floating root is; the torque plotted is the hinge's: at constant rate about its fixed
+    axis y, τ = −(m c × g)_y with c the centre of mass turned by θ."""
+    from manipdyn.viz.plots import signals
+    model = md.load_mjcf_string(XML)
+    t = np.linspace(0.0, 1.0, 11)
+    Q = np.tile(md.neutral(model), (len(t), 1))
+    Q[:, model.idx_q[model.joint_index("hinge")]] = 0.5 * t
+    groups = {g["key"]: g for g in signals(model, t, Q)["groups"]}
+    assert [g["names"] for g in groups.values()] == [["hinge"]] * 3
+    assert "ball joints" not in groups["q"]["title"]
+    th, g = 0.5 * t[5], model.gravity
+    c = np.array([0.2 * np.cos(th), 0.0, -0.2 * np.sin(th)])          # R_y(θ) (0.2, 0, 0)
+    want = -2.0 * np.cross(c, g)[1]
+    assert abs(groups["tau"]["series"][0][5] - want) <= 1e-4 * abs(want)        # the page keeps 5 digits
