@@ -303,7 +303,7 @@ def _model(model, call):
         others = [n for n, k in zip(model.joint_names, model.kernel.arrays[0][4]) if k != 1]
         raise InputError(f"{call}: the GPU kernels take joints with one velocity each; {others} have more "
                          f"(use the CPU call)")
-    return model.kernel.arrays
+    return model.kernel.lane_arrays                      # the lane steps' model: z-aligned frames (model.z_aligned)
 
 
 def _raise(model, call, flags, states, cpu):
@@ -398,7 +398,8 @@ def _wrenches(model, f_ext, f_ext_frame, N, call):
     X = c.device_array((max(6 * K * N, 1),))
     paths, poff = [], [0]
     for k, (name, fr, f, m) in enumerate(rows):
-        R = np.eye(3) if f_ext_frame == "world" else fr.R
+        Ct = model.kernel.lane_turns[fr.body].T            # body axes -> its z-aligned axes (the lane steps')
+        R = np.eye(3) if f_ext_frame == "world" else Ct @ fr.R
         _launch("put_wrench", _put_wrench, N, X, k, f, m, c.to_device(np.ascontiguousarray(R, float).ravel()))
         path, j = [], fr.body
         while j >= 0:
@@ -407,7 +408,7 @@ def _wrenches(model, f_ext, f_ext_frame, N, call):
         paths += path[::-1]
         poff.append(len(paths))
     xb = np.array([fr.body for _, fr, _, _ in rows], np.int64)
-    xp = np.array([fr.p for _, fr, _, _ in rows], float).reshape(K, 3)
+    xp = np.array([model.kernel.lane_turns[fr.body].T @ fr.p for _, fr, _, _ in rows], float).reshape(K, 3)
     extra = [(f"f_ext[{name!r}] {what}", x) for name, _, f, m in rows for what, x in (("force", f), ("moment", m))]
     return (X, c.to_device(xb), c.to_device(xp), c.to_device(np.array(paths or [0], np.int64)),
             c.to_device(np.array(poff, np.int64)), f_ext_frame == "world"), extra, [name for name, *_ in rows]
@@ -489,7 +490,7 @@ def _run_frame(model, call, q, frame, jac, reference):
     import manipdyn as md
     I, F = _model(model, call)
     _check_reference(reference)
-    b, X = frame_row(model, frame)
+    b, X = frame_row(model, frame, lanes=True)
     states, N = _states(model, call, (("q", q),))
     nb, nv, c = model.njoints, model.nv, _cuda()
     if b < 0:                                             # a frame on the fixed base: constant, no joint moves it

@@ -493,6 +493,11 @@ class KernelForm:
     closure_labels: tuple      # (m,) the name of every closure row ("<closure>.x|y|z|r1|r2|r3|c")
     result_shapes: tuple       # one state's result of a route (dynamics/route.py), by route.SHAPES: (nv,), (nv, nv),
     #                            (nv, 10 nb) (the regressor)
+    lane_arrays: tuple         # (I, F) of the same model in z-aligned body frames (``z_aligned``): what the lane
+    #                            kernels take (a batch's route; the GPU)
+    lane_turns: np.ndarray     # (nb, 3, 3) C_i: body i's z-aligned frame in its own (x_body = C_i x_lane)
+    lane_frame_rows: MappingProxyType   # frame_rows in those frames
+    lane_wrench_rows: MappingProxyType  # wrench_rows in those frames
 
     @classmethod
     def of(cls, model) -> "KernelForm":
@@ -523,15 +528,63 @@ class KernelForm:
             for axes in ("local", "world"):
                 wrench[name, axes] = np.concatenate([(R if axes == "local" else np.eye(3)).ravel(), p, [float(fr.body)]])
         ints, floats, labels = _closure_form(model.constraints)
-        arrays = [I, F, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
-                  *wrench.values()]
+        Fz, turn = z_aligned(model, F)
+        lane_frames, lane_wrench = {}, {}
+        for name, (b, X) in frame_rows.items():
+            C = turn[b] if b >= 0 else np.eye(3)             # the frame in the body's z-aligned frame: Cᵀ R, Cᵀ p
+            lane_frames[name] = (b, np.ascontiguousarray(np.vstack([C.T @ X[:3], C.T @ X[3]])))
+            for axes in ("local", "world"):
+                P = wrench[name, axes].copy()
+                if axes == "local":
+                    P[:9] = (C.T @ P[:9].reshape(3, 3)).ravel()
+                P[9:12] = C.T @ P[9:12]
+                lane_wrench[name, axes] = P
+        arrays = [I, F, Fz, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
+                  *wrench.values(), turn, *(x for _, x in lane_frames.values()), *lane_wrench.values()]
         for a in arrays:
             a.setflags(write=False)
         return cls((model.nq,), (model.nv,), (I, F), I, F, config,
                    MappingProxyType({name: i for i, name in enumerate(model.joint_names)}),
                    MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
                    ints, floats, labels,
-                   ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)))
+                   ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)),
+                   (I, Fz), turn, MappingProxyType(lane_frames), MappingProxyType(lane_wrench))
+
+
+def z_turn(k) -> np.ndarray:
+    """C, the rotation that turns e_z into the unit vector k (C e_z = k): the identity for k = e_z, a half turn
+    about x for k = −e_z, else the shortest turn, about e_z × k (exact for k along an axis)."""
+    k = np.asarray(k, float)
+    c, s = k[2], np.hypot(k[0], k[1])
+    if s == 0.0:
+        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    u = np.array([-k[1] / s, k[0] / s, 0.0])                 # e_z × k / |e_z × k|
+    U = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+    return c * np.eye(3) + s * U + (1.0 - c) * np.outer(u, u)
+
+
+def z_aligned(model, F):
+    """The kernel array F of the same model with every 1-dof joint's body frame turned so that its joint axis
+    is z (the chapter's z'_i, docs/design.md §4c): body i's frame becomes C_i (``z_turn`` of its axis; the
+    identity for a ball or free joint), so R^{i−1}_i = R0'_i Rot(z, q), R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i,
+    c'_i = C_iᵀ c_i, I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world placements are the same numbers: only
+    what is written in a body's own axes changes. Returns (F', C (nb, 3, 3))."""
+    nb = model.njoints
+    C = np.array([z_turn(model.axis[i]) if model.nvs[i] == 1 else np.eye(3) for i in range(nb)]).reshape(nb, 3, 3)
+    Fz = F.copy()
+    for i in range(nb):
+        Cp = C[model.parent[i]] if model.parent[i] >= 0 else np.eye(3)
+        Fz[i] = Cp.T @ F[i] @ C[i]                                   # R0'
+        J = C[i].T @ F[nb + i] @ C[i]
+        Fz[nb + i] = 0.5 * (J + J.T)                                 # I' about the CoM
+        axis = (0.0, 0.0, 1.0) if model.nvs[i] == 1 else F[2 * nb + i, 0]          # C e_z = k: exactly z
+        Fz[2 * nb + i] = (axis, Cp.T @ F[2 * nb + i, 1], C[i].T @ F[2 * nb + i, 2])
+    m = max(2, 2 * ((model.nv + 2) // 3))
+    S = Fz[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)
+    for i in range(nb):
+        if model.nvs[i] == 1:
+            S[model.idx_v[i]] = motion_subspace(int(model.kind[i]), Fz[2 * nb + i, 0])
+    return Fz, C
 
 
 def perpendicular_pair(e):

@@ -82,7 +82,7 @@ def _count(model):
     if not _jit.NOJIT:
         raise RuntimeError("the flop count runs the kernels as Python: set MANIPDYN_NOJIT=1")
     L = core.LANES
-    I, F = core.kernel_arrays(model)
+    I, F = model.kernel.lane_arrays                 # the form the batch routes pass (z-aligned frames)
     F = _objects(F)
     Q, V, A = (_objects(x, flop=True) for x in random_states(model, L, np.random.default_rng(0)))
     X, xb, xp = F[:1, :0, :], I[0, :0], F[0, :0, :]

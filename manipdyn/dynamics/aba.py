@@ -36,11 +36,11 @@ from ..errors import InputError
 from ..joints import joint_placement
 from ..model import FRICTION_EPS, MimicModel
 from . import mimic
-from ..spatial import (add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite, force_cross,
-                       force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up, motion_cross,
-                       motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
-from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model,
-                   lane_record, motion_model, no_wrenches, placement_lanes, scatter_lanes, set3, set6, shift_code,
+from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite,
+                       force_cross, force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up,
+                       motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
+from .core import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
+                   motion_model, no_wrenches, on_lanes, placement_lanes, scatter_lanes, set3, set6, shift_code,
                    tree_depth, unpack, wrench_rows_of)
 from .crba import crba, crba_kernel, crba_lanes
 from .rnea import rnea, rnea_kernel, rnea_lanes
@@ -287,7 +287,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     then names the joint or the entry; a bad input's code is ≥ 0, and ``state.raise_kernel_error`` names it from
     the inputs). Agrees with the one-state kernel to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if body.shape[0] > 0 or nq != nb or nv != nb:
+    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq):
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -300,8 +300,8 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     depth, dmin = tree_depth(parent), singular_threshold(mdl.inertia, mdl.mass)
     for s0 in range(0, N, L):
         n = min(L, N - s0)
-        ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(Tau, s0, n, Z, 2 * nb)
-        ok &= angles_in_range(mdl, Z)
+        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nb) \
+            & gather_lanes(Tau, s0, n, Z, 2 * nb)
         if ok:
             for i in range(nb):                                          # pass 1 (outward)
                 j = parent[i]
@@ -603,7 +603,7 @@ _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLA
 
 
 @route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_lanes, *_FD), wrenches=True,
-       wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
+       lanes=True, wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
 
@@ -624,7 +624,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
 
 
 @route("forward_dynamics", _QVT, "q̈", "v", entry(cholesky_one, *_ONE), entry(cholesky_kernel, *_FD), wrenches=True,
-       wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
+       lanes=True, wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
        mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``.

@@ -25,11 +25,11 @@ from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..joints import joint_placement
 from ..errors import InputError
 from ..model import MimicModel
-from ..spatial import (add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up, inertia_motion,
-                       merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
+from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
+                       inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
-from .core import (LANES, add_sym3, angles_in_range, gather_lanes, get3, get_rotation, get_sym3, lane_record,
-                   placement_lanes, shift_code, tree_depth, unpack)
+from .core import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
+                   shift_code, tree_depth, unpack)
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
 
@@ -146,7 +146,7 @@ def crba_lanes(I, F, Q, M):
     mass_matrix. A model with a multi-dof joint (free flyer) runs ``crba_kernel``; so does a block with a
     non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
-    if nq != nb or nv != nb:
+    if not on_lanes(unpack(I, F), nq):
         return crba_kernel(I, F, Q, M)
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -158,8 +158,7 @@ def crba_lanes(I, F, Q, M):
     depth = tree_depth(parent)
     for s0 in range(0, N, L):
         n = min(L, N - s0)
-        ok = gather_lanes(Q, s0, n, Z, 0)
-        ok &= angles_in_range(mdl, Z)
+        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX)
         if ok:
             for i in range(nb):                                        # pass 1: placements, own inertias
                 B = lane_record(even, odd, depth, i, COMPOSITE)
@@ -309,7 +308,8 @@ def mass_matrix(model, q, method=_CRBA, *, threads=None):
     return lagrange_mass_matrix(model, q)
 
 
-@route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_lanes, *MODEL, A2, A3))
+@route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_lanes, *MODEL, A2, A3),
+       lanes=True)
 def crba(model, q, *, threads=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
     route: dynamics/route.py). threads: a batch's threads (``rnea``'s)."""

@@ -24,10 +24,10 @@ import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
-from ..spatial import (add, compose, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6, sandwich3,
-                       sub)
-from .core import (LANES, angles_in_range, fk_pass, fk_path, gather_lanes, get3, get_rotation, kernel_arrays,
-                   lane_record, nonfinite_input, placement_lanes, set3, shift_code, tree_depth, unpack)
+from ..spatial import (SINCOS_MAX, add, compose, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6,
+                       sandwich3, sub)
+from .core import (LANES, fk_pass, fk_path, gather_lanes, get3, get_rotation, kernel_arrays, lane_record,
+                   nonfinite_input, on_lanes, placement_lanes, set3, shift_code, tree_depth, unpack)
 from .state import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
@@ -159,7 +159,7 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     base, a model with a multi-dof joint, and a block with a non-finite q or an angle beyond ``spatial.SINCOS_MAX``
     (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], J.shape[2]
-    if want == 2 or V.shape[1] > 0 or b < 0 or nq != nb or I[4].sum() != nb:
+    if want == 2 or V.shape[1] > 0 or b < 0 or not on_lanes(unpack(I, F), nq):
         return frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ)
     I, F = I.copy(), F.copy()                            # the model for this call alone (as rnea.rnea_lanes)
     mdl = unpack(I, F)
@@ -181,8 +181,7 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
         (pl[0], pl[1], pl[2])
     for s0 in range(0, N, L):
         m = min(L, N - s0)
-        ok = gather_lanes(Q, s0, m, Z, 0)
-        ok &= angles_in_range(mdl, Z)
+        ok = gather_lanes(Q, s0, m, Z, 0, SINCOS_MAX)
         if ok:
             for k in range(n - 1, -1, -1):                               # root → b: placements
                 i = path[k]
@@ -392,11 +391,13 @@ def com_jacobians_kernel(I, F, Q, c, J, Iw):
 
 # -- Python entry points -----------------------------------------------------------------------------------
 
-def frame_row(model, frame):
+def frame_row(model, frame, lanes=False):
     """(body, X (4, 3) = [R; p]) of a link or frame name: the frame's placement in its body
-    (``model.kernel.frame_rows``); InputError lists the closest names."""
-    row = model.kernel.frame_rows.get(frame) if type(frame) is str else None
-    return row if row is not None else model.kernel.frame_rows[frame_of(model, frame).name]
+    (``model.kernel.frame_rows``; ``lanes``: in the body's z-aligned frame, ``lane_frame_rows``); InputError lists
+    the closest names."""
+    rows = model.kernel.lane_frame_rows if lanes else model.kernel.frame_rows
+    row = rows.get(frame) if type(frame) is str else None
+    return row if row is not None else rows[frame_of(model, frame).name]
 
 
 def one_state_row(model, frame, reference):
@@ -412,13 +413,13 @@ def one_state_row(model, frame, reference):
 
 def _frame_terms(model, call, frame, Q, V, want, reference):
     """Run frame_kernel on checked batches; returns Rf, pf, J, J̇ (batch form; J, J̇ empty when not wanted)."""
-    b, X = frame_row(model, frame)
+    b, X = frame_row(model, frame, lanes=True)      # the batch entry is a lane kernel: the z-aligned form
     N, nv = Q.shape[0], model.nv
     Rf, pf = np.empty((N, 3, 3)), np.empty((N, 3))
     J = np.zeros((N, 6, nv)) if want >= 1 else np.empty((N, 0, 0))
     dJ = np.zeros((N, 6, nv)) if want == 2 else np.empty((N, 0, 0))
     Vk = np.empty((N, 0)) if V is None else V
-    code = FRAME.call(*kernel_arrays(model), Q, Vk, b, X[:3], X[3], want, reference == "local", Rf, pf, J, dJ)
+    code = FRAME.call(*model.kernel.lane_arrays, Q, Vk, b, X[:3], X[3], want, reference == "local", Rf, pf, J, dJ)
     if code != -1:
         names, batches = ("q",) if V is None else ("q", "v"), (Q,) if V is None else (Q, V)
         raise_kernel_error(model, code, names, batches, call)

@@ -34,9 +34,9 @@ import numpy as np
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
-from ..spatial import add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
-from .core import (LANES, angles_in_range, finite_state, gather_lanes, get3, get_rotation, inertial_model, kernel_arrays,
-                   lane_record, motion_model, no_wrenches, placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
+from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
+from .core import (LANES, finite_state, gather_lanes, get3, get_rotation, inertial_model, kernel_arrays, lane_record,
+                   motion_model, no_wrenches, on_lanes, placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
                    unpack, wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -208,7 +208,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if T.shape[0] > 0 or nq != nb or nv != nb:                          # a multi-dof joint, the terms
+    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq):            # the terms, a multi-dof joint
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
     mdl = unpack(I, F)          # references, and threads sharing one array contend for its count (measured: two
@@ -218,14 +218,13 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     base = np.zeros(9 * LANES)                  # the fixed base as a parent: ω' = ω̇' = 0, v̇' = −g (docs §6)
     for l in range(LANES):
         base[6 * LANES + l], base[7 * LANES + l], base[8 * LANES + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
-    spare = np.empty(6 * LANES)                 # where a root's f', n' go (the base takes them)
     Z, TB = np.empty(3 * nb * LANES), np.empty(nb * LANES)      # q, q̇, q̈ and τ of the block, state index last
     W, path = np.empty(6 * LANES), np.empty(nb, np.int64)      # a wrench of the block, a body's path (external_lanes)
     depth = tree_depth(parent)
     for s0 in range(0, N, LANES):
         n = min(LANES, N - s0)
-        ok = gather_lanes(Q, s0, n, Z, 0) & gather_lanes(V, s0, n, Z, nb) & gather_lanes(A, s0, n, Z, 2 * nb)
-        ok &= angles_in_range(mdl, Z)
+        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nb) \
+            & gather_lanes(A, s0, n, Z, 2 * nb)
         if ok:
             for i in range(nb):                                          # outward, Eqs. 3–14
                 j = parent[i]
@@ -235,7 +234,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
                 j = parent[i]
-                to = spare if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
+                to = TB if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
                 inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB, Z)
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
@@ -254,8 +253,13 @@ def outward_lanes(i, mdl, B, par, Z):
     model's numbers that each needs fit in the vector registers (one loop spilled them: 13.7 → 11.5 ns per lane)."""
     placement_lanes(i, mdl, B, Z)
     mm, im = motion_model(i, mdl), inertial_model(i, mdl)
-    for l in range(LANES):
-        motion_lane(mm, B, par, Z, l, LANES)
+    if mdl.parent[i] < 0:
+        mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
+        for l in range(LANES):
+            root_motion_lane(mm, B, mg, Z, l, LANES)
+    else:
+        for l in range(LANES):
+            motion_lane(mm, B, par, Z, l, LANES)
     for l in range(LANES):
         inertial_lane(im, B, l, LANES)
 
@@ -271,13 +275,25 @@ def motion_lane(mm, B, par, Z, l, L):
     dw_in = mul3t(R, dw0)
     dv_in = mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))    # Eq. 6 (32c)
     qd, qdd = Z[(nb + r) * L + l], Z[(2 * nb + r) * L + l]
-    VL, VA, AL, AA = scale(qd, sl), scale(qd, sa), scale(qdd, sl), scale(qdd, sa)
-    w = add(w_in, VA)                                           # Eq. 3
-    dw = add(add(dw_in, AA), cross(w_in, VA))                   # Eq. 5
-    dv = add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL)))     # Eqs. 6, 12
+    vl, va = qd * sl[2], qd * sa[2]             # the joint's rate along z'_i (z-aligned frames: S = [0 0 s_l; 0 0 s_a])
+    w = (w_in[0], w_in[1], w_in[2] + va)                                          # Eq. 3
+    dw = (dw_in[0] + w_in[1] * va, dw_in[1] - w_in[0] * va, dw_in[2] + qdd * sa[2])   # Eq. 5: + ω' × q̇ z'
+    dv = (dv_in[0] + 2.0 * w_in[1] * vl, dv_in[1] - 2.0 * w_in[0] * vl, dv_in[2] + qdd * sl[2])   # Eqs. 6, 12
     set3(B, 12, l, L, w)
     set3(B, 15, l, L, dw)
     set3(B, 18, l, L, dv)
+
+
+@njit(cache=True, inline="always")
+def root_motion_lane(mm, B, mg, Z, l, L):
+    """``motion_lane`` for a body on the fixed base, whose ω' and ω̇' are 0 and v̇' = −g (mg, docs/design.md §6):
+    ω' = q̇ z', ω̇' = q̈ z', v̇' = Rᵀ(−g) + q̈ z' (prismatic)."""
+    r, sl, sa, nb = mm
+    qd, qdd = Z[(nb + r) * L + l], Z[(2 * nb + r) * L + l]
+    dv_in = mul3t(get_rotation(B, l, L), mg)
+    set3(B, 12, l, L, (0.0, 0.0, qd * sa[2]))
+    set3(B, 15, l, L, (0.0, 0.0, qdd * sa[2]))
+    set3(B, 18, l, L, (dv_in[0], dv_in[1], dv_in[2] + qdd * sl[2]))
 
 
 @njit(cache=True, inline="always")
@@ -330,10 +346,23 @@ def external_lane(B, fe, ne, p, l, L):
 
 @njit(cache=True, fastmath=CONTRACT)
 def inward_lanes(i, mdl, B, to, TB, Z):
-    """``inward_lane`` for every lane of the block."""
+    """``inward_lane`` for every lane of the block; a body on the fixed base, whose wrench the base takes, its τ
+    alone (``torque_lane``)."""
     mm, ar = motion_model(i, mdl), mdl.armature[mdl.iv[i]]
-    for l in range(LANES):
-        inward_lane(mm, ar, B, to, TB, Z, l, LANES)
+    if mdl.parent[i] < 0:
+        for l in range(LANES):
+            torque_lane(mm, ar, B, TB, Z, l, LANES)
+    else:
+        for l in range(LANES):
+            inward_lane(mm, ar, B, to, TB, Z, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def torque_lane(mm, ar, B, TB, Z, l, L):
+    """τ_i = z'ᵀ f'_i (prismatic) or z'ᵀ n'_i (revolute) + armature_i q̈_i (Eqs. 17, 18; the rotor term as ``rotor``)
+    into row iv_i of TB at lane l (z-aligned frames: S = [0 0 s_l; 0 0 s_a]); mm: ``motion_model``."""
+    r, sl, sa, nb = mm
+    TB[r * L + l] = sl[2] * B[23 * L + l] + sa[2] * B[26 * L + l] + ar * Z[(2 * nb + r) * L + l]
 
 
 @njit(cache=True, inline="always")
@@ -341,10 +370,8 @@ def inward_lane(mm, ar, B, to, TB, Z, l, L):
     """τ_i = Sᵀ [f'_i; n'_i] + armature_i q̈_i (Eqs. 17, 18; the rotor term as ``rotor``) into row iv_i of TB, and the
     parent's f', n' (``to``: 6 rows) += R f'_i, R n'_i + p × R f'_i (Eqs. 15, 16), at lane l, as ``inward`` and
     ``rotor`` for one state; mm: ``motion_model``, ar: joint i's armature, Z: the block's q, q̇, q̈."""
-    r, sl, sa, nb = mm
     f, n = get3(B, 21, l, L), get3(B, 24, l, L)
-    TB[r * L + l] = sl[0] * f[0] + sl[1] * f[1] + sl[2] * f[2] + sa[0] * n[0] + sa[1] * n[1] + sa[2] * n[2] \
-        + ar * Z[(2 * nb + r) * L + l]                                            # τ += armature ⊙ q̈
+    torque_lane(mm, ar, B, TB, Z, l, L)
     R = get_rotation(B, l, L)
     Rf, Rn = mul3(R, f), mul3(R, n)
     n_up = add(Rn, cross(get3(B, 9, l, L), Rf))
@@ -472,7 +499,7 @@ def store_terms(mdl, work, T):
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
 
 @route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,),
-       wrenches=True,
+       wrenches=True, lanes=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
@@ -492,14 +519,14 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
 
 
 @route("nonlinear_effects", ("q", "v"), "h", "v", entry(bias_one, *MODEL, A1, A1, A1),
-       entry(bias_kernel, *MODEL, A2, A2, A2), mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
+       entry(bias_kernel, *MODEL, A2, A2, A2), lanes=True, mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
 def nonlinear_effects(model, q, v, *, threads=None):
     """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
     nonLinearEffects), τ = M q̈ + h. threads: a batch's threads (``rnea``'s)."""
 
 
 @route("gravity_torques", ("q",), "g", "v", entry(gravity_one, *MODEL, A1, A1), entry(gravity_kernel, *MODEL, A2, A2),
-       mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
+       lanes=True, mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
 def gravity_torques(model, q, *, threads=None):
     """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0.
     threads: a batch's threads (``rnea``'s)."""

@@ -221,14 +221,16 @@ class Route:
     wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``state.wrench_rows``
     wrench_one  entry for one state with one wrench: (I, F, *state, force, moment, row, world, out)
     mimic     mimic(model, *states, **wrench keywords) for a MimicModel, or None (refused, by name)
+    lanes     True: the batch entry is a lane kernel, which takes the model in z-aligned frames
+              (``Model.kernel.lane_arrays``, and its wrenches in those frames)
     """
     __slots__ = ("call", "names", "result", "shape", "one", "batch", "tail", "wrenches", "wrench_one",
-                 "mimic", "public")
+                 "mimic", "public", "lanes")
 
     def __init__(self, call, names, result, shape, one, batch, *, tail=(), wrenches=False,
-                 wrench_one=None, mimic=None):
+                 wrench_one=None, mimic=None, lanes=False):
         self.call, self.names, self.result, self.shape = call, tuple(names), result, shape
-        self.one, self.batch, self.tail = one, batch, tuple(tail)
+        self.one, self.batch, self.tail, self.lanes = one, batch, tuple(tail), lanes
         self.wrenches, self.wrench_one, self.mimic = wrenches, wrench_one, mimic
 
     def by_name(self, a, tau):
@@ -269,11 +271,12 @@ class Route:
             return out
         if self.wrenches:
             with np.errstate(over="ignore", invalid="ignore"):  # (an overflow comes back as a kernel code)
-                ext = (*wrench_rows(model, f_ext, f_ext_frame, N), f_ext_frame == "world")
+                ext = (*wrench_rows(model, f_ext, f_ext_frame, N, self.lanes), f_ext_frame == "world")
         else:
             ext = ()
         out = np.empty((N,) + shape)
-        code = run_batch(self.batch, model.kernel.arrays, states, ext, out, self.tail, thread_count(threads, self.call),
+        arrays = model.kernel.lane_arrays if self.lanes else model.kernel.arrays
+        code = run_batch(self.batch, arrays, states, ext, out, self.tail, thread_count(threads, self.call),
                          model.njoints)
         if code != -1:
             self.fail(model, code, states, out, f_ext, f_ext_frame)

@@ -170,8 +170,9 @@ def check_f_ext(model, f_ext, f_ext_frame, N):
     return out or None
 
 
-def wrench_rows(model, f_ext, f_ext_frame, N):
+def wrench_rows(model, f_ext, f_ext_frame, N, lanes=False):
     """f_ext = {frame: (force, moment)} checked and laid out for the kernels: one row per wrench on a moving body.
+    ``lanes``: for the lane kernels' form (``Model.kernel.lane_arrays``), "body axes" are the body's z-aligned ones.
 
     Returns X (N, K, 6) = [force; moment] of each wrench, body (K,) int64 and point (K, 3) = the frame's
     origin in body axes, about which the moment is taken. With f_ext_frame="local" the frame's axes are
@@ -182,9 +183,10 @@ def wrench_rows(model, f_ext, f_ext_frame, N):
     rows = [w for w in (check_f_ext(model, f_ext, f_ext_frame, N) or ()) if w[0].body >= 0]
     X, body, point = np.empty((N, len(rows), 6)), np.empty(len(rows), np.int64), np.empty((len(rows), 3))
     for k, (fr, f, m) in enumerate(rows):
+        Ct = model.kernel.lane_turns[fr.body].T if lanes else np.eye(3)     # body axes -> lane axes
         if f_ext_frame == "local":       # frame axes -> body axes
-            f, m = f @ fr.R.T, m @ fr.R.T
-        X[:, k, :3], X[:, k, 3:], body[k], point[k] = f, m, fr.body, fr.p
+            f, m = f @ (Ct @ fr.R).T, m @ (Ct @ fr.R).T
+        X[:, k, :3], X[:, k, 3:], body[k], point[k] = f, m, fr.body, Ct @ fr.p
     return X, body, point
 
 

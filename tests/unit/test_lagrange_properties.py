@@ -67,7 +67,10 @@ def test_f_ext_in_forward_dynamics(states):
         tau = md.rnea(model, Q, V, A, f_ext=fx, f_ext_frame=ff)
         qdd = md.aba(model, Q, V, tau, f_ext=fx, f_ext_frame=ff)
         cond = np.linalg.cond(md.mass_matrix(model, Q))
-        assert md.validation.error(qdd, A) <= 1e-14 * cond.max()
+        worst = max(md.validation.error(qdd[s], A[s]) / cond[s] for s in range(len(Q)))
+        # state by state, scaled by its cond(M): measured ≤ 1.5e-16 on the arms, 5.4e-14 on allegro (a 1 N wrench
+        # on a 12 g fingertip, whose share of τ dwarfs M q̈)
+        assert worst <= 1e-13, (ff, worst)
 
 
 def test_lagrange_equals_newton_euler(states):

@@ -1,0 +1,71 @@
+"""The lane kernels' model: every 1-dof body frame turned so that its joint axis is z (model.z_aligned,
+Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the scalar kernels, which take
+any axis: the same τ and M from both forms on a tree with unaligned axes; the rotation C_i that turns e_z into the
+axis; the batch routes reaching the lane steps only with that form (any other falls back to the scalar kernel)."""
+import numpy as np
+import pytest
+from conftest import AAU, assert_close
+from test_lanes import _tree
+
+import manipdyn as md
+from manipdyn.dynamics.core import on_lanes, unpack
+from manipdyn.dynamics.crba import crba_kernel
+from manipdyn.dynamics.rnea import NT, rnea_kernel
+from manipdyn.model import z_turn
+from manipdyn.validation import random_states
+
+
+@pytest.mark.parametrize("k", [(0, 0, 1), (0, 0, -1), (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), "random"])
+def test_z_turn_is_a_rotation_taking_z_to_the_axis(k):
+    rng = np.random.default_rng(3)
+    axes = [np.array(k, float)] if k != "random" else [x / np.linalg.norm(x) for x in rng.normal(size=(50, 3))]
+    for a in axes:
+        C = z_turn(a)
+        assert np.abs(C.T @ C - np.eye(3)).max() < 1e-15 and abs(np.linalg.det(C) - 1) < 1e-15   # ≤ 4.4e-16
+        assert np.abs(C[:, 2] - a).max() < 3e-16                      # C e_z = k
+        if k != "random":
+            assert np.array_equal(C[:, 2], a) and set(np.unique(C)) <= {-1.0, 0.0, 1.0}   # exact, no rounding
+
+
+def _scalar(I, F, Q, V, A):
+    N, nv = Q.shape[0], V.shape[1]
+    tau, M = np.empty((N, nv)), np.empty((N, nv, nv))
+    rnea_kernel(I, F, Q, V, A, np.zeros((1, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), False, tau,
+                np.zeros((0, I.shape[1], NT)))
+    crba_kernel(I, F, Q, M)
+    return tau, M
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "tree"])
+def test_the_lane_form_is_the_same_model(name):
+    """The scalar kernels on both forms: τ and M agree to rounding (the turn changes only what is written in a
+    body's own axes), and the lane form's joint axes are exactly z."""
+    model = md.load_urdf(AAU) if name == "aau_arm" else md.load_urdf_string(_tree())
+    Q, V, A = random_states(model, 200, np.random.default_rng(4))
+    tau, M = _scalar(*model.kernel.arrays, Q, V, A)
+    tau_z, M_z = _scalar(*model.kernel.lane_arrays, Q, V, A)
+    assert_close(tau_z, tau, 1e-14, f"{name} τ")                     # measured ≤ 1.2e-15 (0 on the AAU arm)
+    assert_close(M_z, M, 1e-14, f"{name} M")                         # measured ≤ 5.7e-16
+    mdl = unpack(*model.kernel.lane_arrays)
+    assert np.array_equal(mdl.axis, np.tile([0.0, 0.0, 1.0], (model.njoints, 1)))
+    assert on_lanes(mdl, model.nq)
+    # the model's own arrays reach the lane steps only where every axis is z already (the AAU arm's D-H frames)
+    assert on_lanes(unpack(*model.kernel.arrays), model.nq) == (name == "aau_arm")
+    if name == "aau_arm":
+        assert np.array_equal(model.kernel.lane_arrays[1], model.kernel.arrays[1])   # no turn: the same numbers
+
+
+def test_frames_and_wrenches_in_the_lane_form_are_the_same_points():
+    """A frame's placement in its body, turned into the body's z-aligned frame, is the same point and axes in the
+    world: C_b (Cᵀ R, Cᵀ p) = (R, p)."""
+    model = md.load_urdf_string(_tree(tool=True))
+    k = model.kernel
+    for name, (b, X) in k.frame_rows.items():
+        C = k.lane_turns[b] if b >= 0 else np.eye(3)
+        Xz = k.lane_frame_rows[name][1]
+        assert np.abs(C @ Xz[:3] - X[:3]).max() < 1e-15 and np.abs(C @ Xz[3] - X[3]).max() < 1e-15, name  # ≤ 6.7e-16
+        for axes in ("local", "world"):
+            P, Pz = k.wrench_rows[name, axes], k.lane_wrench_rows[name, axes]
+            R, Rz = P[:9].reshape(3, 3), Pz[:9].reshape(3, 3)
+            assert np.abs((C @ Rz if axes == "local" else Rz) - R).max() < 1e-15, (name, axes)
+            assert np.abs(C @ Pz[9:12] - P[9:12]).max() < 1e-15 and Pz[12] == P[12], (name, axes)
