@@ -157,7 +157,7 @@ def test_playback_moves_cursor_and_click_on_plot_seeks(browser, tmp_path_factory
     page_s = (last1 - last0) / 1000
     advanced, expected = (t1 - t0) % T, (0.25 * page_s) % T
     assert 0.02 < advanced and min(abs(advanced - expected), T - abs(advanced - expected)) < 1e-9, (advanced, expected)
-    assert 0 < page_s <= wall + 0.5 and x1 != x0
+    assert 0 < page_s <= wall + 2.0 and x1 != x0        # (+ the age of the first frame read, < 2 s even when loaded)
     # the leg singularity is marked on the time axis of every plot
     assert browser.run("return document.querySelectorAll('#manipdyn-plot-tau .manipdyn-mark').length") == 1
     # a click at 40 % of the torque plot's time axis seeks there and pauses
