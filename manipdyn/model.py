@@ -20,6 +20,7 @@ import numpy as np
 from types import MappingProxyType
 
 from .errors import InputError
+from .spatial import skew
 from .joints import (BALL, COORDS, FREEFLYER, NQ, NV, OMEGA_AT, PRISMATIC, QUAT_AT, RATES, REVOLUTE, TYPE_NAMES,
                      motion_subspace)
 
@@ -495,9 +496,9 @@ class KernelForm:
     #                            (nv, 10 nb) (the regressor)
     lane_arrays: tuple         # (I, F) of the same model in z-aligned body frames (``z_aligned``): what the lane
     #                            kernels take (a batch's route; the GPU)
-    lane_turns: np.ndarray     # (nb, 3, 3) C_i: body i's z-aligned frame in its own (x_body = C_i x_lane)
+    lane_turns: np.ndarray     # (nb, 3, 3) C_i: body i's z-aligned frame in its own (x_body = C_i x_lane); a
+    #                            wrench's rows are turned with it as they are laid out (state.wrench_rows(lanes=True))
     lane_frame_rows: MappingProxyType   # frame_rows in those frames
-    lane_wrench_rows: MappingProxyType  # wrench_rows in those frames
 
     @classmethod
     def of(cls, model) -> "KernelForm":
@@ -506,16 +507,7 @@ class KernelForm:
         I = np.zeros((5, nb), np.int64)
         if nb:
             I[:] = np.vstack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
-        S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, model.axis)]) if nb \
-            else np.zeros((0, 6))
-        m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
-        F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
-        F[:nb], F[nb:2 * nb] = model.R0, model.inertia
-        F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = model.axis, model.p0, model.com
-        F[3 * nb:4 * nb, 0, 0] = model.mass
-        F[4 * nb, 0] = -np.asarray(model.gravity, float)
-        F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
-        F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature
+        F = _floats(model, model.R0, model.inertia, model.axis, model.p0, model.com)
         config = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
                   np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
         frame_rows, one_state, wrench = {}, {}, {}
@@ -528,19 +520,14 @@ class KernelForm:
             for axes in ("local", "world"):
                 wrench[name, axes] = np.concatenate([(R if axes == "local" else np.eye(3)).ravel(), p, [float(fr.body)]])
         ints, floats, labels = _closure_form(model.constraints)
-        Fz, turn = z_aligned(model, F)
-        lane_frames, lane_wrench = {}, {}
+        *turned, turn = z_aligned(model)
+        Fz = _floats(model, *turned)
+        lane_frames = {}
         for name, (b, X) in frame_rows.items():
             C = turn[b] if b >= 0 else np.eye(3)             # the frame in the body's z-aligned frame: Cᵀ R, Cᵀ p
             lane_frames[name] = (b, np.ascontiguousarray(np.vstack([C.T @ X[:3], C.T @ X[3]])))
-            for axes in ("local", "world"):
-                P = wrench[name, axes].copy()
-                if axes == "local":
-                    P[:9] = (C.T @ P[:9].reshape(3, 3)).ravel()
-                P[9:12] = C.T @ P[9:12]
-                lane_wrench[name, axes] = P
         arrays = [I, F, Fz, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
-                  *wrench.values(), turn, *(x for _, x in lane_frames.values()), *lane_wrench.values()]
+                  *wrench.values(), turn, *(x for _, x in lane_frames.values())]
         for a in arrays:
             a.setflags(write=False)
         return cls((model.nq,), (model.nv,), (I, F), I, F, config,
@@ -548,43 +535,55 @@ class KernelForm:
                    MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
                    ints, floats, labels,
                    ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)),
-                   (I, Fz), turn, MappingProxyType(lane_frames), MappingProxyType(lane_wrench))
+                   (I, Fz), turn, MappingProxyType(lane_frames))
+
+
+def _floats(model, R0, inertia, axis, p0, com):
+    """F, the kernels' float array (KernelForm's layout), of the model with these joint frames, inertias, axes,
+    origins and centres of mass (the model's own, or ``z_aligned``'s)."""
+    nb = model.njoints
+    S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, axis)]) if nb else np.zeros((0, 6))
+    m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
+    F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
+    F[:nb], F[nb:2 * nb] = R0, inertia
+    F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = axis, p0, com
+    F[3 * nb:4 * nb, 0, 0] = model.mass
+    F[4 * nb, 0] = -np.asarray(model.gravity, float)
+    F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
+    F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature
+    return F
 
 
 def z_turn(k) -> np.ndarray:
     """C, the rotation that turns e_z into the unit vector k (C e_z = k): the identity for k = e_z, a half turn
-    about x for k = −e_z, else the shortest turn, about e_z × k (exact for k along an axis)."""
+    about x for k = −e_z, else the shortest turn, about u = e_z × k / |e_z × k|, by Rodrigues with cos = k_z and
+    sin = |e_z × k| taken from k itself (``spatial.axis_angle`` takes an angle, whose sin and cos would round: this
+    way a turn onto a coordinate axis is exact)."""
     k = np.asarray(k, float)
     c, s = k[2], np.hypot(k[0], k[1])
     if s == 0.0:
         return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
-    u = np.array([-k[1] / s, k[0] / s, 0.0])                 # e_z × k / |e_z × k|
-    U = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
-    return c * np.eye(3) + s * U + (1.0 - c) * np.outer(u, u)
+    u = np.array([-k[1] / s, k[0] / s, 0.0])
+    return c * np.eye(3) + s * skew(u) + (1.0 - c) * np.outer(u, u)
 
 
-def z_aligned(model, F):
-    """The kernel array F of the same model with every 1-dof joint's body frame turned so that its joint axis
-    is z (the chapter's z'_i, docs/design.md §4c): body i's frame becomes C_i (``z_turn`` of its axis; the
-    identity for a ball or free joint), so R^{i−1}_i = R0'_i Rot(z, q), R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i,
-    c'_i = C_iᵀ c_i, I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world placements are the same numbers: only
-    what is written in a body's own axes changes. Returns (F', C (nb, 3, 3))."""
+def z_aligned(model):
+    """The model's joint frames, inertias, axes, origins and centres of mass with every 1-dof joint's body frame
+    turned so that its joint axis is z (the chapter's z'_i, docs/design.md §4c): body i's frame becomes C_i
+    (``z_turn`` of its axis; the identity for a ball or free joint), so R^{i−1}_i = R0'_i Rot(z, q),
+    R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i, c'_i = C_iᵀ c_i, I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world
+    placements are the same numbers: only what is written in a body's own axes changes.
+    Returns (R0', I', axis', p0', c', C), each (nb, 3, 3) or (nb, 3)."""
     nb = model.njoints
     C = np.array([z_turn(model.axis[i]) if model.nvs[i] == 1 else np.eye(3) for i in range(nb)]).reshape(nb, 3, 3)
-    Fz = F.copy()
-    for i in range(nb):
-        Cp = C[model.parent[i]] if model.parent[i] >= 0 else np.eye(3)
-        Fz[i] = Cp.T @ F[i] @ C[i]                                   # R0'
-        J = C[i].T @ F[nb + i] @ C[i]
-        Fz[nb + i] = 0.5 * (J + J.T)                                 # I' about the CoM
-        axis = (0.0, 0.0, 1.0) if model.nvs[i] == 1 else F[2 * nb + i, 0]          # C e_z = k: exactly z
-        Fz[2 * nb + i] = (axis, Cp.T @ F[2 * nb + i, 1], C[i].T @ F[2 * nb + i, 2])
-    m = max(2, 2 * ((model.nv + 2) // 3))
-    S = Fz[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)
-    for i in range(nb):
-        if model.nvs[i] == 1:
-            S[model.idx_v[i]] = motion_subspace(int(model.kind[i]), Fz[2 * nb + i, 0])
-    return Fz, C
+    Cp = np.array([C[j] if j >= 0 else np.eye(3) for j in model.parent]).reshape(nb, 3, 3)
+    Ct = np.swapaxes(C, 1, 2)
+    R0 = np.swapaxes(Cp, 1, 2) @ np.asarray(model.R0, float) @ C
+    J = Ct @ np.asarray(model.inertia, float) @ C
+    axis = np.where(np.asarray(model.nvs)[:, None] == 1, [0.0, 0.0, 1.0], model.axis)   # C e_z = k: exactly z
+    p0 = np.einsum("nji,nj->ni", Cp, np.asarray(model.p0, float))
+    com = np.einsum("nji,nj->ni", C, np.asarray(model.com, float))
+    return R0, 0.5 * (J + np.swapaxes(J, 1, 2)), axis.reshape(nb, 3), p0, com, C
 
 
 def perpendicular_pair(e):

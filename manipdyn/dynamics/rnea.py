@@ -233,7 +233,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
             if xb.shape[0] > 0:
                 external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
-                j = parent[i]
+                j = parent[i]                                            # (a root's ``to`` is not read)
                 to = TB if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
                 inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB, Z)
             ok = scatter_lanes(TB, n, tau, s0)
@@ -362,7 +362,7 @@ def torque_lane(mm, ar, B, TB, Z, l, L):
     """τ_i = z'ᵀ f'_i (prismatic) or z'ᵀ n'_i (revolute) + armature_i q̈_i (Eqs. 17, 18; the rotor term as ``rotor``)
     into row iv_i of TB at lane l (z-aligned frames: S = [0 0 s_l; 0 0 s_a]); mm: ``motion_model``."""
     r, sl, sa, nb = mm
-    TB[r * L + l] = sl[2] * B[23 * L + l] + sa[2] * B[26 * L + l] + ar * Z[(2 * nb + r) * L + l]
+    TB[r * L + l] = sl[2] * B[(_F + 2) * L + l] + sa[2] * B[(_F + 5) * L + l] + ar * Z[(2 * nb + r) * L + l]
 
 
 @njit(cache=True, inline="always")

@@ -11,6 +11,7 @@ import manipdyn as md
 from manipdyn.dynamics.core import on_lanes, unpack
 from manipdyn.dynamics.crba import crba_kernel
 from manipdyn.dynamics.rnea import NT, rnea_kernel
+from manipdyn.dynamics.state import wrench_rows
 from manipdyn.model import z_turn
 from manipdyn.validation import random_states
 
@@ -57,15 +58,21 @@ def test_the_lane_form_is_the_same_model(name):
 
 def test_frames_and_wrenches_in_the_lane_form_are_the_same_points():
     """A frame's placement in its body, turned into the body's z-aligned frame, is the same point and axes in the
-    world: C_b (Cᵀ R, Cᵀ p) = (R, p)."""
+    world: C_b (Cᵀ R, Cᵀ p) = (R, p); so is a wrench laid out for the lane kernels (``state.wrench_rows``)."""
     model = md.load_urdf_string(_tree(tool=True))
     k = model.kernel
     for name, (b, X) in k.frame_rows.items():
         C = k.lane_turns[b] if b >= 0 else np.eye(3)
         Xz = k.lane_frame_rows[name][1]
         assert np.abs(C @ Xz[:3] - X[:3]).max() < 1e-15 and np.abs(C @ Xz[3] - X[3]).max() < 1e-15, name  # ≤ 6.7e-16
-        for axes in ("local", "world"):
-            P, Pz = k.wrench_rows[name, axes], k.lane_wrench_rows[name, axes]
-            R, Rz = P[:9].reshape(3, 3), Pz[:9].reshape(3, 3)
-            assert np.abs((C @ Rz if axes == "local" else Rz) - R).max() < 1e-15, (name, axes)
-            assert np.abs(C @ Pz[9:12] - P[9:12]).max() < 1e-15 and Pz[12] == P[12], (name, axes)
+    rng = np.random.default_rng(2)
+    fx = {n: (rng.normal(size=(5, 3)), rng.normal(size=(5, 3))) for n in ("tool", "L3", "L0")}
+    for axes in ("local", "world"):
+        X, body, point = wrench_rows(model, fx, axes, 5)
+        Xz, body_z, point_z = wrench_rows(model, fx, axes, 5, lanes=True)
+        C = k.lane_turns[body]                                        # (K, 3, 3)
+        assert np.array_equal(body_z, body) and np.abs(np.einsum("kij,kj->ki", C, point_z) - point).max() < 1e-15
+        if axes == "local":                                           # body axes: turned; world axes: as given
+            Xz = np.concatenate([np.einsum("kij,nkj->nki", C, Xz[..., :3]),
+                                 np.einsum("kij,nkj->nki", C, Xz[..., 3:])], axis=2)
+        assert np.abs(Xz - X).max() < 1e-14 * np.abs(X).max(), axes

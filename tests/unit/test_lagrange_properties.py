@@ -69,8 +69,9 @@ def test_f_ext_in_forward_dynamics(states):
         cond = np.linalg.cond(md.mass_matrix(model, Q))
         worst = max(md.validation.error(qdd[s], A[s]) / cond[s] for s in range(len(Q)))
         # state by state, scaled by its cond(M): measured ≤ 1.5e-16 on the arms, 5.4e-14 on allegro (a 1 N wrench
-        # on a 12 g fingertip, whose share of τ dwarfs M q̈)
-        assert worst <= 1e-13, (ff, worst)
+        # on a 12 g fingertip, whose share of τ dwarfs M q̈: the error scales with it, not with q̈)
+        tol = 1e-13 if model.name.startswith("allegro") else 2e-15
+        assert worst <= tol, (ff, worst)
 
 
 def test_lagrange_equals_newton_euler(states):
