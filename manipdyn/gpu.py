@@ -20,7 +20,8 @@ thread runs which state, and scratch in device memory (kept between calls of the
 
 Checks as on the CPU, on the device: a non-finite input or result, or a revolute angle beyond
 ``spatial.SINCOS_MAX`` (where the GPU, unlike the CPU, has no one-state fallback: reduce the angle modulo 2π),
-raises the typed error naming the first such row. Joints with one velocity only (a free flyer is refused by name).
+raises the typed error naming the first such row. rnea, aba and mass_matrix take free flyers and ball joints; the
+frame calls take joints with one velocity each (a free flyer or ball is refused by name).
 Tested on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, tests/gpu/), compiled to PTX where NVVM is installed,
 and timed by ``scripts/gpu_bench.py`` on a GPU.
 """
@@ -30,15 +31,18 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .dynamics.aba import (_A, _V, ARTICULATED, acceleration_lane, articulated_lane, articulated_model, bias_lane,
-                           bias_up_lane, handed_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane)
-from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, placement_lane,
-                            placement_model, scatter_lane, unpack)
-from .dynamics.crba import (COMPOSITE, column_lane, column_model, column_up_lane, merge_lane, merge_weights,
-                            own_inertia_lane, own_inertia_model)
+from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi_lane, articulated_lane,
+                           articulated_model, articulated_multi_lane, bias_lane, bias_up_lane, handed_lane,
+                           handed_multi_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane,
+                           velocity_multi_lane)
+from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
+                            placement_model, quat_model, quat_placement_lane, scatter_lane, unpack)
+from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, merge_lane,
+                            merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
-from .dynamics.rnea import _F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane
+from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
+                            torque_multi_lane, wrench_up_lane)
 from .dynamics.state import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
@@ -68,26 +72,27 @@ def _cuda():
 # an angle beyond SINCOS_MAX, left uncomputed), runs the lane steps with L = N, writes its result and flags a
 # non-finite one (flags[1]) or, in the ABA, a singular articulated inertia (flags[2]).
 
-def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare, Z, TB, tau, flags, with_v, with_a):
+def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare, Z, TB, tau, angle, flags, with_v,
+                  with_a):
     """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0.
     External wrenches (``_wrenches``): wrench k, rows 6k … 6k + 5 of X (rows N long), on body xb[k] about xp[k]; in
     world axes (world) it is turned into the body by the placements of the bodies paths[poff[k]:poff[k + 1]], from
     the base out (as ``rnea.external_lanes``)."""
     s = cuda.grid(1)
-    N, nb = tau.shape[0], I.shape[1]
+    N, nb, nq, nv = tau.shape[0], I.shape[1], Q.shape[1], tau.shape[1]
     if s >= N:
         return
     mdl = unpack(I, F)
-    bad = gather_lane(Q, Z, s, N, 0, mdl.kind, True)
+    bad = gather_lane(Q, Z, s, N, 0, angle, True)
     if with_v:
-        bad += gather_lane(V, Z, s, N, nb, mdl.kind, False)
+        bad += gather_lane(V, Z, s, N, nq, angle, False)
     if with_a:
-        bad += gather_lane(A, Z, s, N, 2 * nb, mdl.kind, False)
-    for k in range(nb):
+        bad += gather_lane(A, Z, s, N, nq + nv, angle, False)
+    for k in range(nv):
         if not with_v:
-            Z[(nb + k) * N + s] = 0.0
+            Z[(nq + k) * N + s] = 0.0
         if not with_a:
-            Z[(2 * nb + k) * N + s] = 0.0
+            Z[(nq + nv + k) * N + s] = 0.0
     if not bad == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
@@ -99,8 +104,13 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         par = base if j < 0 else rec[(j * RECORD + _W) * N:(j * RECORD + _W + 9) * N]
-        placement_lane(placement_model(i, mdl), B, Z, s, N)
-        motion_lane(motion_model(i, mdl), B, par, Z, s, N)
+        mm = motion_model(i, mdl, nq)
+        if mdl.nvj[i] > 1:                                # a free flyer or a ball joint
+            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
+            motion_lane_multi(mm, B, par, Z, s, N)
+        else:
+            placement_lane(placement_model(i, mdl), B, Z, s, N)
+            motion_lane(mm, B, par, Z, s, N)
         inertial_lane(inertial_model(i, mdl), B, s, N)
     for k in range(xb.shape[0]):                          # external wrenches
         fe, ne = get3(X, 6 * k, s, N), get3(X, 6 * k + 3, s, N)
@@ -114,43 +124,60 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         to = spare if j < 0 else rec[(j * RECORD + _F) * N:(j * RECORD + _F + 6) * N]
-        inward_lane(motion_model(i, mdl), mdl.armature[mdl.iv[i]], B, to, TB, Z, s, N)
+        mm = motion_model(i, mdl, nq)
+        if mdl.nvj[i] > 1:
+            for k in range(mdl.nvj[i]):
+                torque_multi_lane(mm, k, mdl.armature[mdl.iv[i] + k], B, TB, Z, s, N)
+            if j >= 0:
+                wrench_up_lane(B, to, s, N)
+        else:
+            inward_lane(mm, mdl.armature[mdl.iv[i]], B, to, TB, Z, s, N)
     if not scatter_lane(TB, tau, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
 
 
-def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, flags):
+def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, angle, flags):
     """Thread s: state s's M by the composite-rigid-body algorithm (``crba.crba_lanes``' steps)."""
     s = cuda.grid(1)
-    N, nb = M.shape[0], I.shape[1]
+    N, nb, nv = M.shape[0], I.shape[1], M.shape[1]
     if s >= N:
         return
     mdl = unpack(I, F)
-    if not gather_lane(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
+    if not gather_lane(Q, Z, s, N, 0, angle, True) == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
     for i in range(nb):                                   # pass 1: placements, own inertias
         B = rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N]
-        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        if mdl.nvj[i] > 1:
+            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
+        else:
+            placement_lane(placement_model(i, mdl), B, Z, s, N)
         own_inertia_lane(own_inertia_model(i, mdl), B, s, N)
     for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
         j = mdl.parent[i]
         if j >= 0:
             merge_lane((W[i, 0], W[i, 1], W[i, 2]), rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N],
                        rec[j * COMPOSITE * N:(j + 1) * COMPOSITE * N], s, N)
-    for k in range(nb * nb):                              # bodies on different branches do not couple
+    for k in range(nv * nv):                              # bodies on different branches do not couple
         Mb[k * N + s] = 0.0
-    for i in range(nb):                                   # pass 2: column iv_i of M
-        column_lane(column_model(i, i, mdl), mC[i], rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N], Fw, Mb, s, N)
-        k = i
-        while mdl.parent[k] >= 0:
-            column_up_lane(column_model(i, mdl.parent[k], mdl), rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N], Fw,
-                           Mb, s, N)
-            k = mdl.parent[k]
+    for i in range(nb):                                   # pass 2: columns iv_i + r of M (crba.column_lanes)
+        for r in range(mdl.nvj[i]):
+            column_lane(column_model(i, r, i, r, mdl), mC[i], rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N], Fw, Mb,
+                        s, N)
+            for c in range(r):
+                block_lane(column_model(i, r, i, c, mdl), Fw, Mb, s, N)
+            k = i
+            while mdl.parent[k] >= 0:
+                j = mdl.parent[k]
+                column_up_lane(column_model(i, r, j, 0, mdl), rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N], Fw, Mb,
+                               s, N)
+                for c in range(1, mdl.nvj[j]):
+                    block_lane(column_model(i, r, j, c, mdl), Fw, Mb, s, N)
+                k = j
     bad = 0.0
-    for a in range(nb):
+    for a in range(nv):
         for b in range(a + 1):
-            y = Mb[(a * nb + b) * N + s]
+            y = Mb[(a * nv + b) * N + s]
             M[s, a, b] = y
             M[s, b, a] = y
             bad += y - y
@@ -158,15 +185,16 @@ def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, flags):
         cuda.atomic.min(flags, 1, s)
 
 
-def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
-    """Thread s: state s's q̈ by the articulated-body algorithm (``aba.aba_lanes``' steps)."""
+def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, flags):
+    """Thread s: state s's q̈ by the articulated-body algorithm (``aba.aba_lanes``' steps); G: the multi-dof joints'
+    records (aba.MULTI rows each; slot[i]: body i's)."""
     s = cuda.grid(1)
-    N, nb = out.shape[0], I.shape[1]
+    N, nb, nq, nv = out.shape[0], I.shape[1], Q.shape[1], out.shape[1]
     if s >= N:
         return
     mdl = unpack(I, F)
-    bad = gather_lane(Q, Z, s, N, 0, mdl.kind, True) + gather_lane(V, Z, s, N, nb, mdl.kind, False) + \
-        gather_lane(T, Z, s, N, 2 * nb, mdl.kind, False)
+    bad = gather_lane(Q, Z, s, N, 0, angle, True) + gather_lane(V, Z, s, N, nq, angle, False) + \
+        gather_lane(T, Z, s, N, nq + nv, angle, False)
     if not bad == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
@@ -176,17 +204,30 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
         j = mdl.parent[i]
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         par = base[:6 * N] if j < 0 else rec[(j * ARTICULATED + _V) * N:(j * ARTICULATED + _V + 6) * N]
-        placement_lane(placement_model(i, mdl), B, Z, s, N)
-        velocity_lane(motion_model(i, mdl), B, par, Z, s, N)
+        mm = motion_model(i, mdl, nq)
+        if mdl.nvj[i] > 1:
+            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
+            velocity_multi_lane(mm, B, par, Z, s, N)
+        else:
+            placement_lane(placement_model(i, mdl), B, Z, s, N)
+            velocity_lane(mm, B, par, Z, s, N)
         bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, s, N)
     singular = 0
     for i in range(nb - 1, -1, -1):                       # pass 2 (inward)
         j = mdl.parent[i]
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
-        singular += articulated_lane(articulated_model(i, mdl), dmin, B, Z, s, N)
+        n, r = mdl.nvj[i], mdl.iv[i]
+        Gi = G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N]
+        if n > 1:
+            singular += articulated_multi_lane(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, N)
+        else:
+            singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, s, N)
         if j >= 0:
             P = rec[j * ARTICULATED * N:(j + 1) * ARTICULATED * N]
-            handed_lane(B, s, N)
+            if n > 1:
+                handed_multi_lane(n, B, Gi, s, N)
+            else:
+                handed_lane(B, s, N)
             inertia_up_lane(B, P, s, N)
             bias_up_lane(B, P, s, N)
     if singular > 0:
@@ -195,13 +236,17 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, out, flags):
     for i in range(nb):                                   # pass 3 (outward)
         j = mdl.parent[i]
         par = base[6 * N:] if j < 0 else rec[(j * ARTICULATED + _A) * N:(j * ARTICULATED + _A + 6) * N]
-        acceleration_lane(articulated_model(i, mdl), rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N], par, QDD,
-                          s, N)
+        B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
+        if mdl.nvj[i] > 1:
+            acceleration_multi_lane(mdl.nvj[i], mdl.iv[i], B, G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N], par,
+                                    QDD, s, N)
+        else:
+            acceleration_lane(articulated_model(i, mdl, nq), B, par, QDD, s, N)
     if not scatter_lane(QDD, out, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
 
 
-def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J, jac, local, flags):
+def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J, jac, local, angle, flags):
     """Thread s: the world placement of the frame (Rl, pl) on body b and, with ``jac``, its Jacobian (in the frame's
     axes with ``local``) (``kinematics.frame_lanes``' steps); path[:n]: b, its parent, …, the root."""
     s = cuda.grid(1)
@@ -209,7 +254,7 @@ def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J,
     if s >= N:
         return
     mdl = unpack(I, F)
-    if not gather_lane(Q, Z, s, N, 0, mdl.kind, True) == 0.0:
+    if not gather_lane(Q, Z, s, N, 0, angle, True) == 0.0:
         cuda.atomic.min(flags, 0, s)
         return
     for a in range(3):                                    # the world as a parent: Rw = 1, pw = 0
@@ -296,14 +341,24 @@ def to_device(x, name, n, call):
     return d
 
 
-def _model(model, call):
+def _model(model, call, multi=True):
+    """The lane steps' model (z-aligned frames, model.z_aligned) of a Model whose joints they take: screw joints, and
+    free flyers and ball joints for the dynamics calls (``multi``; the frames' drivers take one velocity a joint)."""
     if type(model) is not Model:
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
-    if not (model.nq == model.nv == model.njoints):
-        others = [n for n, k in zip(model.joint_names, model.kernel.arrays[0][4]) if k != 1]
-        raise InputError(f"{call}: the GPU kernels take joints with one velocity each; {others} have more "
-                         f"(use the CPU call)")
-    return model.kernel.lane_arrays                      # the lane steps' model: z-aligned frames (model.z_aligned)
+    I, F = model.kernel.lane_arrays
+    if not on_lanes(unpack(I, F), model.nq, multi):
+        others = [n for n, k in zip(model.joint_names, I[4]) if k != 1]
+        what = "free flyers and ball joints are taken by rnea, aba and mass_matrix" if not multi else "its joints"
+        raise InputError(f"{call}: the GPU kernels do not take the joints {others} ({what}; use the CPU call)")
+    return I, F
+
+
+def _angles(model):
+    """angle (nq,) int64 on the device: 1 where q's entry is a revolute joint's angle (the sincos range check)."""
+    a = np.zeros(model.nq, np.int64)
+    a[model.idx_q[model.kind == REVOLUTE]] = 1
+    return _cuda().to_device(a)
 
 
 def _raise(model, call, flags, states, cpu):
@@ -312,8 +367,10 @@ def _raise(model, call, flags, states, cpu):
     first = min(int(x) for x in flags.copy_to_host())
     rows = [d[first:first + 1].copy_to_host()[0] for _, d in states]
     q = rows[0]
+    angle = np.zeros(model.nq, bool)
+    angle[model.idx_q[model.kind == REVOLUTE]] = True
     for k, x in enumerate(q):
-        if np.isfinite(x) and model.kind[k] == REVOLUTE and abs(x) > SINCOS_MAX:
+        if np.isfinite(x) and angle[k] and abs(x) > SINCOS_MAX:
             raise InputError(f"{call}: q[{first}, {k}] (joint {model.q_names[k]!r}) is {x:.6g}, beyond "
                              f"{SINCOS_MAX:.0e} rad, the GPU's sin and cos range: reduce it modulo 2π (the CPU call takes it)")
     try:
@@ -418,13 +475,14 @@ def _run_rnea(model, call, q, v, a, f_ext=None, f_ext_frame="local"):
     import manipdyn as md
     I, F = _model(model, call)
     states, N = _states(model, call, (("q", q), ("v", v), ("a", a)))
-    nb, Q = model.njoints, states[0][1]
+    nb, nq, nv, Q = model.njoints, model.nq, model.nv, states[0][1]
     V, A = (dict(states).get(n, Q) for n in ("v", "a"))
     ext, extra, names = _wrenches(model, f_ext, f_ext_frame, N, call)
-    tau, flags = _cuda().device_array((N, nb)), _flags()
+    tau, flags = _cuda().device_array((N, nv)), _flags()
     _launch("rnea", _rnea_threads, N, _cuda().to_device(I), _cuda().to_device(F), Q, V, A, *ext,
             _scratch("rec", (nb * RECORD * N,)), _scratch("base", (9 * N,)), _scratch("spare", (6 * N,)),
-            _scratch("Z", (3 * nb * N,)), _scratch("T", (nb * N,)), tau, flags, v is not None, a is not None)
+            _scratch("Z", ((nq + 2 * nv) * N,)), _scratch("T", (nv * N,)), tau, _angles(model), flags, v is not None,
+            a is not None)
     if N and (flags.copy_to_host() < _BIG).any():
         n = len(states)
 
@@ -457,14 +515,14 @@ def mass_matrix(model, q):
     import manipdyn as md
     I, F = _model(model, "mass_matrix")
     states, N = _states(model, "mass_matrix", (("q", q),))
-    nb = model.njoints
+    nb, nq, nv = model.njoints, model.nq, model.nv
     mdl = unpack(I, F)
     mC, W = np.empty(nb), np.zeros((nb, 3))
     merge_weights(mdl.parent, mdl.mass, mC, W)
-    M, flags, cuda = _cuda().device_array((N, nb, nb)), _flags(), _cuda()
+    M, flags, cuda = _cuda().device_array((N, nv, nv)), _flags(), _cuda()
     _launch("crba", _crba_threads, N, cuda.to_device(I), cuda.to_device(F), states[0][1], cuda.to_device(W),
-            cuda.to_device(mC), _scratch("rec", (nb * COMPOSITE * N,)), _scratch("Z", (nb * N,)),
-            _scratch("F", (6 * N,)), _scratch("M", (nb * nb * N,)), M, flags)
+            cuda.to_device(mC), _scratch("rec", (nb * COMPOSITE * N,)), _scratch("Z", (nq * N,)),
+            _scratch("F", (6 * N,)), _scratch("M", (nv * nv * N,)), M, _angles(model), flags)
     if N and (flags.copy_to_host() < _BIG).any():
         _raise(model, "mass_matrix", flags, states, lambda q: md.mass_matrix(model, q))
     return M
@@ -475,12 +533,16 @@ def aba(model, q, v, tau):
     import manipdyn as md
     I, F = _model(model, "aba")
     states, N = _states(model, "aba", (("q", q), ("v", v), ("tau", tau)))
-    nb, cuda = model.njoints, _cuda()
+    nb, nq, nv, cuda = model.njoints, model.nq, model.nv, _cuda()
     mdl = unpack(I, F)
-    out, flags = cuda.device_array((N, nb)), _flags()
+    multi = np.asarray(model.nvs) > 1
+    slot = np.cumsum(multi) - multi                       # body i's record among the multi-dof joints'
+    out, flags = cuda.device_array((N, nv)), _flags()
     _launch("aba", _aba_threads, N, cuda.to_device(I), cuda.to_device(F), *(d for _, d in states),
             float(singular_threshold(mdl.inertia, mdl.mass)), _scratch("rec", (nb * ARTICULATED * N,)),
-            _scratch("base", (12 * N,)), _scratch("Z", (3 * nb * N,)), _scratch("T", (nb * N,)), out, flags)
+            _scratch("base", (12 * N,)), _scratch("Z", ((nq + 2 * nv) * N,)), _scratch("T", (nv * N,)),
+            _scratch("G", (max(int(multi.sum()), 1) * MULTI * N,)), cuda.to_device(slot.astype(np.int64)), out,
+            _angles(model), flags)
     if N and (flags.copy_to_host() < _BIG).any():
         _raise(model, "aba", flags, states, lambda q, v, t: md.aba(model, q, v, t))
     return out
@@ -488,7 +550,7 @@ def aba(model, q, v, tau):
 
 def _run_frame(model, call, q, frame, jac, reference):
     import manipdyn as md
-    I, F = _model(model, call)
+    I, F = _model(model, call, multi=False)
     _check_reference(reference)
     b, X = frame_row(model, frame, lanes=True)
     states, N = _states(model, call, (("q", q),))
@@ -507,7 +569,7 @@ def _run_frame(model, call, q, frame, jac, reference):
             c.to_device(np.array(path, np.int64)), len(path), c.to_device(np.ascontiguousarray(X[:3])),
             c.to_device(np.ascontiguousarray(X[3])), _scratch("rec", (nb * WORLD * N,)), _scratch("base", (WORLD * N,)),
             _scratch("Z", (nb * N,)), _scratch("F", (12 * N,)), _scratch("J", (max(6 * nv * N, 1) if jac else 1,)),
-            Rf, pf, J, jac, reference == "local", flags)
+            Rf, pf, J, jac, reference == "local", _angles(model), flags)
     if N and (flags.copy_to_host() < _BIG).any():
         cpu = (lambda x: md.frame_jacobian(model, x, frame, reference=reference)) if jac else \
             (lambda x: md.frame_placement(model, x, frame))
@@ -539,10 +601,10 @@ def ptx(name, cc=(9, 0)):
     flags = types.Array(types.int64, 1, "C")
     i1, c3, a1 = types.Array(types.int64, 1, "C"), types.Array(types.float64, 3, "C"), types.Array(types.float64, 1, "A")
     sigs = {"frame": (_frame_threads, (i2, f3, a2, types.int64, i1, types.int64, c2, a1, c1, c1, c1, c1, c1, c3, c2,
-                                       c3, types.boolean, types.boolean, flags)),
+                                       c3, types.boolean, types.boolean, i1, flags)),
             "rnea": (_rnea_threads, (i2, f3, a2, a2, a2, c1, i1, c2, i1, i1, types.boolean, c1, c1, c1, c1, c1, c2,
-                                     flags, types.boolean, types.boolean)),
-            "crba": (_crba_threads, (i2, f3, a2, c2, c1, c1, c1, c1, c1, f3, flags)),
-            "aba": (_aba_threads, (i2, f3, a2, a2, a2, types.float64, c1, c1, c1, c1, c2, flags))}
+                                     i1, flags, types.boolean, types.boolean)),
+            "crba": (_crba_threads, (i2, f3, a2, c2, c1, c1, c1, c1, c1, f3, i1, flags)),
+            "aba": (_aba_threads, (i2, f3, a2, a2, a2, types.float64, c1, c1, c1, c1, c1, i1, c2, i1, flags))}
     func, sig = sigs[name]
     return c.compile_ptx(func, sig, device=False, cc=cc)[0]

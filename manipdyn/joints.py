@@ -30,31 +30,83 @@ Everything below that a compiled kernel calls is written for numba (``_jit.njit`
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ._jit import njit
 from .spatial import cross3
 
+class JointKind(NamedTuple):
+    """One kind of joint, described once (the registry ``KINDS``, indexed by the kind's code)."""
+    code: int              # the integer tag the model's ``kind`` array holds
+    name: str              # manipdyn's name (Model.describe, errors)
+    nq: int                # configuration entries
+    nv: int                # velocity entries
+    quat_at: int           # where the unit quaternion (qx qy qz qw) starts in the joint's q block (-1: none)
+    omega_at: int          # where the body-frame angular velocity starts in its v block (-1: none)
+    coords: tuple          # names of its q entries (a 1-dof joint's one entry is named by the joint: ())
+    rates: tuple           # names of its v entries
+    urdf: tuple            # URDF type names read as this kind
+    mjcf: str              # MJCF joint type ("" where MJCF has none)
+    pinocchio: str         # Pinocchio's joint model of the same motion
+
+
 REVOLUTE, PRISMATIC, FREEFLYER, BALL = 0, 1, 2, 3
-TYPE_NAMES = ("revolute", "prismatic", "free_flyer", "ball")
-NQ = (1, 1, 7, 4)             # configuration size per type
-NV = (1, 1, 6, 3)             # velocity size per type
-QUAT_AT = (-1, -1, 3, 0)      # where the unit quaternion (qx qy qz qw) starts in the joint's q block (-1: none)
-OMEGA_AT = (-1, -1, 3, 0)     # where the body-frame angular velocity (wx wy wz) starts in its v block (-1: none)
-COORDS = ((), (), ("x", "y", "z", "qx", "qy", "qz", "qw"), ("qx", "qy", "qz", "qw"))  # names of q entries
-RATES = ((), (), ("vx", "vy", "vz", "wx", "wy", "wz"), ("wx", "wy", "wz"))             # names of v entries
-#                                                        (a 1-dof joint's one entry is named by the joint)
+KINDS = (
+    JointKind(REVOLUTE, "revolute", 1, 1, -1, -1, (), (), ("revolute", "continuous"), "hinge",
+              "JointModelRevoluteUnaligned"),
+    JointKind(PRISMATIC, "prismatic", 1, 1, -1, -1, (), (), ("prismatic",), "slide", "JointModelPrismaticUnaligned"),
+    JointKind(FREEFLYER, "free_flyer", 7, 6, 3, 3, ("x", "y", "z", "qx", "qy", "qz", "qw"),
+              ("vx", "vy", "vz", "wx", "wy", "wz"), ("floating",), "free", "JointModelFreeFlyer"),
+    JointKind(BALL, "ball", 4, 3, 0, 0, ("qx", "qy", "qz", "qw"), ("wx", "wy", "wz"), ("spherical",), "ball",
+              "JointModelSpherical"),
+)
+TYPE_NAMES = tuple(k.name for k in KINDS)
+NQ = tuple(k.nq for k in KINDS)             # configuration size per kind
+NV = tuple(k.nv for k in KINDS)             # velocity size per kind
+QUAT_AT = tuple(k.quat_at for k in KINDS)
+OMEGA_AT = tuple(k.omega_at for k in KINDS)
+COORDS = tuple(k.coords for k in KINDS)
+RATES = tuple(k.rates for k in KINDS)
+
+
+def kind_of(code) -> JointKind:
+    """The registry's entry for a kind's code; ValueError for a code it does not hold (never a fall-through)."""
+    c = int(code)
+    if not 0 <= c < len(KINDS):
+        raise ValueError(f"unknown joint kind {code!r}: the registry holds {', '.join(TYPE_NAMES)} (manipdyn.joints)")
+    return KINDS[c]
 
 
 def motion_subspace(kind: int, axis) -> np.ndarray:
     """S (nv_j, 6): one row per joint velocity, [linear; angular] in the body's frame."""
+    kind = kind_of(kind).code
     if kind == REVOLUTE:
         return np.concatenate([np.zeros(3), axis])[None]
     if kind == PRISMATIC:
         return np.concatenate([axis, np.zeros(3)])[None]
     if kind == BALL:
         return np.eye(6)[3:]
-    return np.eye(6)
+    if kind == FREEFLYER:
+        return np.eye(6)
+    raise AssertionError(kind)             # every code of KINDS has its branch above
+
+
+@njit(cache=True, inline="always")
+def multi_dof(kind):
+    """True for the kinds whose S selects the last nv_j entries of [linear; angular] (a free flyer's 1₆, a ball's
+    [0; 1₃]) and whose rotation is a quaternion: what the lane steps take beside the screw joints (core.on_lanes)."""
+    return kind == FREEFLYER or kind == BALL
+
+
+@njit(cache=True, inline="always")
+def quat_layout(kind):
+    """(k, lin): the quaternion's offset in the joint's q block and 1.0 if the joint also translates by its first three
+    entries (a free flyer), 0.0 if not (a ball); (0, 0.0) for a kind without a quaternion."""
+    if kind == FREEFLYER:
+        return 3, 1.0
+    return 0, 0.0
 
 
 # -- the joint's motion X_J(q), compiled --------------------------------------------------------------
@@ -100,9 +152,11 @@ def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
     elif kind == BALL:                         # ball: R_J = R(quat), p_J = 0
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q0, q1, q2, q3)
         px = py = pz = 0.0
-    else:                                      # free flyer: R_J = R(quat), p_J = [x y z]
+    elif kind == FREEFLYER:                    # free flyer: R_J = R(quat), p_J = [x y z]
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q3, q4, q5, q6)
         px, py, pz = q0, q1, q2
+    else:                                      # a code outside the registry: never placed as another kind
+        raise ValueError("joint_placement: unknown joint kind (manipdyn.joints.KINDS)")
     for a in range(3):
         b0, b1, b2 = R0[i, a, 0], R0[i, a, 1], R0[i, a, 2]
         R[i, a, 0] = b0 * r00 + b1 * r10 + b2 * r20
@@ -221,9 +275,11 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
             if kind[j] == BALL:
                 _turn_quat(Q, s, a, V[s, b], V[s, b + 1], V[s, b + 2], out)
                 continue
-            if kind[j] != FREEFLYER:
+            if kind[j] == REVOLUTE or kind[j] == PRISMATIC:
                 out[s, a] = Q[s, a] + V[s, b]
                 continue
+            if kind[j] != FREEFLYER:               # a code outside the registry
+                raise ValueError("integrate: unknown joint kind (manipdyn.joints.KINDS)")
             w[0], w[1], w[2] = V[s, b + 3], V[s, b + 4], V[s, b + 5]
             th2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
             ca, cb = _V_coeffs(th2)            # exp6 translation: V(ω) v
@@ -250,12 +306,14 @@ def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
             if kind[j] == BALL:
                 out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q0, Q1, s, a)
                 continue
-            if kind[j] != FREEFLYER:
+            if kind[j] == REVOLUTE or kind[j] == PRISMATIC:
                 x = Q1[s, a] - Q0[s, a]
                 if continuous[j]:              # wrapped into [−π, π]
                     x = np.arctan2(np.sin(x), np.cos(x))
                 out[s, b] = x
                 continue
+            if kind[j] != FREEFLYER:               # a code outside the registry
+                raise ValueError("difference: unknown joint kind (manipdyn.joints.KINDS)")
             w[0], w[1], w[2] = _log_quat(Q0, Q1, s, a + 3)
             x0, y0, z0, w0 = Q0[s, a + 3], Q0[s, a + 4], Q0[s, a + 5], Q0[s, a + 6]
             n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0

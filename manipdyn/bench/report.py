@@ -40,13 +40,16 @@ def run(out_dir, quick=False, progress=print) -> dict:
     def sts(*keys):        # the robots, loaded once: ur5 + AAU arm ("arms"), the 32-link chain, the SPM's tree
         if not robots:
             robots.update(arms=sections.setups(arms), chain=sections.setups(chain=32),
-                          spm=sections.setups(open_trees=[spm] if spm.is_file() else []))
+                          spm=sections.setups(open_trees=[spm] if spm.is_file() else []),
+                          floating=sections.floating_setups([robots_dir() / p for p in FLOATING_URDF],
+                                                            [p for p in FLOATING_MJCF if p.is_file()]))
         return [s for k in keys for s in robots[k]]
 
     steps = [
         ("latency", lambda: sections.latency(sts("arms", "chain", "spm"), quick)),
         ("closed_latency", lambda: sections.closed_latency(spm, quick)),
         ("batched", lambda: sections.batched(sts("arms", "chain"), quick)),
+        ("floating", lambda: sections.floating(sts("floating"), quick)),
         ("floors", lambda: sections.floors(data["batched"], {"ur5": ur5, "aau_arm": ROOT / "urdf" / "aau_arm.urdf",
                                                              "chain32": "chain:32"})),
         ("throughput", lambda: sections.throughput(arms, (1, 100, 10_000) if quick else (1, 100, 10_000, 100_000), quick)),
@@ -69,6 +72,12 @@ def run(out_dir, quick=False, progress=print) -> dict:
     write(data, out)
     return data
 
+
+# the floating section's robots: free-flyer roots on example-robot-data's ur5, solo12 and talos_reduced (a humanoid,
+# nv = 38), and the bundled ball-jointed MJCF humanoid (tests/data: gymnasium's humanoid, hips and shoulders as balls)
+FLOATING_URDF = ("ur_description/urdf/ur5_robot.urdf", "solo_description/robots/solo12.urdf",
+                 "talos_data/robots/talos_reduced.urdf")       # in example-robot-data's robots folder
+FLOATING_MJCF = (ROOT / "tests" / "data" / "humanoid_ball.xml",)
 
 # (our route, its key, Pinocchio's same route's key): each of ours is held to Pinocchio's same algorithm
 HARD_ROUTES = (("ABA", "aba", "pinocchio"), ("ABA, batched (lanes)", "aba_lanes", "pinocchio"),
@@ -155,6 +164,10 @@ def markdown(d) -> str:
          "is the worst over 20 states spread through the batch.\n\n",
          _table(d["batched"], ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"]
                 + (["refused"] if any("refused" in r for r in d["batched"]) else []),
+                dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
+         "\n### Floating bases and ball joints: the lane kernels, N = 10 000, µs per state\n\nFree-flyer roots and "
+         "ball joints on the lanes (one thread), against Pinocchio's InParallel(1) (rnea, aba) or its crba loop.\n\n",
+         _table(d.get("floating", []), ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"],
                 dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
          "\n### Work–precision of the lane kernels\n\nThe batched rows at N = 10 000 of the calls the lane kernels run: "
          "the median and 95th percentile of the error over states spread through the batch (wp_states), against "

@@ -4,6 +4,7 @@ from __future__ import annotations
 import functools
 import time
 import warnings
+from pathlib import Path
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -52,6 +53,29 @@ def setups(paths=(), chain=None, open_trees=()):
     if chain:
         model, pm = random_chain(chain, seed=chain)
         out.append(Setup(model.name, model, pm, lambda q: q))   # revolute and prismatic only: same q
+    return out
+
+
+def floating_setups(paths=(), mjcf=()):
+    """The robots of the floating section: each URDF of ``paths`` on a free-flyer root (label: the file's name, and
+    "(free flyer)" where the robot is an arm), against buildModelFromUrdf(path, JointModelFreeFlyer()); each MJCF file
+    of ``mjcf`` (its free and ball joints from the file), against buildModelFromMJCF of it (q the same: its ball and
+    free joints are Pinocchio's, a body's several hinges its composite joint)."""
+    from ..io.mjcf_read import load_mjcf
+    out = []
+    for path in paths:
+        model = _load(path, root_joint="free_flyer")
+        ref = Reference(model, path)
+        label = Path(path).stem.replace("_robot", "")
+        out.append(Setup(label + (" (free flyer)" if label == "ur5" else ""), model, ref.pm, ref.to_pin_q))
+    for path in mjcf:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = load_mjcf(path)
+        pm = pin().buildModelFromMJCF(str(path))
+        pm.armature = np.asarray(model.armature, float)
+        pm.gravity.linear = np.asarray(model.gravity, float)
+        out.append(Setup(Path(path).stem + " (MJCF)", model, pm, lambda q: q))
     return out
 
 
@@ -216,11 +240,12 @@ def _work_precision(c, mine, pin_s, cond, Q, V, A, n):
                 err_one_p95=float(np.percentile(e_one, 95)))
 
 
-def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
+def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20, precision=True):
     """b. Every public call on a batch (N, nv), time per state on one thread, against Pinocchio's C++ batch
     (pin.*InParallel, 1 thread) where it exists, else its cheapest Python loop over the same states
     (conversions outside the timing); at ``sizes``, and at ``big`` for the lane kernels' calls (LANE_CALLS).
-    The error is the worst over ``sample`` states spread through the batch. (Every core: ``throughput``.)"""
+    The error is the worst over ``sample`` states spread through the batch; ``precision``: the lane calls' rows at
+    ``big`` also get their work–precision figures. (Every core: ``throughput``.)"""
     P, rows = pin(), []
     timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
         (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # short runs, many rounds: a burst of
@@ -228,7 +253,7 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
     for st in sts:
         model, pm = st.model, st.pm
         pool = P.ModelPool(pm, 1)
-        QA, VA, AA = random_states(model, max(*sizes, big), np.random.default_rng(2))
+        QA, VA, AA = random_states(model, max((*sizes, big)), np.random.default_rng(2))
         for N in sorted({*sizes, big}):
             Q, V, A = QA[:N], VA[:N], AA[:N]
             table, PQ, cond = cases(P, st, Q, V, A, f_ext=N in sizes, threads=1)
@@ -255,10 +280,17 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20):
                 t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A), theirs))
                 row = dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                            pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else "")
-                if N == big and name in LANE_CALLS:
+                if N == big and name in LANE_CALLS and precision:
                     row.update(_work_precision(c, mine, pin_s, cond, Q, V, A, 20 if quick else WP_STATES))
                 rows.append(row)
     return rows
+
+
+def floating(sts, quick=False, big=10_000):
+    """b (floating bases). The lane kernels' calls (rnea, aba, mass_matrix) at N = ``big`` on free-flyer robots and
+    ball-jointed trees, one thread, against rneaInParallel(1), abaInParallel(1) and a loop of crba (``batched``'s
+    rows)."""
+    return batched(sts, quick, sizes=(), big=big, precision=False)
 
 
 def closed_latency(spm_path, quick=False):

@@ -29,6 +29,8 @@ it, [force; moment about that origin] in body axes, or in world axes which the k
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
@@ -40,7 +42,8 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
                        force_cross, force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up,
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .core import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                   motion_model, no_wrenches, on_lanes, placement_lanes, scatter_lanes, set3, set6, shift_code,
+                   motion_model, multi_rates, no_wrenches, on_lanes, placement_lanes,
+                   quat_placement_lanes, scatter_lanes, set3, set6, shift_code,
                    tree_depth, unpack, wrench_rows_of)
 from .crba import crba, crba_kernel, crba_lanes
 from .rnea import rnea, rnea_kernel, rnea_lanes
@@ -273,7 +276,8 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 # innermost loop runs over a block's lanes. A body's record (ARTICULATED rows of LANES numbers): R^λ_i (9) and p (3)
 # (core.placement_lanes), v_i, c_i (6 each), I^A_i (21: the blocks of [[C, Bᵀ], [B, A]] as spatial.inertia_up names
 # them — C and A as core.get_sym3 stores a symmetric 3×3, B row-major), p^A_i (6), U_i (6), D_i, u_i, a_i (6); two
-# arrays by depth parity (core.lane_record). Joints with one velocity only: a free flyer runs aba_kernel.
+# arrays by depth parity (core.lane_record). A free flyer or a ball joint (n velocities, S = [0; 1_n]) keeps its pass-2
+# factors in a record of its own (MULTI rows, ``articulated_multi_lane``).
 _V, _C, _IA, _IB, _IAA, _PA, _U, _D, _A = 12, 18, 24, 30, 39, 45, 51, 57, 59      # first rows: v, c, I^A (C, B, A),
 ARTICULATED = 65                                                              # p^A, U, D (then u), a
 
@@ -282,12 +286,13 @@ ARTICULATED = 65                                                              # 
 def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     """``aba_kernel``'s q̈ (and code) for a batch, block by block across lanes: the batch entry of aba.
 
-    Runs ``aba_kernel`` itself for external wrenches and for a model with a multi-dof joint (free flyer), and
+    Runs ``aba_kernel`` itself for external wrenches and for a model with a joint the lanes do not take
+    (``core.on_lanes``), and
     for a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` (its code
     then names the joint or the entry; a bad input's code is ≥ 0, and ``state.raise_kernel_error`` names it from
     the inputs). Agrees with the one-state kernel to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq):
+    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -296,22 +301,34 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     base = np.zeros(12 * L)                  # the base as a parent: v_0 = 0 (rows 0–5), a_0 = [−g; 0] (rows 6–11)
     for l in range(L):
         base[6 * L + l], base[7 * L + l], base[8 * L + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
-    Z, QDD = np.empty(3 * nb * L), np.empty(nb * L)          # q, q̇, τ and q̈ of the block, state index last
+    Z, QDD = np.empty((nq + 2 * nv) * L), np.empty(nv * L)   # q, q̇, τ and q̈ of the block, state index last
     depth, dmin = tree_depth(parent), singular_threshold(mdl.inertia, mdl.mass)
+    slot, m = np.empty(nb, np.int64), 0                  # the multi-dof joints' records: slot[i] = their index
+    for i in range(nb):
+        slot[i], m = m, m + (mdl.nvj[i] > 1)
+    G = np.empty(m * MULTI * L)
     for s0 in range(0, N, L):
         n = min(L, N - s0)
-        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nb) \
-            & gather_lanes(Tau, s0, n, Z, 2 * nb)
+        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nq) \
+            & gather_lanes(Tau, s0, n, Z, nq + nv)
         if ok:
             for i in range(nb):                                          # pass 1 (outward)
                 j = parent[i]
                 par = base[:6 * L] if j < 0 else lane_record(even, odd, depth, j, ARTICULATED)[_V * L:(_V + 6) * L]
-                velocity_lanes(i, mdl, lane_record(even, odd, depth, i, ARTICULATED), par, Z)
+                B = lane_record(even, odd, depth, i, ARTICULATED)
+                if mdl.nvj[i] > 1:                                       # a free flyer or a ball joint
+                    velocity_multi_lanes(i, mdl, B, par, Z, nq)
+                else:
+                    velocity_lanes(i, mdl, B, par, Z, nq)
             singular = 0
             for i in range(nb - 1, -1, -1):                              # pass 2 (inward)
                 j = parent[i]
                 B = lane_record(even, odd, depth, i, ARTICULATED)
-                singular += articulated_lanes(i, mdl, dmin, B, Z, j >= 0)
+                if mdl.nvj[i] > 1:
+                    singular += articulated_multi_lanes(i, mdl, dmin, B, G[slot[i] * MULTI * L:(slot[i] + 1) * MULTI * L],
+                                                        Z, j >= 0, nq)
+                else:
+                    singular += articulated_lanes(i, mdl, dmin, B, Z, j >= 0, nq)
                 if j >= 0:
                     inertia_up_lanes(B, lane_record(even, odd, depth, j, ARTICULATED))
             ok = singular == 0
@@ -319,7 +336,11 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
             for i in range(nb):                                          # pass 3 (outward)
                 j = parent[i]
                 par = base[6 * L:] if j < 0 else lane_record(even, odd, depth, j, ARTICULATED)[_A * L:(_A + 6) * L]
-                acceleration_lanes(i, mdl, lane_record(even, odd, depth, i, ARTICULATED), par, QDD)
+                B = lane_record(even, odd, depth, i, ARTICULATED)
+                if mdl.nvj[i] > 1:
+                    acceleration_multi_lanes(i, mdl, B, G[slot[i] * MULTI * L:(slot[i] + 1) * MULTI * L], par, QDD)
+                else:
+                    acceleration_lanes(i, mdl, B, par, QDD, nq)
             ok = scatter_lanes(QDD, n, out, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = aba_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], Tau[s0:s0 + n], X, body, point, world,
@@ -342,13 +363,25 @@ def rigid_model(i, mdl):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def velocity_lanes(i, mdl, B, par, Z):
+def velocity_lanes(i, mdl, B, par, Z, nq):
     """Pass 1 for body i, every lane of the block (``aba_kernel``'s velocities_and_biases): placement, then
     ``velocity_lane``, then ``bias_lane``."""
     placement_lanes(i, mdl, B, Z)
-    mm, rm, im = motion_model(i, mdl), rigid_model(i, mdl), inertial_model(i, mdl)
+    mm, rm, im = motion_model(i, mdl, nq), rigid_model(i, mdl), inertial_model(i, mdl)
     for l in range(LANES):
         velocity_lane(mm, B, par, Z, l, LANES)
+    for l in range(LANES):
+        bias_lane(rm, im, B, l, LANES)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def velocity_multi_lanes(i, mdl, B, par, Z, nq):
+    """``velocity_lanes`` for a free flyer or a ball joint: its quaternion placement, ``velocity_multi_lane``, then
+    ``bias_lane`` (a function of its own, as rnea.outward_multi_lanes)."""
+    quat_placement_lanes(i, mdl, B, Z)
+    mm, rm, im = motion_model(i, mdl, nq), rigid_model(i, mdl), inertial_model(i, mdl)
+    for l in range(LANES):
+        velocity_multi_lane(mm, B, par, Z, l, LANES)
     for l in range(LANES):
         bias_lane(rm, im, B, l, LANES)
 
@@ -356,15 +389,26 @@ def velocity_lanes(i, mdl, B, par, Z):
 @njit(cache=True, inline="always")
 def velocity_lane(mm, B, par, Z, l, L):
     """At lane l: v_i = ⁱX_λ v_λ + v_J (v_J = s q̇; par: v_λ), c_i = v_i × v_J (mm: ``rnea.motion_model``)."""
-    r, sl, sa, nb = mm
+    _, sl, sa, rv, _, _ = mm
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
     vl, va = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ v_λ
-    qd = Z[(nb + r) * L + l]
+    qd = Z[rv * L + l]
     jl, ja = scale(qd, sl), scale(qd, sa)                                           # v_J = s q̇
     v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
     c = motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]))
     set6(B, _V, l, L, v)
     set6(B, _C, l, L, c)
+
+
+@njit(cache=True, inline="always")
+def velocity_multi_lane(mm, B, par, Z, l, L):
+    """``velocity_lane`` for a free flyer or a ball joint: v_J = S q̇ (``core.multi_rates``)."""
+    R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
+    vl, va = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ v_λ
+    jl, ja = multi_rates(mm, Z, mm[3], l, L)
+    v = (vl[0] + jl[0], vl[1] + jl[1], vl[2] + jl[2], va[0] + ja[0], va[1] + ja[1], va[2] + ja[2])
+    set6(B, _V, l, L, v)
+    set6(B, _C, l, L, motion_cross(v, (jl[0], jl[1], jl[2], ja[0], ja[1], ja[2])))
 
 
 @njit(cache=True, inline="always")
@@ -383,19 +427,19 @@ def bias_lane(rm, im, B, l, L):
 
 
 @njit(cache=True, inline="always")
-def articulated_model(i, mdl):
-    """What body i's pass 2 and 3 take from the model: (its row r of S, s as a 6-tuple, nb: Z's rows per state, the
-    armature of velocity r)."""
+def articulated_model(i, mdl, nq):
+    """What body i's pass 2 and 3 take from the model: (its row r of S, s as a 6-tuple, the row of τ_r in the block's
+    Z — q, q̇, τ stacked —, the armature of velocity r)."""
     S, r = mdl.S, mdl.iv[i]
-    return r, (S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]), mdl.parent.shape[0], mdl.armature[r]
+    return r, (S[r, 0], S[r, 1], S[r, 2], S[r, 3], S[r, 4], S[r, 5]), nq + S.shape[0] + r, mdl.armature[r]
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")      # (x / 0 is ±inf, not a raise: a branch less)
-def articulated_lanes(i, mdl, dmin, B, Z, child):
+def articulated_lanes(i, mdl, dmin, B, Z, child, nq):
     """Pass 2 for body i, every lane of the block (``aba_kernel``'s articulated_inertias, one velocity):
     ``articulated_lane``, and for a child of a body (``child``) ``handed_lane``. Returns the number of lanes whose
     D_i is not > dmin (singular, or NaN)."""
-    am = articulated_model(i, mdl)
+    am = articulated_model(i, mdl, nq)
     singular = 0
     for l in range(LANES):
         singular += articulated_lane(am, dmin, B, Z, l, LANES)
@@ -409,19 +453,151 @@ def articulated_lanes(i, mdl, dmin, B, Z, child):
 def articulated_lane(am, dmin, B, Z, l, L):
     """At lane l: U_i = I^A_i s, D_i = sᵀ U_i + armature_i, u_i = τ_i − sᵀ p^A_i (am: ``articulated_model``). Returns
     1 if D_i is not > dmin (singular, or NaN), else 0."""
-    r, s, nb, ar = am
+    r, s, rt, ar = am
     C, Bm, A = get_sym3(B, _IA, l, L), (get3(B, _IB, l, L), get3(B, _IB + 3, l, L), get3(B, _IB + 6, l, L)), \
         get_sym3(B, _IAA, l, L)
     sl, sa = (s[0], s[1], s[2]), (s[3], s[4], s[5])
     Ul, Ua = add(mul3(C, sl), mul3t(Bm, sa)), add(mul3(Bm, sl), mul3(A, sa))     # U = I^A s
     pA = get6(B, _PA, l, L)
     D = s[0] * Ul[0] + s[1] * Ul[1] + s[2] * Ul[2] + s[3] * Ua[0] + s[4] * Ua[1] + s[5] * Ua[2] + ar   # + armature
-    u = Z[(2 * nb + r) * L + l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4]
+    u = Z[rt * L + l] - (s[0] * pA[0] + s[1] * pA[1] + s[2] * pA[2] + s[3] * pA[3] + s[4] * pA[4]
                                    + s[5] * pA[5])
     set3(B, _U, l, L, Ul)
     set3(B, _U + 3, l, L, Ua)
     B[_D * L + l], B[(_D + 1) * L + l] = D, u
     return 0 if D > dmin else 1
+
+
+# -- a free flyer or a ball joint: n velocities, S = [0; 1_n] (the last n rows of a spatial vector, o = 6 − n) --------
+# Its record (MULTI rows of L numbers): the Cholesky factor 𝓛 of D_i = Sᵀ I^A_i S + diag(armature) (21 rows, packed
+# lower triangle: row r, column c at r(r+1)/2 + c), Y = 𝓛⁻¹ U_iᵀ (6 rows per velocity), t = 𝓛⁻¹ u_i (6 rows); as the
+# one-state kernel's multi-dof branch (``aba_kernel``: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ t, q̈ = 𝓛⁻ᵀ (t − Y a')).
+MULTI = 63
+_Y, _T = 21, 57                     # first rows of Y and t
+
+
+@njit(cache=True, inline="always")
+def tri(r, c):
+    """Row of entry (r, c), c ≤ r, of a packed lower triangle."""
+    return r * (r + 1) // 2 + c
+
+
+@njit(cache=True, inline="always")
+def inertia_row(a, b):
+    """The record row that holds I^A's entry (a, b), a ≥ b, of [[C, Bᵀ], [B, A]] (C, A: core.get_sym3's order)."""
+    if b >= 3:
+        return _IAA + (a - 3 if a == b else a - 3 + b - 3 + 2)
+    if a >= 3:
+        return _IB + 3 * (a - 3) + b
+    return _IA + (a if a == b else a + b + 2)
+
+
+@njit(cache=True, inline="always")
+def inertia_at(B, a, b, l, L):
+    """I^A's entry (a, b) at lane l (``inertia_row``; symmetric)."""
+    return B[inertia_row(max(a, b), min(a, b)) * L + l]
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
+def articulated_multi_lanes(i, mdl, dmin, B, G, Z, child, nq):
+    """Pass 2 for a free flyer or a ball joint (n velocities), every lane of the block: ``articulated_multi_lane``, and
+    for a child of a body (``child``) ``handed_multi_lane``. Returns the number of lanes with a pivot of D_i not
+    > dmin (singular, or NaN)."""
+    n, r, rt = mdl.nvj[i], mdl.iv[i], nq + mdl.S.shape[0] + mdl.iv[i]
+    ar = mdl.armature[r:r + n]
+    singular = 0
+    if n == 6:                            # the trip counts known to the compiler: its loops unrolled
+        for l in range(LANES):
+            singular += articulated_multi_lane(6, ar, rt, dmin, B, G, Z, l, LANES)
+    else:
+        for l in range(LANES):
+            singular += articulated_multi_lane(3, ar, rt, dmin, B, G, Z, l, LANES)
+    if child:
+        for l in range(LANES):
+            handed_multi_lane(n, B, G, l, LANES)
+    return singular
+
+
+@njit(cache=True, inline="always")
+def articulated_multi_lane(n, ar, rt, dmin, B, G, Z, l, L):
+    """At lane l: D = Sᵀ I^A S + diag(armature) = 𝓛 𝓛ᵀ (Cholesky), Y = 𝓛⁻¹ U_iᵀ with U_i = I^A S (I^A's last n
+    columns), t = 𝓛⁻¹ u, u = τ − Sᵀ p^A (τ from Z's rows rt …). Returns the number of pivots not > dmin."""
+    o, bad = 6 - n, 0
+    for r in range(n):                                      # 𝓛, row by row
+        for c in range(r + 1):
+            x = inertia_at(B, o + r, o + c, l, L) + (ar[r] if r == c else 0.0)
+            for k in range(c):
+                x -= G[tri(r, k) * L + l] * G[tri(c, k) * L + l]
+            if r == c:
+                bad += 0 if x > dmin else 1
+                G[tri(r, r) * L + l] = math.sqrt(x)   # (math: numba-cuda has no np.sqrt)
+            else:
+                G[tri(r, c) * L + l] = x / G[tri(c, c) * L + l]
+    for r in range(n):                                      # [Y | t] = 𝓛⁻¹ [Uᵀ | u], forward substitution
+        d = G[tri(r, r) * L + l]
+        for k in range(6):
+            x = inertia_at(B, o + r, k, l, L)
+            for c in range(r):
+                x -= G[tri(r, c) * L + l] * G[(_Y + 6 * c + k) * L + l]
+            G[(_Y + 6 * r + k) * L + l] = x / d
+        x = Z[(rt + r) * L + l] - B[(_PA + o + r) * L + l]
+        for c in range(r):
+            x -= G[tri(r, c) * L + l] * G[(_T + c) * L + l]
+        G[(_T + r) * L + l] = x / d
+    return bad
+
+
+@njit(cache=True, inline="always")
+def handed_multi_lane(n, B, G, l, L):
+    """At lane l, in place: Iᵃ = I^A − Yᵀ Y and pᵃ = p^A + Iᵃ c + Yᵀ t (``handed_lane`` for n velocities)."""
+    for a in range(6):
+        for b in range(a + 1):
+            x = 0.0
+            for r in range(n):
+                x += G[(_Y + 6 * r + a) * L + l] * G[(_Y + 6 * r + b) * L + l]
+            B[inertia_row(a, b) * L + l] -= x
+    c = get6(B, _C, l, L)
+    for a in range(6):
+        x = 0.0
+        for b in range(6):
+            x += inertia_at(B, a, b, l, L) * c[b]
+        for r in range(n):
+            x += G[(_Y + 6 * r + a) * L + l] * G[(_T + r) * L + l]
+        B[(_PA + a) * L + l] += x
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
+def acceleration_multi_lanes(i, mdl, B, G, par, QDD):
+    """Pass 3 for a free flyer or a ball joint, every lane of the block: ``acceleration_multi_lane``."""
+    n, r = mdl.nvj[i], mdl.iv[i]
+    if n == 6:
+        for l in range(LANES):
+            acceleration_multi_lane(6, r, B, G, par, QDD, l, LANES)
+    else:
+        for l in range(LANES):
+            acceleration_multi_lane(3, r, B, G, par, QDD, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def acceleration_multi_lane(n, r0, B, G, par, QDD, l, L):
+    """At lane l: a' = ⁱX_λ a_λ + c_i, q̈ = 𝓛⁻ᵀ (t − Y a') (D q̈ = u − U_iᵀ a') into rows r0 … of QDD, a_i = a' + S q̈."""
+    R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
+    al, aa = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ a_λ
+    c = get6(B, _C, l, L)
+    a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
+    o = 6 - n
+    for r in range(n):                                      # y = t − Y a' (into t's rows)
+        x = G[(_T + r) * L + l]
+        for k in range(6):
+            x -= G[(_Y + 6 * r + k) * L + l] * a[k]
+        G[(_T + r) * L + l] = x
+    for r in range(n - 1, -1, -1):                          # 𝓛ᵀ q̈ = y, back substitution
+        x = G[(_T + r) * L + l]
+        for c2 in range(r + 1, n):
+            x -= G[tri(c2, r) * L + l] * QDD[(r0 + c2) * L + l]
+        QDD[(r0 + r) * L + l] = x / G[tri(r, r) * L + l]
+    for k in range(6):
+        B[(_A + k) * L + l] = a[k] + (QDD[(r0 + k - o) * L + l] if k >= o else 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -483,9 +659,9 @@ def bias_up_lane(B, P, l, L):
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")
-def acceleration_lanes(i, mdl, B, par, QDD):
+def acceleration_lanes(i, mdl, B, par, QDD, nq):
     """Pass 3 for body i, every lane of the block: ``acceleration_lane``."""
-    am = articulated_model(i, mdl)
+    am = articulated_model(i, mdl, nq)
     for l in range(LANES):
         acceleration_lane(am, B, par, QDD, l, LANES)
 
@@ -494,7 +670,7 @@ def acceleration_lanes(i, mdl, B, par, QDD):
 def acceleration_lane(am, B, par, QDD, l, L):
     """At lane l (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ), q̈_i = (u_i − U_iᵀ a'_i) / D_i into
     row iv_i of QDD, a_i = a'_i + s q̈_i (am: ``articulated_model``)."""
-    r, s, nb, _ = am
+    r, s, _, _ = am
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
     al, aa = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ a_λ
     c, U = get6(B, _C, l, L), get6(B, _U, l, L)

@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import njit
-from ..joints import REVOLUTE, joint_placement, joint_velocity
+from ..joints import REVOLUTE, joint_placement, joint_velocity, multi_dof, quat_layout, quat_rotation
 from ..spatial import SINCOS_MAX, first_nonfinite, sincos
 
 
@@ -312,15 +312,19 @@ def lane_record(even, odd, depth, i, rows):
 
 
 @njit(cache=True, inline="always")
-def on_lanes(mdl, nq):
-    """True when the lane steps apply to the model (nq: a state's q entries): every joint has one coordinate and
-    one velocity and its axis is z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``,
-    model.z_aligned). Else a lane kernel runs its scalar kernel, which takes any axis."""
+def on_lanes(mdl, nq, multi=False):
+    """True when the lane steps apply to the model (nq: a state's q entries): every joint is a screw joint
+    (revolute, prismatic: one coordinate, one velocity) about z — the z-aligned form the batch routes pass
+    (``Model.kernel.lane_arrays``, model.z_aligned) — or, for a kernel whose steps take them (``multi``), a free
+    flyer or a ball joint (``joints.multi_dof``). Else a lane kernel runs its scalar kernel, which takes any joint."""
     nb = mdl.parent.shape[0]
-    ok = nq == nb
-    for i in range(nb if ok else 0):
-        ok &= mdl.nvj[i] == 1 and mdl.axis[i, 0] == 0.0 and mdl.axis[i, 1] == 0.0 and mdl.axis[i, 2] == 1.0
-    return ok
+    ok = True
+    for i in range(nb):
+        if mdl.nvj[i] == 1:
+            ok &= mdl.axis[i, 0] == 0.0 and mdl.axis[i, 1] == 0.0 and mdl.axis[i, 2] == 1.0
+        else:
+            ok &= multi and multi_dof(mdl.kind[i])
+    return ok and (multi or nq == nb)
 
 
 @njit(cache=True, inline="always")
@@ -328,11 +332,22 @@ def placement_model(i, mdl):
     """What body i's placement takes from the model, once per block (``placement_lane``): in z-aligned frames
     (``on_lanes``) R^{i−1}_i = R0 Rot(z, q), whose rows are (c a_x + s a_y, c a_y − s a_x, a_z) for each row a of
     R0, and p = p0 + d R0 z (R0's last column) for a prismatic joint (its rotation is 1: s = 0, c = 1 from an
-    angle of 0). Returns (a0, a1, a2: R0's rows, p0, turn: 1 revolute / 0 prismatic, q's row)."""
+    angle of 0). Returns (a0, a1, a2: R0's rows, p0, turn: 1 revolute / 0 prismatic, q's row). (One number for
+    both: a fourteenth constant in the loop spilled AVX2's 16 registers, 4–10 % slower.)"""
     R0 = mdl.R0
     a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
         (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
     return a0, a1, a2, (mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]), 1.0 if mdl.kind[i] == REVOLUTE else 0.0, mdl.iq[i]
+
+
+@njit(cache=True, inline="always")
+def quat_model(i, mdl):
+    """What a free flyer's or a ball joint's placement takes from the model (``quat_placement_lane``): (R0's rows,
+    p0, q's row, the quaternion's row, 1.0 for a joint that translates by its first three entries (a free flyer))."""
+    R0, (kq, lin) = mdl.R0, quat_layout(mdl.kind[i])
+    a0, a1, a2 = (R0[i, 0, 0], R0[i, 0, 1], R0[i, 0, 2]), (R0[i, 1, 0], R0[i, 1, 1], R0[i, 1, 2]), \
+        (R0[i, 2, 0], R0[i, 2, 1], R0[i, 2, 2])
+    return a0, a1, a2, (mdl.p0[i, 0], mdl.p0[i, 1], mdl.p0[i, 2]), mdl.iq[i], mdl.iq[i] + kq, lin
 
 
 @njit(cache=True, inline="always")
@@ -351,10 +366,39 @@ def placement_lane(pm, B, Z, l, L):
 
 
 @njit(cache=True, inline="always")
-def motion_model(i, mdl):
-    """What body i's motion and torque take from the model: (its row r of S, s_l, s_a, nb: Z's rows per q, q̇, q̈)."""
-    r = mdl.iv[i]
-    return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), mdl.parent.shape[0]
+def quat_placement_lane(pm, B, Z, l, L):
+    """``placement_lane`` for a free flyer or a ball joint: R^{i−1}_i = R0 R(quat), p^{i−1}_i = p0 + R0 t, t = [x y z]
+    for a free flyer (lin = 1), 0 for a ball (``joints.joint_placement``'s two quaternion branches); pm:
+    ``quat_model``."""
+    a0, a1, a2, o, iq, k, lin = pm
+    r = quat_rotation(Z[k * L + l], Z[(k + 1) * L + l], Z[(k + 2) * L + l], Z[(k + 3) * L + l])
+    t = (lin * Z[iq * L + l], lin * Z[(iq + 1) * L + l], lin * Z[(iq + 2) * L + l])
+    for a in range(3):
+        x = a0 if a == 0 else a1 if a == 1 else a2
+        B[(3 * a) * L + l] = x[0] * r[0] + x[1] * r[3] + x[2] * r[6]
+        B[(3 * a + 1) * L + l] = x[0] * r[1] + x[1] * r[4] + x[2] * r[7]
+        B[(3 * a + 2) * L + l] = x[0] * r[2] + x[1] * r[5] + x[2] * r[8]
+        B[(9 + a) * L + l] = o[a] + x[0] * t[0] + x[1] * t[1] + x[2] * t[2]
+
+
+@njit(cache=True, inline="always")
+def motion_model(i, mdl, nq):
+    """What body i's motion and torque take from the model: (r: its first row of S and of τ, s_l, s_a: S's row r,
+    rv, ra: the rows of q̇_r and q̈_r in the block's Z — q, q̇, q̈ stacked, nq + 2 nv rows —, n: its velocities)."""
+    r, nv = mdl.iv[i], mdl.S.shape[0]
+    return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), nq + r, \
+        nq + nv + r, mdl.nvj[i]
+
+
+@njit(cache=True, inline="always")
+def multi_rates(mm, Z, row, l, L):
+    """S x of a free flyer (S = 1₆) or a ball joint (S = [0; 1₃]) at lane l, x = q̇ or q̈ from its rows ``row`` … of Z
+    (``motion_model``'s rv or ra): the 3-tuples (linear, angular), (x[0:3], x[3:6]) or (0, x[0:3]) — a ball's
+    linear part is 0 × its own rates (finite: gather_lanes checked them), so that no branch sits in the lane loop."""
+    n = mm[5]
+    lin, o = 1.0 if n == 6 else 0.0, n - 3
+    x = get3(Z, row, l, L)
+    return (lin * x[0], lin * x[1], lin * x[2]), get3(Z, row + o, l, L)
 
 
 @njit(cache=True, inline="always")
@@ -367,15 +411,16 @@ def inertial_model(i, mdl):
 
 
 @njit(cache=True, inline="always")
-def gather_lane(X, Z, s, N, row, kind, angles):
+def gather_lane(X, Z, s, N, row, angle, angles):
     """One state's row into a record of rows N long (a GPU thread's ``gather_lanes``): Z[(row + k)·N + s] = X[s, k].
-    Returns 0.0, or inf/NaN for a non-finite entry or (``angles``: X is q) a revolute angle beyond SINCOS_MAX."""
+    Returns 0.0, or inf/NaN for a non-finite entry or (``angles``: X is q) a revolute angle beyond SINCOS_MAX
+    (angle (nq,): 1 where q's entry is a revolute joint's angle)."""
     bad = 0.0
     for k in range(X.shape[1]):
         x = X[s, k]
         Z[(row + k) * N + s] = x
         bad += x - x
-        if angles and kind[k] == REVOLUTE and not abs(x) <= SINCOS_MAX:
+        if angles and angle[k] == 1 and not abs(x) <= SINCOS_MAX:
             bad += np.inf
     return bad
 
@@ -393,10 +438,18 @@ def scatter_lane(Z, Y, s, N):
 
 @njit(cache=True, inline="always")
 def placement_lanes(i, mdl, B, Z):
-    """``placement_lane`` for every lane of the block."""
+    """``placement_lane`` for every lane of the block (a screw joint; a free flyer or ball: ``quat_placement_lanes``)."""
     pm = placement_model(i, mdl)
     for l in range(LANES):
         placement_lane(pm, B, Z, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def quat_placement_lanes(i, mdl, B, Z):
+    """``quat_placement_lane`` for every lane of the block."""
+    pm = quat_model(i, mdl)
+    for l in range(LANES):
+        quat_placement_lane(pm, B, Z, l, LANES)
 
 
 @njit(cache=True)

@@ -29,6 +29,7 @@ from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, fi
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
 from .core import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
+                   quat_placement_lanes,
                    shift_code, tree_depth, unpack)
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
@@ -143,10 +144,10 @@ COMPOSITE = 21
 @njit(cache=True, fastmath=CONTRACT)
 def crba_lanes(I, F, Q, M):
     """``crba_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of
-    mass_matrix. A model with a multi-dof joint (free flyer) runs ``crba_kernel``; so does a block with a
-    non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
+    mass_matrix. A model with a joint the lanes do not take (``core.on_lanes``) runs ``crba_kernel``; so does a
+    block with a non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
-    if not on_lanes(unpack(I, F), nq):
+    if not on_lanes(unpack(I, F), nq, True):
         return crba_kernel(I, F, Q, M)
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -154,29 +155,44 @@ def crba_lanes(I, F, Q, M):
     mC, W = np.empty(nb), np.empty((nb, 3))
     merge_weights(parent, mdl.mass, mC, W)
     even, odd = np.empty(nb * COMPOSITE * L), np.empty(nb * COMPOSITE * L)     # records by depth parity
-    Z, Fw, Mb = np.empty(nb * L), np.empty(6 * L), np.empty(nv * nv * L)     # q; the carried wrench; M's block
-    depth = tree_depth(parent)
+    Z, Fw, Mb = np.empty(nq * L), np.empty(6 * L), np.empty(nv * nv * L)     # q; the carried wrench; M's block
+    depth, multi = tree_depth(parent), nq > nb        # multi: a free flyer or a ball joint somewhere
     for s0 in range(0, N, L):
         n = min(L, N - s0)
         ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX)
         if ok:
             for i in range(nb):                                        # pass 1: placements, own inertias
                 B = lane_record(even, odd, depth, i, COMPOSITE)
-                placement_lanes(i, mdl, B, Z)
-                own_inertia_lanes(i, mdl, B)
+                if mdl.nvj[i] > 1:                                     # a free flyer or a ball joint
+                    quat_composite_lanes(i, mdl, B, Z)
+                else:
+                    placement_lanes(i, mdl, B, Z)
+                    own_inertia_lanes(i, mdl, B)
             for i in range(nb - 1, -1, -1):                            # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
                 if parent[i] >= 0:
                     merge_lanes(W[i], lane_record(even, odd, depth, i, COMPOSITE),
                                 lane_record(even, odd, depth, parent[i], COMPOSITE))
             Mb[:] = 0.0                                                # bodies on different branches do not couple
-            for i in range(nb):                                        # pass 2: column iv_i of M
-                column_lanes(i, mdl, mC[i], even, odd, depth, Fw, Mb)
+            for i in range(nb):                                        # pass 2: columns iv_i … of M
+                if multi:
+                    for r in range(mdl.nvj[i]):
+                        column_multi_lanes(i, r, mdl, mC[i], even, odd, depth, Fw, Mb)
+                else:
+                    column_lanes(i, mdl, mC[i], even, odd, depth, Fw, Mb)
             ok = scatter_symmetric(Mb, n, M, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = crba_kernel(I, F, Q[s0:s0 + n], M[s0:s0 + n])
             if code != -1:
                 return shift_code(code, s0, nb, nq, nv * nv)
     return -1
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def quat_composite_lanes(i, mdl, B, Z):
+    """Pass 1 for a free flyer or a ball joint: its quaternion placement (core.quat_placement_lanes), its own inertia
+    (a function of its own, as rnea.outward_multi_lanes: the screw joints' loops compile as they would alone)."""
+    quat_placement_lanes(i, mdl, B, Z)
+    own_inertia_lanes(i, mdl, B)
 
 
 @njit(cache=True, inline="always")
@@ -227,25 +243,54 @@ def merge_lane(w, B, P, l, L):
 
 @njit(cache=True, fastmath=CONTRACT)
 def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
-    """Column iv_i of M for every lane of the block: ``column_lane``, then ``column_up_lane`` for each ancestor."""
+    """Column iv_i of M for every lane of the block, on a model of screw joints: ``column_lane``, then
+    ``column_up_lane`` for each ancestor (``column_multi_lanes`` with r = 0 and one velocity a body, kept apart: its
+    extra loops cost the fixed-base arms 6–8 %)."""
     parent = mdl.parent
-    B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, i, mdl)
+    B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, 0, i, 0, mdl)
     for l in range(LANES):
         column_lane(cm, m, B, Fw, Mb, l, LANES)
     k = i
     while parent[k] >= 0:
-        B, cm = lane_record(even, odd, depth, k, COMPOSITE), column_model(i, parent[k], mdl)
+        B, cm = lane_record(even, odd, depth, k, COMPOSITE), column_model(i, 0, parent[k], 0, mdl)
         for l in range(LANES):
             column_up_lane(cm, B, Fw, Mb, l, LANES)
         k = parent[k]
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def column_multi_lanes(i, r, mdl, m, even, odd, depth, Fw, Mb):
+    """Column iv_i + r of M (r < nv_i: the joint's velocity r) for every lane of the block, on a model with a free
+    flyer or a ball joint: ``column_lane``, the entries of the joint's own block left of the diagonal
+    (``block_lane``), then for each ancestor ``column_up_lane`` (and ``block_lane`` for its other velocities)."""
+    parent = mdl.parent
+    B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, r, i, r, mdl)
+    for l in range(LANES):
+        column_lane(cm, m, B, Fw, Mb, l, LANES)
+    for c in range(r):                                    # M[iv_i + r, iv_i + c] = S_cᵀ F, c < r
+        cm = column_model(i, r, i, c, mdl)
+        for l in range(LANES):
+            block_lane(cm, Fw, Mb, l, LANES)
+    k = i
+    while parent[k] >= 0:
+        B, j = lane_record(even, odd, depth, k, COMPOSITE), parent[k]
+        cm = column_model(i, r, j, 0, mdl)
+        for l in range(LANES):
+            column_up_lane(cm, B, Fw, Mb, l, LANES)
+        for c in range(1, mdl.nvj[j]):                    # a multi-dof ancestor's other velocities
+            cm = column_model(i, r, j, c, mdl)
+            for l in range(LANES):
+                block_lane(cm, Fw, Mb, l, LANES)
+        k = j
+
+
 @njit(cache=True, inline="always")
-def column_model(i, k, mdl):
-    """What M's entry (iv_i, iv_k) takes from the model: (its flat index in Mb's rows, S_k's row as s_l, s_a, the
-    armature of velocity iv_k: added on the diagonal only, ``column_lane``)."""
-    S, x = mdl.S, mdl.iv[k]
-    return mdl.iv[i] * S.shape[0] + x, (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5]), mdl.armature[x]
+def column_model(i, r, k, c, mdl):
+    """What M's entry (iv_i + r, iv_k + c) takes from the model: (its flat index in Mb's rows, S's row iv_k + c as s_l,
+    s_a, the armature of velocity iv_k + c: added on the diagonal only, ``column_lane``)."""
+    S, x = mdl.S, mdl.iv[k] + c
+    return (mdl.iv[i] + r) * S.shape[0] + x, (S[x, 0], S[x, 1], S[x, 2]), (S[x, 3], S[x, 4], S[x, 5]), \
+        mdl.armature[x]
 
 
 @njit(cache=True, inline="always")
@@ -261,13 +306,22 @@ def column_lane(cm, m, B, Fw, Mb, l, L):
 
 @njit(cache=True, inline="always")
 def column_up_lane(cm, B, Fw, Mb, l, L):
-    """At lane l: column i's wrench F (Fw) carried from body k to its parent λ(k) (``spatial.force_up``; B: k's record),
-    and M[iv_i, iv_λ(k)] = S_λ(k)ᵀ F (cm: ``column_model(i, λ(k))``)."""
+    """At lane l: the column's wrench F (Fw) carried from body k to its parent λ(k) (``spatial.force_up``; B: k's
+    record), and M[iv_i + r, iv_λ(k)] = S_{iv_λ(k)}ᵀ F (cm: ``column_model(i, r, λ(k), 0)``)."""
     e, tl, ta, _ = cm
     F = force_up(get_rotation(B, l, L), get3(B, 9, l, L), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l],
                  Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l])
     Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
     Mb[e * L + l] = tl[0] * F[0] + tl[1] * F[1] + tl[2] * F[2] + ta[0] * F[3] + ta[1] * F[4] + ta[2] * F[5]
+
+
+@njit(cache=True, inline="always")
+def block_lane(cm, Fw, Mb, l, L):
+    """At lane l: M[iv_i + r, iv_k + c] = S_{iv_k + c}ᵀ F, the column's wrench F (Fw) against a velocity of body k, which
+    carries it (cm: ``column_model(i, r, k, c)``)."""
+    e, tl, ta, _ = cm
+    Mb[e * L + l] = tl[0] * Fw[0 * L + l] + tl[1] * Fw[1 * L + l] + tl[2] * Fw[2 * L + l] + ta[0] * Fw[3 * L + l] \
+        + ta[1] * Fw[4 * L + l] + ta[2] * Fw[5 * L + l]
 
 
 @njit(cache=True, inline="always")

@@ -36,7 +36,8 @@ from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .core import (LANES, finite_state, gather_lanes, get3, get_rotation, inertial_model, kernel_arrays, lane_record,
-                   motion_model, no_wrenches, on_lanes, placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
+                   motion_model, multi_rates, no_wrenches, on_lanes, placement_lanes,
+                   quat_placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
                    unpack, wrench_rows_of)
 from .route import route
 from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -201,14 +202,14 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """``rnea_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of rnea.
 
     External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
-    itself for what the lanes do not cover — per-link terms, a joint with more than one velocity (free flyer) —
-    and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
+    itself for what the lanes do not cover — per-link terms, a joint other than a screw joint, a free flyer or a
+    ball (``core.on_lanes``) — and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
     then names the state or entry, as the one-state form's does).
     Every lane is computed alone, so a state's τ does not depend on the batch around it; it agrees with the
     one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq):            # the terms, a multi-dof joint
+    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):      # the terms, a joint the lanes do not take
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
     mdl = unpack(I, F)          # references, and threads sharing one array contend for its count (measured: two
@@ -218,24 +219,32 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     base = np.zeros(9 * LANES)                  # the fixed base as a parent: ω' = ω̇' = 0, v̇' = −g (docs §6)
     for l in range(LANES):
         base[6 * LANES + l], base[7 * LANES + l], base[8 * LANES + l] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
-    Z, TB = np.empty(3 * nb * LANES), np.empty(nb * LANES)      # q, q̇, q̈ and τ of the block, state index last
+    Z, TB = np.empty((nq + 2 * nv) * LANES), np.empty(nv * LANES)  # q, q̇, q̈ and τ of the block, state index last
     W, path = np.empty(6 * LANES), np.empty(nb, np.int64)      # a wrench of the block, a body's path (external_lanes)
     depth = tree_depth(parent)
     for s0 in range(0, N, LANES):
         n = min(LANES, N - s0)
-        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nb) \
-            & gather_lanes(A, s0, n, Z, 2 * nb)
+        ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nq) \
+            & gather_lanes(A, s0, n, Z, nq + nv)
         if ok:
             for i in range(nb):                                          # outward, Eqs. 3–14
                 j = parent[i]
                 par = base if j < 0 else lane_record(even, odd, depth, j, RECORD)[_W * LANES:(_W + 9) * LANES]
-                outward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), par, Z)
+                B = lane_record(even, odd, depth, i, RECORD)
+                if mdl.nvj[i] > 1:                                       # a free flyer or a ball joint
+                    outward_multi_lanes(i, mdl, B, par, Z, nq)
+                else:
+                    outward_lanes(i, mdl, B, par, Z, nq)
             if xb.shape[0] > 0:
                 external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
                 j = parent[i]                                            # (a root's ``to`` is not read)
                 to = TB if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
-                inward_lanes(i, mdl, lane_record(even, odd, depth, i, RECORD), to, TB, Z)
+                B = lane_record(even, odd, depth, i, RECORD)
+                if mdl.nvj[i] > 1:
+                    inward_multi_lanes(i, mdl, B, to, TB, Z, nq)
+                else:
+                    inward_lanes(i, mdl, B, to, TB, Z, nq)
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
@@ -246,13 +255,14 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def outward_lanes(i, mdl, B, par, Z):
+def outward_lanes(i, mdl, B, par, Z, nq):
     """Body i's record B for every lane of the block (Eqs. 3–14, as ``outward`` and ``inertial`` for one state):
-    its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'), then f'_i = m v̇'_C and
-    n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes). Three loops, not one: the
-    model's numbers that each needs fit in the vector registers (one loop spilled them: 13.7 → 11.5 ns per lane)."""
+    its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'; the base's for a root), then
+    f'_i = m v̇'_C and n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes; nq rows of
+    q). Three loops, not one: the model's numbers that each needs fit in the vector registers (one loop spilled
+    them: 13.7 → 11.5 ns per lane)."""
     placement_lanes(i, mdl, B, Z)
-    mm, im = motion_model(i, mdl), inertial_model(i, mdl)
+    mm, im = motion_model(i, mdl, nq), inertial_model(i, mdl)
     if mdl.parent[i] < 0:
         mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
         for l in range(LANES):
@@ -264,17 +274,30 @@ def outward_lanes(i, mdl, B, par, Z):
         inertial_lane(im, B, l, LANES)
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def outward_multi_lanes(i, mdl, B, par, Z, nq):
+    """``outward_lanes`` for a free flyer or a ball joint (joints.multi_dof): its quaternion placement, then
+    ``motion_lane_multi`` and ``inertial_lane``. (A function of its own: the screw joints' loops compile as they
+    would alone — with these in the same function the RNEA's lanes measured 4–6 % slower on ur5.)"""
+    quat_placement_lanes(i, mdl, B, Z)
+    mm, im = motion_model(i, mdl, nq), inertial_model(i, mdl)
+    for l in range(LANES):
+        motion_lane_multi(mm, B, par, Z, l, LANES)
+    for l in range(LANES):
+        inertial_lane(im, B, l, LANES)
+
+
 @njit(cache=True, inline="always")
 def motion_lane(mm, B, par, Z, l, L):
     """ω'_i, ω̇'_i, v̇'_i (Eqs. 3, 5, 6; prismatic 9, 10, 12, as ``outward``) into rows 12–20 of B at lane l, from the
     placement (rows 0–11) and the parent's (par: 9 rows ω', ω̇', v̇'); mm: ``motion_model``."""
-    r, sl, sa, nb = mm
+    _, sl, sa, rv, ra, _ = mm
     R, p = get_rotation(B, l, L), get3(B, 9, l, L)
     w0, dw0, dv0 = get3(par, 0, l, L), get3(par, 3, l, L), get3(par, 6, l, L)
     w_in = mul3t(R, w0)                                    # R^i_{i−1} ω'_{i−1}
     dw_in = mul3t(R, dw0)
     dv_in = mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))    # Eq. 6 (32c)
-    qd, qdd = Z[(nb + r) * L + l], Z[(2 * nb + r) * L + l]
+    qd, qdd = Z[rv * L + l], Z[ra * L + l]
     vl, va = qd * sl[2], qd * sa[2]             # the joint's rate along z'_i (z-aligned frames: S = [0 0 s_l; 0 0 s_a])
     w = (w_in[0], w_in[1], w_in[2] + va)                                          # Eq. 3
     dw = (dw_in[0] + w_in[1] * va, dw_in[1] - w_in[0] * va, dw_in[2] + qdd * sa[2])   # Eq. 5: + ω' × q̇ z'
@@ -285,11 +308,34 @@ def motion_lane(mm, B, par, Z, l, L):
 
 
 @njit(cache=True, inline="always")
+def motion_in(B, par, l, L):
+    """The parent's ω', ω̇', v̇' (par: 9 rows) moved to body i's origin and axes at lane l, from body i's placement
+    (rows 0–11 of B): R^i_{i−1} ω'_{i−1}, R^i_{i−1} ω̇'_{i−1} and R^i_{i−1} (v̇'_{i−1} + ω̇'_{i−1} × p + ω'_{i−1} × (ω'_{i−1}
+    × p)) (Eqs. 3, 5, 6; 32c)."""
+    R, p = get_rotation(B, l, L), get3(B, 9, l, L)
+    w0, dw0, dv0 = get3(par, 0, l, L), get3(par, 3, l, L), get3(par, 6, l, L)
+    return mul3t(R, w0), mul3t(R, dw0), mul3t(R, add(dv0, add(cross(dw0, p), cross(w0, cross(w0, p)))))
+
+
+@njit(cache=True, inline="always")
+def motion_lane_multi(mm, B, par, Z, l, L):
+    """``motion_lane`` for a free flyer (n = 6, S = 1₆) or a ball joint (n = 3, S = [0; 1₃]), rows 12–20 of B at
+    lane l: S q̇ = (v_l, v_a) is (q̇[0:3], q̇[3:6]) or (0, q̇[0:3]), in the general form of Eqs. 3, 5, 6 (``outward``):
+    ω' = w_in + v_a,  ω̇' = ω̇_in + a_a + w_in × v_a,  v̇' = v̇_in + a_l + 2 w_in × v_l + v_a × v_l."""
+    w_in, dw_in, dv_in = motion_in(B, par, l, L)
+    vl, va = multi_rates(mm, Z, mm[3], l, L)
+    al, aa = multi_rates(mm, Z, mm[4], l, L)
+    set3(B, 12, l, L, add(w_in, va))                                              # Eq. 3
+    set3(B, 15, l, L, add(add(dw_in, aa), cross(w_in, va)))                       # Eq. 5
+    set3(B, 18, l, L, add(add(dv_in, al), add(scale(2.0, cross(w_in, vl)), cross(va, vl))))   # Eq. 6
+
+
+@njit(cache=True, inline="always")
 def root_motion_lane(mm, B, mg, Z, l, L):
     """``motion_lane`` for a body on the fixed base, whose ω' and ω̇' are 0 and v̇' = −g (mg, docs/design.md §6):
     ω' = q̇ z', ω̇' = q̈ z', v̇' = Rᵀ(−g) + q̈ z' (prismatic)."""
-    r, sl, sa, nb = mm
-    qd, qdd = Z[(nb + r) * L + l], Z[(2 * nb + r) * L + l]
+    _, sl, sa, rv, ra, _ = mm
+    qd, qdd = Z[rv * L + l], Z[ra * L + l]
     dv_in = mul3t(get_rotation(B, l, L), mg)
     set3(B, 12, l, L, (0.0, 0.0, qd * sa[2]))
     set3(B, 15, l, L, (0.0, 0.0, qdd * sa[2]))
@@ -345,10 +391,10 @@ def external_lane(B, fe, ne, p, l, L):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def inward_lanes(i, mdl, B, to, TB, Z):
+def inward_lanes(i, mdl, B, to, TB, Z, nq):
     """``inward_lane`` for every lane of the block; a body on the fixed base, whose wrench the base takes, its τ
-    alone (``torque_lane``)."""
-    mm, ar = motion_model(i, mdl), mdl.armature[mdl.iv[i]]
+    alone (``torque_lane``). (A free flyer or a ball: ``inward_multi_lanes``.)"""
+    mm, ar = motion_model(i, mdl, nq), mdl.armature[mdl.iv[i]]
     if mdl.parent[i] < 0:
         for l in range(LANES):
             torque_lane(mm, ar, B, TB, Z, l, LANES)
@@ -357,12 +403,36 @@ def inward_lanes(i, mdl, B, to, TB, Z):
             inward_lane(mm, ar, B, to, TB, Z, l, LANES)
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def inward_multi_lanes(i, mdl, B, to, TB, Z, nq):
+    """``inward_lanes`` for a free flyer or a ball joint (n velocities): τ = Sᵀ [f'; n'] + armature ⊙ q̈, the last n
+    rows of [f'; n'] (S = [0; 1_n]) plus the rotor terms (``torque_multi_lane``), then ``wrench_up_lane`` unless the
+    base takes the wrench."""
+    mm = motion_model(i, mdl, nq)
+    r, n = mm[0], mm[5]
+    for k in range(n):
+        ak = mdl.armature[r + k]
+        for l in range(LANES):
+            torque_multi_lane(mm, k, ak, B, TB, Z, l, LANES)
+    if mdl.parent[i] >= 0:
+        for l in range(LANES):
+            wrench_up_lane(B, to, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def torque_multi_lane(mm, k, ak, B, TB, Z, l, L):
+    """τ's row iv_i + k of a free flyer or a ball joint (n velocities, S = [0; 1_n]) at lane l: row 6 − n + k of
+    [f'_i; n'_i] + armature · q̈ (Eqs. 17, 18 and ``rotor``); ak: the armature of that velocity."""
+    r, ra, n = mm[0], mm[4], mm[5]
+    TB[(r + k) * L + l] = B[(_F + 6 - n + k) * L + l] + ak * Z[(ra + k) * L + l]
+
+
 @njit(cache=True, inline="always")
 def torque_lane(mm, ar, B, TB, Z, l, L):
     """τ_i = z'ᵀ f'_i (prismatic) or z'ᵀ n'_i (revolute) + armature_i q̈_i (Eqs. 17, 18; the rotor term as ``rotor``)
     into row iv_i of TB at lane l (z-aligned frames: S = [0 0 s_l; 0 0 s_a]); mm: ``motion_model``."""
-    r, sl, sa, nb = mm
-    TB[r * L + l] = sl[2] * B[(_F + 2) * L + l] + sa[2] * B[(_F + 5) * L + l] + ar * Z[(2 * nb + r) * L + l]
+    r, sl, sa, _, ra, _ = mm
+    TB[r * L + l] = sl[2] * B[(_F + 2) * L + l] + sa[2] * B[(_F + 5) * L + l] + ar * Z[ra * L + l]
 
 
 @njit(cache=True, inline="always")
@@ -372,6 +442,21 @@ def inward_lane(mm, ar, B, to, TB, Z, l, L):
     ``rotor`` for one state; mm: ``motion_model``, ar: joint i's armature, Z: the block's q, q̇, q̈."""
     f, n = get3(B, 21, l, L), get3(B, 24, l, L)
     torque_lane(mm, ar, B, TB, Z, l, L)
+    R = get_rotation(B, l, L)
+    Rf, Rn = mul3(R, f), mul3(R, n)
+    n_up = add(Rn, cross(get3(B, 9, l, L), Rf))
+    to[l] += Rf[0]
+    to[L + l] += Rf[1]
+    to[2 * L + l] += Rf[2]
+    to[3 * L + l] += n_up[0]
+    to[4 * L + l] += n_up[1]
+    to[5 * L + l] += n_up[2]
+
+
+@njit(cache=True, inline="always")
+def wrench_up_lane(B, to, l, L):
+    """The parent's f', n' (``to``: 6 rows) += R f'_i, R n'_i + p × R f'_i at lane l (Eqs. 15, 16)."""
+    f, n = get3(B, 21, l, L), get3(B, 24, l, L)
     R = get_rotation(B, l, L)
     Rf, Rn = mul3(R, f), mul3(R, n)
     n_up = add(Rn, cross(get3(B, 9, l, L), Rf))

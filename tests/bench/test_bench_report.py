@@ -11,7 +11,7 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     monkeypatch.setattr(sections, "per_call_pair", lambda f, g, repeat=1, min_time=0: (f(), g(), 1e-6, 1e-6)[2:])
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "report.json").read_text())
-    for key in ("machine", "latency", "closed_latency", "batched", "floors", "throughput", "scaling", "slopes", "reduced",
+    for key in ("machine", "latency", "closed_latency", "batched", "floating", "floors", "throughput", "scaling", "slopes", "reduced",
                 "work_precision", "spm_drift", "hard_cases", "cold_start", "targets"):
         assert data[key], key
     assert all(r["err"] <= 1e-12 for r in data["latency"])      # errors are measured, not assumed
@@ -19,6 +19,12 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     assert {(r["robot"], r["call"]) for r in data["batched"]} == {
         (rob, c) for rob in ("ur5", "aau_arm", "chain32") for c in targets.SINGLE_CALLS + targets.LAGRANGE}
     assert all("refused" not in r and r["err"] <= 1e-12 for r in data["batched"])
+    # the floating bases: the lane calls at N = 10 000 on free flyers and the ball-jointed humanoid, none refused;
+    # errors measured ≤ 2.7e-12 (q̈ of talos_reduced's aba, divided by nothing: the batched err column's measure)
+    assert {(r["robot"], r["call"]) for r in data["floating"]} == {
+        (rob, c) for rob in ("ur5 (free flyer)", "solo12", "talos_reduced", "humanoid_ball (MJCF)")
+        for c in ("rnea", "aba", "mass_matrix (crba)")}
+    assert all("refused" not in r and r["N"] == 10_000 and r["err"] <= 1e-11 for r in data["floating"])
     assert {r["robot"] for r in data["latency"]} == {"ur5", "aau_arm", "chain32", "spm (open tree)"}
     # the lane kernels' work–precision rows: against the one-state kernel within the batch-vs-single bound (1e-14;
     # measured p95 ≤ 5.4e-15, the chain's q̈), against Pinocchio within the batched err column's 1e-12 (≤ 3.5e-13)

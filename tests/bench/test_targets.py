@@ -25,6 +25,8 @@ def report(at_limit=True):
     batched += [dict(robot="ur5", call=c, N=1000, pin_route="loop", ratio=f(1.0)) for c in SINGLE_CALLS
                 if c not in ("rnea", "aba")]
     batched.append(dict(robot="ur5", call=LAGRANGE[0], N=1000, pin_route="loop", ratio=f(20.0)))
+    floating = [dict(robot=rob, call=c, N=10_000, ratio=f(limit)) for rob in ("solo12", "talos_reduced")
+                for c, limit in (("rnea", 0.15), ("aba", 0.25), ("mass_matrix (crba)", 0.3))]
     hard = [dict(case=case, route=r, ratio_median=f(1.5), ratio_p95=f(1.5)) for case in ("uniform", "heavy root")
             for r in HARD_ROUTES]
     hard += [dict(case=case, route="Pinocchio aba", median=1e-15, p95=1e-14) for case in ("uniform", "heavy root")]
@@ -32,7 +34,7 @@ def report(at_limit=True):
                   for c in ("rnea", "aba", "mass_matrix") for N in (100, 10_000)]     # (N = 100: not a target row)
     return dict(machine={}, latency=latency, closed_latency=[dict(robot="spm", call="constrained_forward_dynamics",
                                                                   ratio=f(1.0))],
-                batched=batched, throughput=throughput, hard_cases=hard, cold_start=dict(measured=True, total_s=f(10.0)))
+                batched=batched, floating=floating, throughput=throughput, hard_cases=hard, cold_start=dict(measured=True, total_s=f(10.0)))
 
 
 def rows_of(rep, t):

@@ -27,7 +27,7 @@ from numba import cuda
 from manipdyn.validation import random_states
 from test_lanes import _tree
 warnings.simplefilter("ignore")
-from test_gpu import tree_model, wrenches
+from test_gpu import ball_model, floating_model, multi_wrenches, tree_model, wrenches
 out = dict(nojit=_jit.NOJIT, sim=cuda.simulator_enabled if hasattr(cuda, "simulator_enabled") else None)
 for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tree))):
     for N in (1, 7, 40):
@@ -49,6 +49,18 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tre
         for frame in ("local", "world"):
             out[f"{{name}}/{{N}}"]["rnea_f_ext_" + frame] = gpu.rnea(model, dq, V, A, f_ext=fx_gpu,
                                                                     f_ext_frame=frame).copy_to_host().tolist()
+for name, model in (("floating", floating_model()), ("ball", ball_model())):
+    for N in (1, 7):
+        Q, V, A = random_states(model, N, np.random.default_rng(N))
+        dq = cuda.to_device(Q)
+        out[f"{{name}}/{{N}}"] = dict(
+            rnea=gpu.rnea(model, dq, V, A).copy_to_host().tolist(),
+            rnea_f_ext_world=gpu.rnea(model, dq, V, A, f_ext=multi_wrenches(model, N),
+                                      f_ext_frame="world").copy_to_host().tolist(),
+            nonlinear_effects=gpu.nonlinear_effects(model, Q, V).copy_to_host().tolist(),
+            gravity_torques=gpu.gravity_torques(model, Q).copy_to_host().tolist(),
+            mass_matrix=gpu.mass_matrix(model, dq).copy_to_host().tolist(),
+            aba=gpu.aba(model, Q, V, A).copy_to_host().tolist())
 model = md.load_urdf({aau!r})
 Q, V, A = random_states(model, 9, np.random.default_rng(3))
 errors = {{}}
@@ -75,8 +87,8 @@ fails("f_ext_nan", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]
 fails("f_ext_name", lambda: gpu.rnea(model, Q, V, A, f_ext={{"no_such_frame": (np.zeros(3), np.zeros(3))}}))
 fails("f_ext_rows", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]: (cuda.to_device(f[:4]),
                                                                                     np.zeros(3))}}))
-fails("free_flyer", lambda: gpu.rnea(md.load_urdf({aau!r}, root_joint="free_flyer"), np.zeros((2, 12)),
-                                     np.zeros((2, 11)), np.zeros((2, 11))))
+fails("free_flyer", lambda: gpu.frame_placement(md.load_urdf({aau!r}, root_joint="free_flyer"), np.zeros((2, 12)),
+                                                "link5"))
 out["errors"] = errors
 print(json.dumps(out))
 """
@@ -88,6 +100,34 @@ def tree_model(_tree):
     import dataclasses
     model = md.load_urdf_string(_tree(tool=True))
     return dataclasses.replace(model, armature=np.linspace(0.1, 0.9, model.nv))
+
+
+def floating_model():
+    """The AAU arm on a free-flyer root, armature on every velocity (the free flyer's six too)."""
+    import dataclasses
+    model = md.load_urdf(AAU, root_joint="free_flyer")
+    return dataclasses.replace(model, armature=np.linspace(0.1, 0.9, model.nv))
+
+
+def ball_model():
+    """A random MJCF tree of ball and hinge joints (tests/ball_models.py): balls at the root and mid-chain, armature
+    on every velocity."""
+    import dataclasses
+    import warnings
+
+    from ball_models import random_tree
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = md.load_mjcf_string(random_tree(3, "BHBB"))
+    return dataclasses.replace(model, armature=np.linspace(0.05, 0.5, model.nv))
+
+
+def multi_wrenches(model, N):
+    """f_ext on the tip and a mid body of a floating or ball-jointed model, seeded rows."""
+    rng = np.random.default_rng(200 + N)
+    tip, mid = model.body_names[-1], model.body_names[len(model.body_names) // 2]
+    return {tip: (rng.normal(0, 10, (N, 3)), rng.normal(0, 2, (N, 3))), mid: (rng.normal(0, 10, (N, 3)),
+                                                                             rng.normal(0, 2, (N, 3)))}
 
 
 def wrenches(model, N):
@@ -146,6 +186,27 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
         assert err(got["rnea_f_ext_" + frame], got["rnea"]) > 1e-3                       # the wrenches count
 
 
+@pytest.mark.parametrize("name", ["floating", "ball"])
+@pytest.mark.parametrize("N", [1, 7])
+def test_gpu_takes_free_flyers_and_ball_joints(probe, name, N):
+    """The multi-dof lane steps (core.quat_placement_lane, rnea.motion_lane_multi and torque_multi_lane, crba's
+    columns of a multi-dof joint, aba.articulated_multi_lane, handed_multi_lane, acceleration_multi_lane) driven one
+    thread per state give the CPU's numbers (whose lanes are held to Pinocchio: tests/batch/test_lanes_multi_dof.py)."""
+    model = floating_model() if name == "floating" else ball_model()
+    assert model.nq > model.nv and model.armature.all()
+    Q, V, A = random_states(model, N, np.random.default_rng(N))
+    got = {k: np.array(x) for k, x in probe[f"{name}/{N}"].items()}
+    assert_close(got["rnea"], md.rnea(model, Q, V, A), 1e-14, "rnea")                        # measured ≤ 4.4e-16
+    tau = md.rnea(model, Q, V, A, f_ext=multi_wrenches(model, N), f_ext_frame="world")
+    assert_close(got["rnea_f_ext_world"], tau, 1e-14, "rnea f_ext")
+    assert err(got["rnea_f_ext_world"], got["rnea"]) > 1e-3
+    assert_close(got["nonlinear_effects"], md.nonlinear_effects(model, Q, V), 1e-14, "h")
+    assert_close(got["gravity_torques"], md.gravity_torques(model, Q), 1e-14, "g")
+    assert_close(got["mass_matrix"], md.mass_matrix(model, Q), 1e-14, "M")
+    cond = np.linalg.cond(md.mass_matrix(model, Q)).max()
+    assert_close(got["aba"], md.aba(model, Q, V, A), 1e-14 * cond, "q̈")
+
+
 @pytest.mark.parametrize("key, kind, words", [
     ("nan_q", "InputError", ["rnea on the GPU, row 5", "q[2]", "nan"]),
     ("huge_angle", "InputError", ["q[6, 0]", "300000", "modulo 2π"]),
@@ -158,7 +219,7 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
     ("f_ext_nan", "InputError", ["rnea on the GPU, row 3", "f_ext", "force"]),
     ("f_ext_name", "InputError", ["no_such_frame"]),
     ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"]),
-    ("free_flyer", "InputError", ["one velocity each", "root_joint"])])
+    ("free_flyer", "InputError", ["do not take the joints", "root_joint", "taken by rnea, aba and mass_matrix"])])
 def test_gpu_errors_name_the_row_and_the_entry(probe, key, kind, words):
     got = probe["errors"][key]
     assert got is not None and got[0] == kind, got

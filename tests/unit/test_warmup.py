@@ -15,6 +15,9 @@ NOT_PUBLIC = {"com_jacobians_kernel", "fk_kernel", "joint_placements_kernel"}
 CALLED_BY_KERNELS = {"closure_rows", "frame_one", "rnea_kernel", "crba_kernel", "aba_kernel", "cholesky_states", "outward_lanes", "external_lanes",
                      "inward_lanes", "merge_lanes",
                      "column_lanes", "velocity_lanes", "articulated_lanes", "inertia_up_lanes", "acceleration_lanes",
+                     "articulated_multi_lanes", "acceleration_multi_lanes",
+                     "outward_multi_lanes", "inward_multi_lanes", "velocity_multi_lanes",
+                     "column_multi_lanes", "quat_composite_lanes",
                      "frame_kernel", "world_lanes", "jacobian_lanes", "local_lanes"}
 
 
