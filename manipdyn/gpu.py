@@ -31,10 +31,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi_lane, articulated_lane,
-                           articulated_model, articulated_multi_lane, bias_lane, bias_up_lane, handed_lane,
-                           handed_multi_lane, inertia_up_lane, rigid_model, singular_threshold, velocity_lane,
-                           velocity_multi_lane)
+from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi, articulated_lane,
+                           articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
+                           inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
 from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
                             placement_model, quat_model, quat_placement_lane, scatter_lane, unpack)
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, merge_lane,
@@ -219,13 +218,13 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         n, r = mdl.nvj[i], mdl.iv[i]
         Gi = G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N]
         if n > 1:
-            singular += articulated_multi_lane(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, N)
+            singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, s + 1, N)
         else:
             singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, s, N)
         if j >= 0:
             P = rec[j * ARTICULATED * N:(j + 1) * ARTICULATED * N]
             if n > 1:
-                handed_multi_lane(n, B, Gi, s, N)
+                handed_multi(n, B, Gi, s, s + 1, N)
             else:
                 handed_lane(B, s, N)
             inertia_up_lane(B, P, s, N)
@@ -238,8 +237,8 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         par = base[6 * N:] if j < 0 else rec[(j * ARTICULATED + _A) * N:(j * ARTICULATED + _A + 6) * N]
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         if mdl.nvj[i] > 1:
-            acceleration_multi_lane(mdl.nvj[i], mdl.iv[i], B, G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N], par,
-                                    QDD, s, N)
+            acceleration_multi(mdl.nvj[i], mdl.iv[i], B, G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N], par,
+                               QDD, s, s + 1, N)
         else:
             acceleration_lane(articulated_model(i, mdl, nq), B, par, QDD, s, N)
     if not scatter_lane(QDD, out, s, N) == 0.0:

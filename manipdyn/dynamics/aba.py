@@ -277,7 +277,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 # (core.placement_lanes), v_i, c_i (6 each), I^A_i (21: the blocks of [[C, Bᵀ], [B, A]] as spatial.inertia_up names
 # them — C and A as core.get_sym3 stores a symmetric 3×3, B row-major), p^A_i (6), U_i (6), D_i, u_i, a_i (6); two
 # arrays by depth parity (core.lane_record). A free flyer or a ball joint (n velocities, S = [0; 1_n]) keeps its pass-2
-# factors in a record of its own (MULTI rows, ``articulated_multi_lane``).
+# factors in a record of its own (MULTI rows, ``articulated_multi``).
 _V, _C, _IA, _IB, _IAA, _PA, _U, _D, _A = 12, 18, 24, 30, 39, 45, 51, 57, 59      # first rows: v, c, I^A (C, B, A),
 ARTICULATED = 65                                                              # p^A, U, D (then u), a
 
@@ -471,7 +471,8 @@ def articulated_lane(am, dmin, B, Z, l, L):
 # -- a free flyer or a ball joint: n velocities, S = [0; 1_n] (the last n rows of a spatial vector, o = 6 − n) --------
 # Its record (MULTI rows of L numbers): the Cholesky factor 𝓛 of D_i = Sᵀ I^A_i S + diag(armature) (21 rows, packed
 # lower triangle: row r, column c at r(r+1)/2 + c), Y = 𝓛⁻¹ U_iᵀ (6 rows per velocity), t = 𝓛⁻¹ u_i (6 rows); as the
-# one-state kernel's multi-dof branch (``aba_kernel``: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ t, q̈ = 𝓛⁻ᵀ (t − Y a')).
+# one-state kernel's multi-dof branch (``aba_kernel``: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ t, q̈ = 𝓛⁻ᵀ (t − Y a')): ``articulated_multi``,
+# ``handed_multi``, ``acceleration_multi``.
 MULTI = 63
 _Y, _T = 21, 57                     # first rows of Y and t
 
@@ -492,112 +493,137 @@ def inertia_row(a, b):
     return _IA + (a if a == b else a + b + 2)
 
 
-@njit(cache=True, inline="always")
-def inertia_at(B, a, b, l, L):
-    """I^A's entry (a, b) at lane l (``inertia_row``; symmetric)."""
-    return B[inertia_row(max(a, b), min(a, b)) * L + l]
-
-
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")
 def articulated_multi_lanes(i, mdl, dmin, B, G, Z, child, nq):
-    """Pass 2 for a free flyer or a ball joint (n velocities), every lane of the block: ``articulated_multi_lane``, and
-    for a child of a body (``child``) ``handed_multi_lane``. Returns the number of lanes with a pivot of D_i not
-    > dmin (singular, or NaN)."""
-    n, r, rt = mdl.nvj[i], mdl.iv[i], nq + mdl.S.shape[0] + mdl.iv[i]
-    ar = mdl.armature[r:r + n]
-    singular = 0
-    if n == 6:                            # the trip counts known to the compiler: its loops unrolled
-        for l in range(LANES):
-            singular += articulated_multi_lane(6, ar, rt, dmin, B, G, Z, l, LANES)
+    """Pass 2 for a free flyer or a ball joint (n velocities), every lane of the block: ``articulated_multi``, and
+    for a child of a body (``child``) ``handed_multi``. Returns the number of pivots of D_i not > dmin (singular,
+    or NaN) over the lanes."""
+    n, r = mdl.nvj[i], mdl.iv[i]
+    rt, ar = nq + mdl.S.shape[0] + r, mdl.armature[r:r + n]
+    if n == 6:                            # the trip counts known to the compiler
+        singular = articulated_multi(6, ar, rt, dmin, B, G, Z, 0, LANES, LANES)
+        if child:
+            handed_multi(6, B, G, 0, LANES, LANES)
     else:
-        for l in range(LANES):
-            singular += articulated_multi_lane(3, ar, rt, dmin, B, G, Z, l, LANES)
-    if child:
-        for l in range(LANES):
-            handed_multi_lane(n, B, G, l, LANES)
+        singular = articulated_multi(3, ar, rt, dmin, B, G, Z, 0, LANES, LANES)
+        if child:
+            handed_multi(3, B, G, 0, LANES, LANES)
     return singular
 
 
+# The multi-dof steps work on lanes l0 … l1 − 1 (the CPU: a block, 0 … LANES − 1; a GPU thread: its own lane), with
+# the loops over the joint's velocities outside and the loop over the lanes inside each operation — the order in
+# which the compiler vectorises them (a per-lane Cholesky inside the lane loop stayed scalar).
+
 @njit(cache=True, inline="always")
-def articulated_multi_lane(n, ar, rt, dmin, B, G, Z, l, L):
-    """At lane l: D = Sᵀ I^A S + diag(armature) = 𝓛 𝓛ᵀ (Cholesky), Y = 𝓛⁻¹ U_iᵀ with U_i = I^A S (I^A's last n
-    columns), t = 𝓛⁻¹ u, u = τ − Sᵀ p^A (τ from Z's rows rt …). Returns the number of pivots not > dmin."""
+def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L):
+    """D = Sᵀ I^A S + diag(armature) = 𝓛 𝓛ᵀ (Cholesky), Y = 𝓛⁻¹ U_iᵀ with U_i = I^A S (I^A's last n columns),
+    t = 𝓛⁻¹ u, u = τ − Sᵀ p^A (τ from Z's rows rt …), into G's rows. Returns the number of pivots not > dmin."""
     o, bad = 6 - n, 0
-    for r in range(n):                                      # 𝓛, row by row
+    for r in range(n):                                      # 𝓛, entry by entry
         for c in range(r + 1):
-            x = inertia_at(B, o + r, o + c, l, L) + (ar[r] if r == c else 0.0)
+            e, src, a = tri(r, c), inertia_row(o + r, o + c), ar[r] if r == c else 0.0
+            for l in range(l0, l1):
+                G[e * L + l] = B[src * L + l] + a
             for k in range(c):
-                x -= G[tri(r, k) * L + l] * G[tri(c, k) * L + l]
+                e1, e2 = tri(r, k), tri(c, k)
+                for l in range(l0, l1):
+                    G[e * L + l] -= G[e1 * L + l] * G[e2 * L + l]
             if r == c:
-                bad += 0 if x > dmin else 1
-                G[tri(r, r) * L + l] = math.sqrt(x)   # (math: numba-cuda has no np.sqrt)
+                for l in range(l0, l1):
+                    x = G[e * L + l]
+                    bad += 0 if x > dmin else 1
+                    G[e * L + l] = math.sqrt(x)     # (math: numba-cuda has no np.sqrt)
             else:
-                G[tri(r, c) * L + l] = x / G[tri(c, c) * L + l]
+                d = tri(c, c)
+                for l in range(l0, l1):
+                    G[e * L + l] /= G[d * L + l]
     for r in range(n):                                      # [Y | t] = 𝓛⁻¹ [Uᵀ | u], forward substitution
-        d = G[tri(r, r) * L + l]
+        d = tri(r, r)
         for k in range(6):
-            x = inertia_at(B, o + r, k, l, L)
+            y, src = _Y + 6 * r + k, inertia_row(max(o + r, k), min(o + r, k))
+            for l in range(l0, l1):
+                G[y * L + l] = B[src * L + l]
             for c in range(r):
-                x -= G[tri(r, c) * L + l] * G[(_Y + 6 * c + k) * L + l]
-            G[(_Y + 6 * r + k) * L + l] = x / d
-        x = Z[(rt + r) * L + l] - B[(_PA + o + r) * L + l]
+                e, yc = tri(r, c), _Y + 6 * c + k
+                for l in range(l0, l1):
+                    G[y * L + l] -= G[e * L + l] * G[yc * L + l]
+            for l in range(l0, l1):
+                G[y * L + l] /= G[d * L + l]
+        t = _T + r
+        for l in range(l0, l1):
+            G[t * L + l] = Z[(rt + r) * L + l] - B[(_PA + o + r) * L + l]
         for c in range(r):
-            x -= G[tri(r, c) * L + l] * G[(_T + c) * L + l]
-        G[(_T + r) * L + l] = x / d
+            e, tc = tri(r, c), _T + c
+            for l in range(l0, l1):
+                G[t * L + l] -= G[e * L + l] * G[tc * L + l]
+        for l in range(l0, l1):
+            G[t * L + l] /= G[d * L + l]
     return bad
 
 
 @njit(cache=True, inline="always")
-def handed_multi_lane(n, B, G, l, L):
-    """At lane l, in place: Iᵃ = I^A − Yᵀ Y and pᵃ = p^A + Iᵃ c + Yᵀ t (``handed_lane`` for n velocities)."""
+def handed_multi(n, B, G, l0, l1, L):
+    """In place: Iᵃ = I^A − Yᵀ Y and pᵃ = p^A + Iᵃ c + Yᵀ t (``handed_lane`` for n velocities)."""
     for a in range(6):
         for b in range(a + 1):
-            x = 0.0
+            row = inertia_row(a, b)
             for r in range(n):
-                x += G[(_Y + 6 * r + a) * L + l] * G[(_Y + 6 * r + b) * L + l]
-            B[inertia_row(a, b) * L + l] -= x
-    c = get6(B, _C, l, L)
+                ya, yb = _Y + 6 * r + a, _Y + 6 * r + b
+                for l in range(l0, l1):
+                    B[row * L + l] -= G[ya * L + l] * G[yb * L + l]
     for a in range(6):
-        x = 0.0
+        pa = _PA + a
         for b in range(6):
-            x += inertia_at(B, a, b, l, L) * c[b]
+            row, cb = inertia_row(max(a, b), min(a, b)), _C + b
+            for l in range(l0, l1):
+                B[pa * L + l] += B[row * L + l] * B[cb * L + l]
         for r in range(n):
-            x += G[(_Y + 6 * r + a) * L + l] * G[(_T + r) * L + l]
-        B[(_PA + a) * L + l] += x
+            ya, t = _Y + 6 * r + a, _T + r
+            for l in range(l0, l1):
+                B[pa * L + l] += G[ya * L + l] * G[t * L + l]
 
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")
 def acceleration_multi_lanes(i, mdl, B, G, par, QDD):
-    """Pass 3 for a free flyer or a ball joint, every lane of the block: ``acceleration_multi_lane``."""
+    """Pass 3 for a free flyer or a ball joint, every lane of the block: ``acceleration_multi``."""
     n, r = mdl.nvj[i], mdl.iv[i]
     if n == 6:
-        for l in range(LANES):
-            acceleration_multi_lane(6, r, B, G, par, QDD, l, LANES)
+        acceleration_multi(6, r, B, G, par, QDD, 0, LANES, LANES)
     else:
-        for l in range(LANES):
-            acceleration_multi_lane(3, r, B, G, par, QDD, l, LANES)
+        acceleration_multi(3, r, B, G, par, QDD, 0, LANES, LANES)
 
 
 @njit(cache=True, inline="always")
-def acceleration_multi_lane(n, r0, B, G, par, QDD, l, L):
-    """At lane l: a' = ⁱX_λ a_λ + c_i, q̈ = 𝓛⁻ᵀ (t − Y a') (D q̈ = u − U_iᵀ a') into rows r0 … of QDD, a_i = a' + S q̈."""
-    R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
-    al, aa = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ a_λ
-    c = get6(B, _C, l, L)
-    a = (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5])
-    o = 6 - n
+def acceleration_multi(n, r0, B, G, par, QDD, l0, l1, L):
+    """a' = ⁱX_λ a_λ + c_i, q̈ = 𝓛⁻ᵀ (t − Y a') (D q̈ = u − U_iᵀ a') into rows r0 … of QDD, a_i = a' + S q̈."""
+    for l in range(l0, l1):
+        R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
+        al, aa = motion_down(R, p, get3(par, 0, l, L), w)                          # ⁱX_λ a_λ
+        c = get6(B, _C, l, L)
+        set6(B, _A, l, L, (al[0] + c[0], al[1] + c[1], al[2] + c[2], aa[0] + c[3], aa[1] + c[4], aa[2] + c[5]))
     for r in range(n):                                      # y = t − Y a' (into t's rows)
-        x = G[(_T + r) * L + l]
+        t = _T + r
         for k in range(6):
-            x -= G[(_Y + 6 * r + k) * L + l] * a[k]
-        G[(_T + r) * L + l] = x
+            y, a = _Y + 6 * r + k, _A + k
+            for l in range(l0, l1):
+                G[t * L + l] -= G[y * L + l] * B[a * L + l]
     for r in range(n - 1, -1, -1):                          # 𝓛ᵀ q̈ = y, back substitution
-        x = G[(_T + r) * L + l]
-        for c2 in range(r + 1, n):
-            x -= G[tri(c2, r) * L + l] * QDD[(r0 + c2) * L + l]
-        QDD[(r0 + r) * L + l] = x / G[tri(r, r) * L + l]
-    for k in range(6):
-        B[(_A + k) * L + l] = a[k] + (QDD[(r0 + k - o) * L + l] if k >= o else 0.0)
+        q, t = r0 + r, _T + r
+        for l in range(l0, l1):
+            QDD[q * L + l] = G[t * L + l]
+        for c in range(r + 1, n):
+            e, qc = tri(c, r), r0 + c
+            for l in range(l0, l1):
+                QDD[q * L + l] -= G[e * L + l] * QDD[qc * L + l]
+        d = tri(r, r)
+        for l in range(l0, l1):
+            QDD[q * L + l] /= G[d * L + l]
+    o = 6 - n
+    for r in range(n):                                      # a_i = a' + S q̈
+        a, q = _A + o + r, r0 + r
+        for l in range(l0, l1):
+            B[a * L + l] += QDD[q * L + l]
 
 
 @njit(cache=True, inline="always")

@@ -1,5 +1,5 @@
 """The lane kernels on free flyers and ball joints (core.on_lanes with multi: rnea.motion_lane_multi, core.
-quat_placement_lane, crba's columns of a multi-dof joint, aba.articulated_multi_lane): floating-base robots and
+quat_placement_lane, crba's columns of a multi-dof joint, aba.articulated_multi): floating-base robots and
 ball-jointed trees run at lane speed, not through the one-state kernels, and give Pinocchio's numbers.
 
 Against Pinocchio 4.1 (docs/design.md §3 measure; q̈ scaled by cond(M)): ur5 on a free flyer (buildModelFromUrdf
