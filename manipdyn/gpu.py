@@ -36,8 +36,8 @@ from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, accele
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
 from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
                             placement_model, quat_model, quat_placement_lane, scatter_lane, unpack)
-from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, merge_lane,
-                            merge_weights, own_inertia_lane, own_inertia_model)
+from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
+                            merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
 from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
@@ -167,11 +167,11 @@ def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, angle, flags):
                 block_lane(column_model(i, r, i, c, mdl), Fw, Mb, s, N)
             k = i
             while mdl.parent[k] >= 0:
-                j = mdl.parent[k]
-                column_up_lane(column_model(i, r, j, 0, mdl), rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N], Fw, Mb,
-                               s, N)
-                for c in range(1, mdl.nvj[j]):
-                    block_lane(column_model(i, r, j, c, mdl), Fw, Mb, s, N)
+                j, Bk = mdl.parent[k], rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N]
+                if mdl.nvj[j] == 1:
+                    column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, s, N)
+                else:                                     # a free flyer or ball ancestor
+                    column_up_multi_lane((mdl.iv[i] + r) * nv + mdl.iv[j], mdl.nvj[j], Bk, Fw, Mb, s, N)
                 k = j
     bad = 0.0
     for a in range(nv):

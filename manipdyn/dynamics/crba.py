@@ -262,7 +262,8 @@ def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
 def column_multi_lanes(i, r, mdl, m, even, odd, depth, Fw, Mb):
     """Column iv_i + r of M (r < nv_i: the joint's velocity r) for every lane of the block, on a model with a free
     flyer or a ball joint: ``column_lane``, the entries of the joint's own block left of the diagonal
-    (``block_lane``), then for each ancestor ``column_up_lane`` (and ``block_lane`` for its other velocities)."""
+    (``block_lane``), then for each ancestor ``column_up_lane`` (a free flyer or ball ancestor:
+    ``column_up_multi_lane``)."""
     parent = mdl.parent
     B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, r, i, r, mdl)
     for l in range(LANES):
@@ -271,16 +272,21 @@ def column_multi_lanes(i, r, mdl, m, even, odd, depth, Fw, Mb):
         cm = column_model(i, r, i, c, mdl)
         for l in range(LANES):
             block_lane(cm, Fw, Mb, l, LANES)
-    k = i
+    k, nv = i, mdl.S.shape[0]
     while parent[k] >= 0:
         B, j = lane_record(even, odd, depth, k, COMPOSITE), parent[k]
-        cm = column_model(i, r, j, 0, mdl)
-        for l in range(LANES):
-            column_up_lane(cm, B, Fw, Mb, l, LANES)
-        for c in range(1, mdl.nvj[j]):                    # a multi-dof ancestor's other velocities
-            cm = column_model(i, r, j, c, mdl)
+        if mdl.nvj[j] == 1:
+            cm = column_model(i, r, j, 0, mdl)
             for l in range(LANES):
-                block_lane(cm, Fw, Mb, l, LANES)
+                column_up_lane(cm, B, Fw, Mb, l, LANES)
+        else:                                             # a free flyer or ball ancestor: its entries in one pass
+            e = (mdl.iv[i] + r) * nv + mdl.iv[j]
+            if mdl.nvj[j] == 6:
+                for l in range(LANES):
+                    column_up_multi_lane(e, 6, B, Fw, Mb, l, LANES)
+            else:
+                for l in range(LANES):
+                    column_up_multi_lane(e, 3, B, Fw, Mb, l, LANES)
         k = j
 
 
@@ -313,6 +319,17 @@ def column_up_lane(cm, B, Fw, Mb, l, L):
                  Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l])
     Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
     Mb[e * L + l] = tl[0] * F[0] + tl[1] * F[1] + tl[2] * F[2] + ta[0] * F[3] + ta[1] * F[4] + ta[2] * F[5]
+
+
+@njit(cache=True, inline="always")
+def column_up_multi_lane(e, n, B, Fw, Mb, l, L):
+    """``column_up_lane`` into a free flyer or a ball joint (n velocities, S = [0; 1_n]): its n entries M[iv_i + r,
+    iv_λ(k) + c] = S_cᵀ F are F's last n entries, written in the pass that carries F (e: the first one's index)."""
+    F = force_up(get_rotation(B, l, L), get3(B, 9, l, L), Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l],
+                 Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l])
+    Fw[0 * L + l], Fw[1 * L + l], Fw[2 * L + l], Fw[3 * L + l], Fw[4 * L + l], Fw[5 * L + l] = F
+    for c in range(n):
+        Mb[(e + c) * L + l] = F[6 - n + c]
 
 
 @njit(cache=True, inline="always")
