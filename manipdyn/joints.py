@@ -37,6 +37,7 @@ import numpy as np
 from ._jit import njit
 from .spatial import cross3
 
+
 class JointKind(NamedTuple):
     """One kind of joint, described once (the registry ``KINDS``, indexed by the kind's code)."""
     code: int              # the integer tag the model's ``kind`` array holds
@@ -47,7 +48,7 @@ class JointKind(NamedTuple):
     omega_at: int          # where the body-frame angular velocity starts in its v block (-1: none)
     coords: tuple          # names of its q entries (a 1-dof joint's one entry is named by the joint: ())
     rates: tuple           # names of its v entries
-    urdf: tuple            # URDF type names read as this kind
+    urdf: tuple            # URDF type names the loader reads as this kind
     mjcf: str              # MJCF joint type ("" where MJCF has none)
     pinocchio: str         # Pinocchio's joint model of the same motion
 
@@ -58,7 +59,8 @@ KINDS = (
               "JointModelRevoluteUnaligned"),
     JointKind(PRISMATIC, "prismatic", 1, 1, -1, -1, (), (), ("prismatic",), "slide", "JointModelPrismaticUnaligned"),
     JointKind(FREEFLYER, "free_flyer", 7, 6, 3, 3, ("x", "y", "z", "qx", "qy", "qz", "qw"),
-              ("vx", "vy", "vz", "wx", "wy", "wz"), ("floating",), "free", "JointModelFreeFlyer"),
+              ("vx", "vy", "vz", "wx", "wy", "wz"), (), "free", "JointModelFreeFlyer"),   # (URDF's "floating" type:
+    #                                                  still refused by the loader; root_joint="free_flyer" makes one)
     JointKind(BALL, "ball", 4, 3, 0, 0, ("qx", "qy", "qz", "qw"), ("wx", "wy", "wz"), ("spherical",), "ball",
               "JointModelSpherical"),
 )

@@ -35,7 +35,7 @@ def kernel_arrays(model):
 ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature")
 ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
     parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
-    kind (nb,) int     joints.REVOLUTE, PRISMATIC or FREEFLYER
+    kind (nb,) int     joints.REVOLUTE, PRISMATIC, FREEFLYER or BALL (the registry's codes, joints.KINDS)
     iq, iv (nb,) int   joint i's first entry in q and in v
     nvj (nb,) int      joint i's number of velocities
     S (nv, 6)          motion subspace rows [linear; angular] in the body frame (joints.motion_subspace)
