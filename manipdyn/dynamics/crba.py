@@ -157,6 +157,8 @@ def crba_lanes(I, F, Q, M):
     even, odd = np.empty(nb * COMPOSITE * L), np.empty(nb * COMPOSITE * L)     # records by depth parity
     Z, Fw, Mb = np.empty(nq * L), np.empty(6 * L), np.empty(nv * nv * L)     # q; the carried wrench; M's block
     depth, multi = tree_depth(parent), nq > nb        # multi: a free flyer or a ball joint somewhere
+    Mb[:] = 0.0     # entries of bodies on different branches: never written, zero for every block (pass 2 writes
+    #                 every other entry of the lower triangle in every block; zeroing once, not per block: talos)
     for s0 in range(0, N, L):
         n = min(L, N - s0)
         ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX)
@@ -172,7 +174,6 @@ def crba_lanes(I, F, Q, M):
                 if parent[i] >= 0:
                     merge_lanes(W[i], lane_record(even, odd, depth, i, COMPOSITE),
                                 lane_record(even, odd, depth, parent[i], COMPOSITE))
-            Mb[:] = 0.0                                                # bodies on different branches do not couple
             for i in range(nb):                                        # pass 2: columns iv_i … of M
                 if multi:
                     for r in range(mdl.nvj[i]):
