@@ -105,10 +105,12 @@ def multi_dof(kind):
 @njit(cache=True, inline="always")
 def quat_layout(kind):
     """(k, lin): the quaternion's offset in the joint's q block and 1.0 if the joint also translates by its first three
-    entries (a free flyer), 0.0 if not (a ball); (0, 0.0) for a kind without a quaternion."""
+    entries (a free flyer), 0.0 if not (a ball). A kind without a quaternion raises (the lanes take only these two)."""
     if kind == FREEFLYER:
         return 3, 1.0
-    return 0, 0.0
+    if kind == BALL:
+        return 0, 0.0
+    raise ValueError("quat_layout: not a free flyer or a ball joint (manipdyn.joints.KINDS)")
 
 
 # -- the joint's motion X_J(q), compiled --------------------------------------------------------------

@@ -56,12 +56,13 @@ import yourdfpy
 from lxml import etree
 
 from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
-from ..model import (BALL, FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, MimicModel, Model, Quirk,
+from ..joints import KINDS
+from ..model import (FREEFLYER, QUIRK_KINDS, Constraint, Frame, MimicModel, Model, Quirk,
                      check_gravity, with_joint_dynamics)
 from ..spatial import combine_inertias, rpy_matrix
 
-MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC,
-          "spherical": BALL}                 # PyBullet's and MuJoCo's URDF extension: a ball joint at the origin
+MOVING = {name: k.code for k in KINDS for name in k.urdf}   # the registry's URDF names: revolute, continuous,
+#                                                             prismatic, spherical (PyBullet's and MuJoCo's extension)
 SUPPORTED = set(MOVING) | {"fixed"}
 ROOT_JOINTS = (None, "free_flyer")   # accepted values of root_joint
 ROOT_JOINT_NAME = "root_joint"       # the free flyer's name (Pinocchio's)

@@ -53,3 +53,7 @@ def test_an_unknown_code_raises_in_the_compiled_kernels():
         joints.integrate_kernel(kind, iq, iv, Q, V, np.empty_like(Q))
     with pytest.raises(ValueError, match="unknown joint kind"):
         joints.difference_kernel(kind, np.zeros(1, np.bool_), iq, iv, Q, Q, np.empty_like(V))
+    for code in (joints.REVOLUTE, joints.PRISMATIC, UNKNOWN):     # the lanes' quaternion layout: only the two kinds
+        with pytest.raises(ValueError, match="not a free flyer or a ball"):
+            joints.quat_layout(code)
+    assert joints.quat_layout(joints.FREEFLYER) == (3, 1.0) and joints.quat_layout(joints.BALL) == (0, 0.0)
