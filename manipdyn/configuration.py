@@ -6,7 +6,7 @@ angle, where Pinocchio stores cos/sin; a free-flyer root is [x y z qx qy qz qw],
 Pinocchio):
 
     q ⊕ v         integrate: 1-dof joints q + v; ball quat ⊗ exp(ω); free flyer M(q) exp6(v), v = [linear;
-                  angular] body frame
+                  angular] body frame; planar M(q) exp(v) in SE(2), v = [vx vy wz] body frame
     q1 ⊖ q0       difference: the v with q0 ⊕ v = q1 (continuous joints: the shortest angle; ball
                   log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1)); rotation angles ≤ π)
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError
-from .joints import BALL, FREEFLYER, PRISMATIC, difference_kernel, integrate_kernel
+from .joints import BALL, FREEFLYER, PLANAR, PRISMATIC, difference_kernel, integrate_kernel, neutral_q
 from .dynamics.state import as_batch, check_model, check_scalar, unbatch
 from .model import QUAT_TOL
 
@@ -37,25 +37,31 @@ def _arrays(model):
     return model.kernel.config
 
 
+def _unit_name(model, k, n):
+    """'root_joint.(qx qy qz qw)' or 'base.(c s)': a unit block of q by its joint's name and its entries'."""
+    joint = model.q_names[k].rsplit(".", 1)[0]
+    what = "quaternion" if n == 4 else "rotation (cos θ, sin θ) of the planar joint"
+    return f"{what} {joint}.({' '.join(x.rsplit('.', 1)[1] for x in model.q_names[k:k + n])})"
+
+
 def check_quaternions(model, Q, name="q"):
-    """Refuse a quaternion (free flyer, ball joint) whose norm is not 1 within QUAT_TOL (Q in batch form (N, nq))."""
-    for k in model.quat_q:
-        n = np.linalg.norm(Q[:, k:k + 4], axis=1)
+    """Refuse a quaternion (free flyer, ball joint) or a planar joint's (cos θ, sin θ) whose norm is not 1 within
+    QUAT_TOL (Q in batch form (N, nq)): the placement formulas read them as rotations."""
+    for k, m in model.unit_q:
+        n = np.linalg.norm(Q[:, k:k + m], axis=1)
         bad = np.flatnonzero(np.abs(n - 1.0) > QUAT_TOL)
         if bad.size:
             r = int(bad[0])
             row = f"[{r}]" if Q.shape[0] > 1 else ""
-            raise InputError(f"{name}{row}: the quaternion {model.q_names[k][:-3]}.(qx qy qz qw) = "
-                             f"{Q[r, k:k + 4].tolist()} has norm {n[r]:.12g}, not 1 (within {QUAT_TOL:g}); "
-                             f"normalize it first (manipdyn.normalize)")
+            raise InputError(f"{name}{row}: the {_unit_name(model, k, m)} = {Q[r, k:k + m].tolist()} has norm "
+                             f"{n[r]:.12g}, not 1 (within {QUAT_TOL:g}); normalize it first (manipdyn.normalize)")
 
 
 def neutral(model) -> np.ndarray:
-    """q_neutral (nq,): every joint at 0, a free flyer at the origin, every quaternion the identity (0 0 0 1)."""
+    """q_neutral (nq,): every joint at 0, a free flyer at the origin, every quaternion the identity (0 0 0 1), a planar
+    joint at the origin with (cos θ, sin θ) = (1, 0)."""
     check_model(model)
-    q = np.zeros(model.nq)
-    q[model.quat_q + 3] = 1.0
-    return q
+    return np.concatenate([neutral_q(k) for k in model.kind]) if model.njoints else np.zeros(0)
 
 
 def integrate(model, q, v) -> np.ndarray:
@@ -95,7 +101,9 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
     prismatic within [lower, upper] when both are finite, else [−0.5, 0.5] m;
     free flyer position uniform in [−1, 1]³ m, orientation uniform on SO(3): a unit quaternion from four
               independent standard normals, normalised (uniform on the sphere S³);
-    ball      orientation uniform on SO(3), as the free flyer's.
+    ball      orientation uniform on SO(3), as the free flyer's;
+    planar    position uniform in [−1, 1]² m, angle uniform in [−π, π];
+    helical   as a revolute joint.
     rng: a numpy Generator, an int seed, or None (fresh entropy). Pinocchio's randomConfiguration also
     samples within the limits; its free-flyer position needs finite limits, hence the fixed cube here.
     """
@@ -109,6 +117,11 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
     Q = np.empty((N, model.nq))
     for i in range(model.njoints):
         k = int(model.idx_q[i])
+        if model.kind[i] == PLANAR:
+            Q[:, k:k + 2] = rng.uniform(-FREE_RANGE, FREE_RANGE, (N, 2))
+            th = rng.uniform(-np.pi, np.pi, N)
+            Q[:, k + 2], Q[:, k + 3] = np.cos(th), np.sin(th)
+            continue
         if model.kind[i] in (FREEFLYER, BALL):
             if model.kind[i] == FREEFLYER:
                 Q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (N, 3))
@@ -125,16 +138,17 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
 
 
 def normalize(model, q) -> np.ndarray:
-    """q (nq,) or (N, nq) with every quaternion (free flyer, ball joint) divided by its norm (the rest unchanged).
+    """q (nq,) or (N, nq) with every quaternion (free flyer, ball joint) and every planar joint's (cos θ, sin θ) divided
+    by its norm (the rest unchanged).
 
-    InputError for a quaternion of norm 0 (it names no rotation)."""
+    InputError for a block of norm 0 (it names no rotation)."""
     (Q,), single = as_batch(model, q=q)
     Q = Q.copy()
-    for k in model.quat_q:
-        n = np.linalg.norm(Q[:, k:k + 4], axis=1, keepdims=True)
+    for k, m in model.unit_q:
+        n = np.linalg.norm(Q[:, k:k + m], axis=1, keepdims=True)
         if np.any(n == 0.0):
             r = int(np.flatnonzero(n[:, 0] == 0.0)[0])
-            raise InputError(f"q{f'[{r}]' if Q.shape[0] > 1 else ''}: the quaternion "
-                             f"{model.q_names[k][:-3]}.(qx qy qz qw) is zero: it names no rotation")
-        Q[:, k:k + 4] /= n
+            raise InputError(f"q{f'[{r}]' if Q.shape[0] > 1 else ''}: the {_unit_name(model, k, m)} is zero: it names "
+                             f"no rotation")
+        Q[:, k:k + m] /= n
     return unbatch(Q, single)

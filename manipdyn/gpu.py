@@ -45,7 +45,7 @@ from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward
 from .dynamics.state import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
-from .joints import REVOLUTE
+from .joints import BALL, FREEFLYER, PRISMATIC, REVOLUTE, TYPE_NAMES
 from .model import Model
 from .spatial import SINCOS_MAX, mul3t
 
@@ -347,9 +347,12 @@ def _model(model, call, multi=True):
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays
     if not on_lanes(unpack(I, F), model.nq, multi):
-        others = [n for n, k in zip(model.joint_names, I[4]) if k != 1]
-        what = "free flyers and ball joints are taken by rnea, aba and mass_matrix" if not multi else "its joints"
-        raise InputError(f"{call}: the GPU kernels do not take the joints {others} ({what}; use the CPU call)")
+        taken = (REVOLUTE, PRISMATIC) + ((FREEFLYER, BALL) if multi else ())
+        others = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in taken]
+        what = "revolute and prismatic joints" + (", free flyers and ball joints" if multi else
+                                                  "; free flyers and ball joints in rnea, aba and mass_matrix")
+        raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take {what}; use "
+                         f"the CPU call)")
     return I, F
 
 

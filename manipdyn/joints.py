@@ -15,6 +15,9 @@ constant in body i's frame for every type here; so its acceleration is S q̈ (no
 | prismatic   | 1  | 1  | displacement d                 | (1, d z)                     | [z; 0]            |
 | free_flyer  | 7  | 6  | [x y z, quaternion qx qy qz qw]| (R(quat), [x y z])           | 1₆ (body frame)   |
 | ball        | 4  | 3  | quaternion qx qy qz qw         | (R(quat), 0)                 | [0; 1₃]           |
+| helical     | 1  | 1  | angle θ                        | (Rot(z, θ), h θ z)           | [h z; z]          |
+| planar      | 4  | 3  | [x y, cos θ, sin θ]            | (Rot(z, θ), x e₁ + y e₂)     | [e₁;0] [e₂;0] [0;z] |
+| universal   | 2  | 2  | angles θ₁ θ₂                   | Rot(z₁, θ₁) Rot(z₂, θ₂)      | (two revolutes)   |
 
 z is the joint's unit axis in body i's frame. A free flyer's v = [linear; angular] velocity of the body
 in its own frame (Pinocchio's convention), so q moves by ``integrate`` (q ⊕ v = M(q) exp6(v)), never by
@@ -25,6 +28,14 @@ by quat ⊗ exp(ω). A continuous joint is one angle (Pinocchio stores cos/sin; 
 the bodies they hold together. A free flyer hangs from the fixed base (a free body: the floating-base root, or
 an MJCF object beside the robot); a ball joint anywhere.
 
+A helical (screw) joint turns by θ about z and slides h θ along it (h, the pitch: metres per radian, Pinocchio's
+``JointModelHelicalUnaligned``; Drake's ``screw_thread_pitch`` is 2π h, metres per turn). A planar joint moves in
+the plane normal to z (URDF's ``planar``, Pinocchio's ``JointModelPlanar`` for z = e_z): q = [x y cos θ sin θ] as
+Pinocchio stores it, v = [v_x v_y ω] in the body frame (the SE(2) twist: q moves by ``integrate``, the SE(2)
+exponential), e₁ e₂ the plane's axes (``plane_axes``: e₁ = x, e₂ = y for z = e_z). A universal joint (two axes
+meeting at a point, Pinocchio's ``JointModelUniversal``) is loaded as what it is: a revolute joint about z₁
+carrying a massless body, then a revolute joint about z₂ in that body (how MuJoCo chains the joints of one body);
+the loaders expand it (``universal_pair``), so no kernel sees its code. Every constant S above has no Ṡ term.
 Everything below that a compiled kernel calls is written for numba (``_jit.njit``): scalar loops over
 3-vectors, no allocation per call.
 """
@@ -53,17 +64,24 @@ class JointKind(NamedTuple):
     pinocchio: str         # Pinocchio's joint model of the same motion
 
 
-REVOLUTE, PRISMATIC, FREEFLYER, BALL = 0, 1, 2, 3
+REVOLUTE, PRISMATIC, FREEFLYER, BALL, HELICAL, PLANAR, UNIVERSAL = 0, 1, 2, 3, 4, 5, 6
 KINDS = (
     JointKind(REVOLUTE, "revolute", 1, 1, -1, -1, (), (), ("revolute", "continuous"), "hinge",
               "JointModelRevoluteUnaligned"),
     JointKind(PRISMATIC, "prismatic", 1, 1, -1, -1, (), (), ("prismatic",), "slide", "JointModelPrismaticUnaligned"),
     JointKind(FREEFLYER, "free_flyer", 7, 6, 3, 3, ("x", "y", "z", "qx", "qy", "qz", "qw"),
-              ("vx", "vy", "vz", "wx", "wy", "wz"), (), "free", "JointModelFreeFlyer"),   # (URDF's "floating" type:
-    #                                                  still refused by the loader; root_joint="free_flyer" makes one)
+              ("vx", "vy", "vz", "wx", "wy", "wz"), ("floating",), "free", "JointModelFreeFlyer"),
     JointKind(BALL, "ball", 4, 3, 0, 0, ("qx", "qy", "qz", "qw"), ("wx", "wy", "wz"), ("spherical",), "ball",
               "JointModelSpherical"),
+    JointKind(HELICAL, "helical", 1, 1, -1, -1, (), (), ("screw",), "", "JointModelHelicalUnaligned"),
+    JointKind(PLANAR, "planar", 4, 3, -1, -1, ("x", "y", "c", "s"), ("vx", "vy", "wz"), ("planar",), "",
+              "JointModelPlanar"),
+    JointKind(UNIVERSAL, "universal", 2, 2, -1, -1, (), (), ("universal",), "", "JointModelUniversal"),
 )
+# Kinds a Model holds (a universal joint is expanded by the loaders into two revolute joints: ``universal_pair``)
+IN_MODEL = (REVOLUTE, PRISMATIC, FREEFLYER, BALL, HELICAL, PLANAR)
+UNIT_AT = (-1, -1, 3, 0, -1, 2, -1)      # where a unit-norm block starts in q (a quaternion, planar's cos/sin)
+UNIT_LEN = (0, 0, 4, 4, 0, 2, 0)         # its length
 TYPE_NAMES = tuple(k.name for k in KINDS)
 NQ = tuple(k.nq for k in KINDS)             # configuration size per kind
 NV = tuple(k.nv for k in KINDS)             # velocity size per kind
@@ -81,9 +99,9 @@ def kind_of(code) -> JointKind:
     return KINDS[c]
 
 
-def motion_subspace(kind: int, axis) -> np.ndarray:
+def motion_subspace(kind: int, axis, pitch=0.0) -> np.ndarray:
     """S (nv_j, 6): one row per joint velocity, [linear; angular] in the body's frame."""
-    kind = kind_of(kind).code
+    kind, axis = kind_of(kind).code, np.asarray(axis, float)
     if kind == REVOLUTE:
         return np.concatenate([np.zeros(3), axis])[None]
     if kind == PRISMATIC:
@@ -92,7 +110,42 @@ def motion_subspace(kind: int, axis) -> np.ndarray:
         return np.eye(6)[3:]
     if kind == FREEFLYER:
         return np.eye(6)
-    raise AssertionError(kind)             # every code of KINDS has its branch above
+    if kind == HELICAL:
+        return np.concatenate([pitch * axis, axis])[None]
+    if kind == PLANAR:
+        e1, e2 = (np.array(e) for e in plane_axes(axis[0], axis[1], axis[2]))
+        return np.array([[*e1, 0, 0, 0], [*e2, 0, 0, 0], [0, 0, 0, *axis]], float)
+    raise ValueError(f"motion_subspace: a {KINDS[kind].name} joint is not in a Model (the loaders expand it)")
+
+
+def neutral_q(kind: int) -> np.ndarray:
+    """The joint's neutral q block (nq_j,): zeros, every unit block at the identity (a quaternion (0 0 0 1), a planar
+    joint's (cos, sin) = (1, 0))."""
+    k = kind_of(kind)
+    q = np.zeros(k.nq)
+    if UNIT_LEN[k.code]:
+        q[UNIT_AT[k.code] + UNIT_LEN[k.code] - 1 if UNIT_LEN[k.code] == 4 else UNIT_AT[k.code]] = 1.0
+    return q
+
+
+def universal_pair(axis1, axis2):
+    """A universal joint as the two revolute joints it is: ((REVOLUTE, axis1 in the joint frame), (REVOLUTE,
+    axis2 in the frame turned by the first)); the first one's body is massless and sits where the second turns
+    (X_J = Rot(axis1, θ₁) Rot(axis2, θ₂), Pinocchio's ``JointModelUniversal``)."""
+    return (REVOLUTE, np.asarray(axis1, float)), (REVOLUTE, np.asarray(axis2, float))
+
+
+@njit(cache=True, inline="always")
+def plane_axes(nx, ny, nz):
+    """(e₁, e₂): the axes of the plane normal to the unit vector n: e₁ = the x axis projected onto the plane (the y
+    axis where n is within 45° of x), e₂ = n × e₁; (x, y) for n = z. A planar joint's x and y run along them."""
+    if abs(nx) <= 0.7071067811865476:
+        tx, ty, tz = 1.0 - nx * nx, -nx * ny, -nx * nz
+    else:
+        tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
+    k = 1.0 / np.sqrt(tx * tx + ty * ty + tz * tz)
+    tx, ty, tz = k * tx, k * ty, k * tz
+    return (tx, ty, tz), (ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx)
 
 
 @njit(cache=True, inline="always")
@@ -131,10 +184,20 @@ def quat_to_matrix(x, y, z, w, R):
 
 
 @njit(cache=True, inline="always")
-def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
+def rodrigues(x, y, z, s, c):
+    """The 9 entries (row by row) of Rot(z, θ) about the unit axis (x, y, z), from s = sin θ, c = cos θ:
+    c 1 + s [z]× + (1 − c) z zᵀ, written out."""
+    t = 1.0 - c
+    return (c + t * x * x, t * x * y - s * z, t * x * z + s * y,
+            t * x * y + s * z, c + t * y * y, t * y * z - s * x,
+            t * x * z - s * y, t * y * z + s * x, c + t * z * z)
+
+
+@njit(cache=True, inline="always")
+def joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p):
     """R[i] = R0_i R_J(q), p[i] = p0_i + R0_i p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
     evaluated at the current d), from the model's per-joint arrays (kind, iq: q's first entry of the joint,
-    axis, R0, p0; core.unpack) and the whole configuration q."""
+    axis, pitch (helical joints), R0, p0; core.unpack) and the whole configuration q."""
     # Indexed, not handed rows: a row view per body costs a reference-count pair (17 ns per body of forward
     # kinematics, measured). Every array is read before the branches, which then hold scalars only: an array
     # whose last use lies inside a branch makes numba keep an atomic reference-count pair per call.
@@ -142,13 +205,9 @@ def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
     last = q.shape[0] - 1
     q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's, ball's
     q3, q4, q5, q6 = q[min(iq + 3, last)], q[min(iq + 4, last)], q[min(iq + 5, last)], q[min(iq + 6, last)]
-    x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
-    if kind == REVOLUTE:                       # Rodrigues, written out: R_J = Rot(z, θ), p_J = 0
-        s, c = np.sin(q0), np.cos(q0)
-        t = 1.0 - c
-        r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
-        r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
-        r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+    x, y, z, h = axis[i, 0], axis[i, 1], axis[i, 2], pitch[i]
+    if kind == REVOLUTE:                       # R_J = Rot(z, θ), p_J = 0
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, np.sin(q0), np.cos(q0))
         px = py = pz = 0.0
     elif kind == PRISMATIC:                    # R_J = 1, p_J = d z
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
@@ -159,6 +218,13 @@ def joint_placement(i, kind, iq, axis, R0, p0, q, R, p):
     elif kind == FREEFLYER:                    # free flyer: R_J = R(quat), p_J = [x y z]
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q3, q4, q5, q6)
         px, py, pz = q0, q1, q2
+    elif kind == HELICAL:                      # helical: R_J = Rot(z, θ), p_J = h θ z
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, np.sin(q0), np.cos(q0))
+        px, py, pz = h * q0 * x, h * q0 * y, h * q0 * z
+    elif kind == PLANAR:                       # planar: R_J = Rot(z, θ) from q's cos θ, sin θ; p_J = x e₁ + y e₂
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, q3, q2)
+        (e0, e1, e2), (f0, f1, f2) = plane_axes(x, y, z)
+        px, py, pz = q0 * e0 + q1 * f0, q0 * e1 + q1 * f1, q0 * e2 + q1 * f2
     else:                                      # a code outside the registry: never placed as another kind
         raise ValueError("joint_placement: unknown joint kind (manipdyn.joints.KINDS)")
     for a in range(3):
@@ -267,10 +333,47 @@ def _log_quat(Q0, Q1, s, a):
     return k * rx, k * ry, k * rz
 
 
+@njit(cache=True, inline="always")
+def _se2_coeffs(w):
+    """(a, b) of SE(2)'s V(ω) = [[a, −b], [b, a]], a = sin ω / ω, b = (1 − cos ω) / ω (exp's translation V v)."""
+    if abs(w) < 1e-4:                          # Taylor
+        w2 = w * w
+        return 1.0 - w2 / 6.0 + w2 * w2 / 120.0, w * (0.5 - w2 / 24.0)
+    return np.sin(w) / w, (1.0 - np.cos(w)) / w
+
+
+@njit(cache=True, inline="always")
+def _turn_planar(Q, s, a, vx, vy, w, out):
+    """out[s, a:a+4] = a planar joint's q ⊕ v: M(q) exp(v) in SE(2), v = (v_x, v_y, ω) in the body frame:
+    p ← p + R(θ) V(ω) (v_x, v_y), (cos, sin) ← R(θ) (cos ω, sin ω), normalised."""
+    x, y, c, sn = Q[s, a], Q[s, a + 1], Q[s, a + 2], Q[s, a + 3]
+    ka, kb = _se2_coeffs(w)
+    tx, ty = ka * vx - kb * vy, kb * vx + ka * vy
+    cw, sw = np.cos(w), np.sin(w)
+    c1, s1 = c * cw - sn * sw, sn * cw + c * sw
+    nrm = np.sqrt(c1 * c1 + s1 * s1)
+    out[s, a], out[s, a + 1] = x + c * tx - sn * ty, y + sn * tx + c * ty
+    out[s, a + 2], out[s, a + 3] = c1 / nrm, s1 / nrm
+
+
+@njit(cache=True, inline="always")
+def _log_planar(Q0, Q1, s, a):
+    """(v_x, v_y, ω): the SE(2) log of M(q0)⁻¹ M(q1) for a planar joint at Q0[s, a:a+4], Q1[s, a:a+4] (|ω| ≤ π):
+    ω = the angle from θ₀ to θ₁, v = V(ω)⁻¹ R(θ₀)ᵀ (p₁ − p₀) with V(ω)⁻¹ = [[α, ω/2], [−ω/2, α]],
+    α = (ω/2) cot(ω/2)."""
+    c0, s0, c1, s1 = Q0[s, a + 2], Q0[s, a + 3], Q1[s, a + 2], Q1[s, a + 3]
+    w = np.arctan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
+    dx, dy = Q1[s, a] - Q0[s, a], Q1[s, a + 1] - Q0[s, a + 1]
+    px, py = c0 * dx + s0 * dy, -s0 * dx + c0 * dy
+    al = 1.0 - w * w / 12.0 if abs(w) < 1e-4 else 0.5 * w / np.tan(0.5 * w)
+    return al * px + 0.5 * w * py, -0.5 * w * px + al * py, w
+
+
 @njit(cache=True)
 def integrate_kernel(kind, iq, iv, Q, V, out):
     """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a ball joint quat ⊗ exp(ω); a free flyer
-    M(q) exp6(v) with v = [linear; angular] in the body frame (Pinocchio's integrate)."""
+    M(q) exp6(v) with v = [linear; angular] in the body frame; a planar joint M(q) exp(v) in SE(2) (Pinocchio's
+    integrate)."""
     t1, t2, w = np.empty(3), np.empty(3), np.empty(3)
     R = np.empty((3, 3))
     for s in range(Q.shape[0]):
@@ -279,8 +382,11 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
             if kind[j] == BALL:
                 _turn_quat(Q, s, a, V[s, b], V[s, b + 1], V[s, b + 2], out)
                 continue
-            if kind[j] == REVOLUTE or kind[j] == PRISMATIC:
+            if kind[j] == REVOLUTE or kind[j] == PRISMATIC or kind[j] == HELICAL:
                 out[s, a] = Q[s, a] + V[s, b]
+                continue
+            if kind[j] == PLANAR:
+                _turn_planar(Q, s, a, V[s, b], V[s, b + 1], V[s, b + 2], out)
                 continue
             if kind[j] != FREEFLYER:               # a code outside the registry
                 raise ValueError("integrate: unknown joint kind (manipdyn.joints.KINDS)")
@@ -301,7 +407,8 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
 @njit(cache=True)
 def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
     """out (N, nv) = Q1 ⊖ Q0, the velocity that integrate turns Q0 into Q1 in unit time: q1 − q0
-    (continuous joints: the shortest angle); ball log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1))."""
+    (continuous joints: the shortest angle); ball log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1)); planar
+    the SE(2) log of M(q0)⁻¹ M(q1)."""
     R = np.empty((3, 3))
     d, w, t1, t2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for s in range(Q0.shape[0]):
@@ -310,7 +417,10 @@ def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
             if kind[j] == BALL:
                 out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q0, Q1, s, a)
                 continue
-            if kind[j] == REVOLUTE or kind[j] == PRISMATIC:
+            if kind[j] == PLANAR:
+                out[s, b], out[s, b + 1], out[s, b + 2] = _log_planar(Q0, Q1, s, a)
+                continue
+            if kind[j] == REVOLUTE or kind[j] == PRISMATIC or kind[j] == HELICAL:
                 x = Q1[s, a] - Q0[s, a]
                 if continuous[j]:              # wrapped into [−π, π]
                     x = np.arctan2(np.sin(x), np.cos(x))

@@ -21,16 +21,17 @@ from types import MappingProxyType
 
 from .errors import InputError
 from .spatial import skew
-from .joints import (BALL, COORDS, FREEFLYER, NQ, NV, OMEGA_AT, PRISMATIC, QUAT_AT, RATES, REVOLUTE, TYPE_NAMES,
-                     motion_subspace)
+from .joints import (BALL, COORDS, FREEFLYER, HELICAL, IN_MODEL, NQ, NV, OMEGA_AT, PLANAR, PRISMATIC, QUAT_AT, RATES,
+                     REVOLUTE, TYPE_NAMES, UNIT_AT, UNIT_LEN, motion_subspace)
 
 __all__ = ["Model", "KernelForm", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
-           "FREEFLYER", "BALL", "QUAT_TOL",
+           "FREEFLYER", "BALL", "HELICAL", "PLANAR", "QUAT_TOL",
            "JOINT_DYNAMICS", "FRICTION_EPS", "check_joint_dynamics", "with_joint_dynamics"]
 
 JOINT_DYNAMICS = ("armature", "damping", "friction")   # the per-velocity joint parameters of a Model
 FRICTION_EPS = 1e-3      # rad/s (m/s): the Coulomb friction's regularisation, friction ⊙ tanh(q̇ / FRICTION_EPS)
-QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's or ball joint's q (integrate's output: ~1e-16)
+QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's or ball joint's q, and for a planar joint's
+#                          (cos θ, sin θ) (integrate's output: ~1e-16)
 
 
 def check_joint_dynamics(x, key, nv, where, names=None) -> np.ndarray:
@@ -196,9 +197,11 @@ class Model:
     joint_names: tuple     # (nb,) joints in q order
     body_names: tuple      # (nb,) child link of each joint (the body's frame)
     parent: np.ndarray     # (nb,) int, parent body, -1 = fixed base; parent[i] < i
-    kind: np.ndarray       # (nb,) int, joints.REVOLUTE, PRISMATIC, FREEFLYER or BALL
+    kind: np.ndarray       # (nb,) int, the joint's kind: a code of joints.IN_MODEL (REVOLUTE, PRISMATIC, FREEFLYER,
+    #                        BALL, HELICAL, PLANAR)
     continuous: np.ndarray  # (nb,) bool, revolute joint without limits (Pinocchio: nq = 2)
-    axis: np.ndarray       # (nb, 3) unit joint axis in body i's frame (free flyer, ball: unused, zeros)
+    axis: np.ndarray       # (nb, 3) unit joint axis in body i's frame (a planar joint's: the plane's normal; free
+    #                        flyer, ball: unused, zeros)
     R0: np.ndarray         # (nb, 3, 3) joint i's frame in its parent body's frame, at q = 0
     p0: np.ndarray         # (nb, 3) joint i's origin in its parent body's frame
     mass: np.ndarray       # (nb,) merged body mass, kg
@@ -224,6 +227,7 @@ class Model:
     #                              τ = rnea + armature ⊙ q̈ (Pinocchio's model.armature, MuJoCo's armature)
     damping: np.ndarray = None   # (nv,) viscous damping, N m s/rad (N s/m): τ_joint −= damping ⊙ q̇
     friction: np.ndarray = None  # (nv,) Coulomb friction, N m (N): τ_joint −= friction ⊙ tanh(q̇ / FRICTION_EPS)
+    pitch: np.ndarray = None     # (nb,) a helical joint's pitch, m/rad (p_J = pitch θ axis); 0 for every other kind
 
     def __post_init__(self):
         if not (isinstance(self.gravity, np.ndarray) and self.gravity.dtype == np.float64):
@@ -234,6 +238,20 @@ class Model:
         for value in vars(self).values():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
+        odd = [i for i in range(self.njoints) if int(self.kind[i]) not in IN_MODEL]
+        if odd:
+            k = int(self.kind[odd[0]])
+            what = f"a {TYPE_NAMES[k]} joint (the loaders expand it)" if 0 <= k < len(TYPE_NAMES) else f"kind {k}"
+            raise InputError(f"model {self.name!r}: joint {self.joint_names[odd[0]]!r} is {what}; a Model holds "
+                             f"{', '.join(TYPE_NAMES[c] for c in IN_MODEL)} joints (manipdyn.joints)")
+        pitch = np.zeros(self.njoints) if self.pitch is None else np.array(self.pitch, float).reshape(-1)
+        if pitch.shape != (self.njoints,) and not np.any(pitch):   # a model replaced with other joints, no helical
+            pitch = np.zeros(self.njoints)
+        if pitch.shape != (self.njoints,) or not np.all(np.isfinite(pitch)) or np.any(pitch[self.kind != HELICAL]):
+            raise InputError(f"model {self.name!r}: pitch must be {self.njoints} finite numbers, 0 but for helical "
+                             f"joints, not {self.pitch!r}")
+        pitch.setflags(write=False)
+        object.__setattr__(self, "pitch", pitch)
         free = [self.joint_names[i] for i in range(self.njoints) if self.kind[i] == FREEFLYER and self.parent[i] >= 0]
         if free:
             raise InputError(f"model {self.name!r}: a free flyer hangs from the base (a free body); {free[0]!r} has a "
@@ -243,10 +261,10 @@ class Model:
             while a != b:
                 if a < b:
                     a, b = b, a
-                if self.kind[a] in (FREEFLYER, BALL):
+                if NV[int(self.kind[a])] != 1:
                     raise InputError(f"model {self.name!r}: coupling {c.name!r}: joint {self.joint_names[a]!r} on "
                                      f"its loop is a {TYPE_NAMES[int(self.kind[a])]} joint; a coupling relates "
-                                     f"revolute and prismatic joints only")
+                                     f"joints of one coordinate only")
                 a = self.parent[a]
         nqs, nvs = _frozen([NQ[int(k)] for k in self.kind]), _frozen([NV[int(k)] for k in self.kind])
         derived = dict(nqs=nqs, nvs=nvs, idx_q=_frozen(np.concatenate([[0], np.cumsum(nqs)[:-1]]) if len(nqs) else []),
@@ -256,7 +274,9 @@ class Model:
         qi, vi = derived["idx_q"], derived["idx_v"]
         rot = [i for i in range(len(nqs)) if QUAT_AT[int(self.kind[i])] >= 0]
         derived.update(quat_q=_frozen([qi[i] + QUAT_AT[int(self.kind[i])] for i in rot]),
-                       quat_v=_frozen([vi[i] + OMEGA_AT[int(self.kind[i])] for i in rot]))
+                       quat_v=_frozen([vi[i] + OMEGA_AT[int(self.kind[i])] for i in rot]),
+                       unit_q=_frozen([(qi[i] + UNIT_AT[int(k)], UNIT_LEN[int(k)]) for i, k in enumerate(self.kind)
+                                       if UNIT_LEN[int(k)]]).reshape(-1, 2))
         for key, value in derived.items():
             object.__setattr__(self, key, value)
         for key in JOINT_DYNAMICS:                           # (nv,) each, zeros when not given
@@ -278,6 +298,8 @@ class Model:
     v_joint: np.ndarray = field(init=False, repr=False)  # (nv,) the joint each entry of v belongs to
     quat_q: np.ndarray = field(init=False, repr=False)  # (k,) q index of every unit quaternion's qx (free flyer, ball)
     quat_v: np.ndarray = field(init=False, repr=False)  # (k,) v index of the matching body-frame ω's wx
+    unit_q: np.ndarray = field(init=False, repr=False)  # (u, 2) [start, length] in q of every block of unit norm: a
+    #                                                     quaternion (4), a planar joint's (cos θ, sin θ) (2)
     kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
     passive: bool = field(init=False, repr=False)       # a damping or friction entry is nonzero (joint torques)
 
@@ -332,10 +354,15 @@ class Model:
             kind = "continuous" if self.continuous[i] else TYPE_NAMES[int(self.kind[i])]
             par = self.body_names[self.parent[i]] if self.parent[i] >= 0 else self.root_link
             how = f"axis {np.round(self.axis[i], 4).tolist()}"
-            if self.kind[i] == FREEFLYER:      # the root body moves freely: q = [x y z qx qy qz qw]
-                par, how = "world", "q = [x y z qx qy qz qw], v = [linear; angular] (body frame)"
+            if self.kind[i] == FREEFLYER:      # a free body: q = [x y z qx qy qz qw]
+                par = "world" if self.body_names[i] == self.root_link else par    # root_joint="free_flyer"
+                how = "q = [x y z qx qy qz qw], v = [linear; angular] (body frame)"
             elif self.kind[i] == BALL:
                 how = "q = [qx qy qz qw], v = angular velocity (body frame)"
+            elif self.kind[i] == HELICAL:
+                how += f", pitch {self.pitch[i]:.6g} m/rad"
+            elif self.kind[i] == PLANAR:
+                how = f"normal {np.round(self.axis[i], 4).tolist()}, q = [x y cos sin], v = [vx vy wz] (body frame)"
             lines.append(f"  q[{self.idx_q[i]}] {j:<28} {kind:<10} {how} "
                          f"{par} -> {self.body_names[i]}  mass {self.mass[i]:.6g} kg")
         for body, links in self.merged.items():
@@ -480,7 +507,8 @@ class KernelForm:
     arrays: tuple              # (I, F), the two below, as the kernels take them
     I: np.ndarray              # (5, nb) int64, rows: parent, kind, idx_q, idx_v, nv_j (joints in q order)
     F: np.ndarray              # (4 nb + 1 + m + ⌈nv/9⌉, 3, 3) float64, blocks of 3×3: [0, nb) R0; [nb, 2nb) inertia
-    #                            about the CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0]; 4nb: −g
+    #                            about the CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0], pitch
+    #                            in [·, 0, 1]; 4nb: −g
     #                            in row 0; then m = max(2, 2⌈nv/3⌉) blocks holding S (nv, 6) row by row ([linear;
     #                            angular], joints.motion_subspace); then the armature (nv,) (Model.armature)
     config: tuple              # (kind (nb,), continuous (nb,) bool, idx_q (nb,), idx_v (nb,)): configuration kernels
@@ -542,12 +570,14 @@ def _floats(model, R0, inertia, axis, p0, com):
     """F, the kernels' float array (KernelForm's layout), of the model with these joint frames, inertias, axes,
     origins and centres of mass (the model's own, or ``z_aligned``'s)."""
     nb = model.njoints
-    S = np.concatenate([motion_subspace(int(k), a) for k, a in zip(model.kind, axis)]) if nb else np.zeros((0, 6))
+    S = np.concatenate([motion_subspace(int(k), a, h) for k, a, h in zip(model.kind, axis, model.pitch)]) if nb \
+        else np.zeros((0, 6))
     m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
     F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
     F[:nb], F[nb:2 * nb] = R0, inertia
     F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = axis, p0, com
     F[3 * nb:4 * nb, 0, 0] = model.mass
+    F[3 * nb:4 * nb, 0, 1] = model.pitch
     F[4 * nb, 0] = -np.asarray(model.gravity, float)
     F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
     F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature

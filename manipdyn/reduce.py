@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from .errors import InputError, ModelError
-from .joints import NQ, QUAT_AT, joint_placement
+from .joints import BALL, COORDS, FREEFLYER, NQ, PLANAR, UNIT_AT, UNIT_LEN, joint_placement, neutral_q
 from .model import QUAT_TOL, Constraint, Frame
 from .spatial import combine_inertias
 
@@ -47,21 +47,23 @@ def _lock_value(model, i, value):
     """The value joint i is locked at, as a q block (nq_i,) float array: None gives the neutral value (0;
     a free flyer's neutral pose [0 0 0 0 0 0 1]; a ball joint's [0 0 0 1]). InputError names the joint and the
     value at fault."""
-    name, nq, at = model.joint_names[i], NQ[int(model.kind[i])], QUAT_AT[int(model.kind[i])]
+    k = int(model.kind[i])
+    name, nq, at = model.joint_names[i], NQ[k], UNIT_AT[k] if UNIT_LEN[k] else -1
     if value is None:
-        return np.eye(nq)[-1] if nq > 1 else np.zeros(1)
+        return neutral_q(k)
     try:
         x = np.asarray(value)
     except (TypeError, ValueError):
         x = None
-    want = {7: "a pose [x y z qx qy qz qw] (7,)", 4: "a quaternion [qx qy qz qw] (4,)"}.get(nq, "a real number")
+    what = {FREEFLYER: "a pose ", BALL: "a quaternion ", PLANAR: "a planar position "}.get(k, "")
+    want = "a real number" if nq == 1 else f"{what}[{' '.join(COORDS[k])}] ({nq},)"
     if x is None or x.dtype.kind not in "fiu" or x.size != nq or x.ndim > 1 or (nq > 1 and x.ndim != 1):
         raise InputError(f"locked value of joint {name!r} is {value!r}: expected {want}")
     x = x.astype(float).reshape(nq)
     if not np.all(np.isfinite(x)):
         raise InputError(f"locked value of joint {name!r} is {value!r}: must be finite")
     if at >= 0 and abs(np.linalg.norm(x[at:]) - 1.0) > QUAT_TOL:
-        raise InputError(f"locked value of joint {name!r}: the quaternion (qx qy qz qw) = {x[at:].tolist()} "
+        raise InputError(f"locked value of joint {name!r}: the {'quaternion' if nq - at == 4 else 'rotation'} ({' '.join(COORDS[k][at:])}) = {x[at:].tolist()} "
                          f"has norm {np.linalg.norm(x[at:]):.12g}, not 1 (within {QUAT_TOL:g})")
     if at >= 0:                                    # a rotation exactly (the placement reads it as one)
         x[at:] /= np.linalg.norm(x[at:])
@@ -149,7 +151,7 @@ def _rebuild(model, keep, values):
         mass=np.array([m for m, _, _ in inert]).reshape(-1), com=np.array([c for _, c, _ in inert]).reshape(-1, 3),
         inertia=np.array([I for _, _, I in inert]).reshape(-1, 3, 3), lower=model.lower[sel],
         upper=model.upper[sel], effort=model.effort[sel], velocity=model.velocity[sel], frames=frames,
-        armature=model.armature[dof], damping=model.damping[dof], friction=model.friction[dof],
+        armature=model.armature[dof], damping=model.damping[dof], friction=model.friction[dof], pitch=model.pitch[sel],
         merged={k: tuple(v) for k, v in merged.items()},
         mimic=tuple(m for m in model.mimic if m[0] in names and m[1] in names),
         constraints=tuple(_move_constraint(c, new_of, base) for c in model.constraints),
@@ -163,7 +165,8 @@ def _fixed_placement(model, i, value):
     model's X = X0 X_J(q), whatever the joint type."""
     R, p = np.empty((1, 3, 3)), np.empty((1, 3))                  # joint i as the only joint of a model
     joint_placement(0, np.array([model.kind[i]], np.int64), np.zeros(1, np.int64),
-                    np.ascontiguousarray(model.axis[i:i + 1], float), np.ascontiguousarray(model.R0[i:i + 1], float),
+                    np.ascontiguousarray(model.axis[i:i + 1], float), np.ascontiguousarray(model.pitch[i:i + 1], float),
+                    np.ascontiguousarray(model.R0[i:i + 1], float),
                     np.ascontiguousarray(model.p0[i:i + 1], float), np.ascontiguousarray(np.atleast_1d(value), float), R, p)
     return R[0], p[0]
 

@@ -26,7 +26,7 @@ from .constraints import constrained_forward_dynamics, project
 from .dynamics.aba import forward_dynamics, passive_torques
 from .dynamics.state import as_batch, as_real, check_finite, check_scalar
 from .errors import DivergenceError, InputError, NumericalError
-from .joints import BALL, FREEFLYER, quat_rotation
+from .joints import FREEFLYER, PLANAR, motion_subspace, quat_rotation
 
 
 @dataclass(frozen=True)
@@ -115,11 +115,12 @@ def _step(integrator, accel, torque, t, q, v, h, plus=np.add, dexpinv=None):
 
 
 def _group_ops(model):
-    """(plus, dexpinv) of the configuration space: (np.add, None) without a quaternion; else q ⊕ ξ by
-    the joint model's integrate and ξ̇ = v + ½ ad_ξ v + 1/12 ad_ξ² v on the free flyer's 6 entries
-    (ad_ξ w = [ξ_ω × w_v + ξ_v × w_ω; ξ_ω × w_ω], twists [linear; angular]) and on each ball joint's 3
-    (ad_ξ w = ξ × w)."""
-    if not model.quat_q.size:
+    """(plus, dexpinv) of the configuration space: (np.add, None) where q ⊕ v is q + v (no quaternion, no planar
+    joint); else q ⊕ ξ by the joint model's integrate and ξ̇ = v + ½ ad_ξ v + 1/12 ad_ξ² v on the entries of every
+    joint of several velocities (free flyer, ball, planar): ad_ξ w = S ad6(Sᵀ ξ) Sᵀ w with the joint's motion
+    subspace S (nv_j, 6) and se(3)'s ad6(ξ) w = [ξ_ω × w_v + ξ_v × w_ω; ξ_ω × w_ω] (twists [linear; angular]): a
+    ball joint's ξ × w, a planar joint's se(2) bracket."""
+    if not model.unit_q.size:
         return np.add, None
     from .configuration import _arrays
     from .joints import integrate_kernel
@@ -130,20 +131,19 @@ def _group_ops(model):
         integrate_kernel(kind, iq, iv, np.ascontiguousarray(Q), np.ascontiguousarray(X), out)
         return out
 
-    blocks = [slice(int(b), int(b) + (3 if k == BALL else 6)) for k, b in zip(model.kind, model.idx_v)
-              if k == BALL or k == FREEFLYER]
+    S = np.concatenate([motion_subspace(k, a, h) for k, a, h in zip(model.kind, model.axis, model.pitch)])
+    blocks = [slice(int(b), int(b) + int(n)) for b, n in zip(model.idx_v, model.nvs) if n > 1]
 
-    def ad(xi, w):
-        if xi.shape[1] == 3:
-            return np.cross(xi, w)
-        return np.concatenate([np.cross(xi[:, 3:6], w[:, :3]) + np.cross(xi[:, :3], w[:, 3:6]),
-                               np.cross(xi[:, 3:6], w[:, 3:6])], axis=1)
+    def ad(Sb, xi, w):
+        x, y = xi @ Sb, w @ Sb
+        return np.concatenate([np.cross(x[:, 3:6], y[:, :3]) + np.cross(x[:, :3], y[:, 3:6]),
+                               np.cross(x[:, 3:6], y[:, 3:6])], axis=1) @ Sb.T
 
     def dexpinv(xi, v):
         out = v.copy()
         for b in blocks:
-            a1 = ad(xi[:, b], v[:, b])
-            out[:, b] += 0.5 * a1 + ad(xi[:, b], a1) / 12.0
+            a1 = ad(S[b], xi[:, b], v[:, b])
+            out[:, b] += 0.5 * a1 + ad(S[b], xi[:, b], a1) / 12.0
         return out
     return plus, dexpinv
 
@@ -301,13 +301,12 @@ def _adaptive(model, accel, torque, q0, v0, t0, t1, rtol, atol, max_steps, watch
     bounds) and counted (at most max_steps); returns every accepted step as solve_ivp does."""
     nq = model.nq
     qdot = _qdot(model)
-    quats = model.quat_q[:, None] + np.arange(4)                 # (k, 4): every quaternion's q indices
-
     def rhs(t, x):
         q, v = x[:nq], x[nq:]
-        if quats.size:                                       # the solver's q drifts off ‖quat‖ = 1
+        if model.unit_q.size:                                # the solver's q drifts off ‖quat‖ = 1
             q = q.copy()
-            q[quats] /= np.linalg.norm(q[quats], axis=1, keepdims=True)
+            for k, m in model.unit_q:
+                q[k:k + m] /= np.linalg.norm(q[k:k + m])
         try:
             a = accel(q, v, torque(t, q[None], v[None])[0])
         except _TorqueError as exc:
@@ -338,20 +337,22 @@ def _dop853(model, rhs, q0, v0, t0, t1, rtol, atol, max_steps, watch):
         ts.append(solver.t)
         ys.append(solver.y.copy())
     Y = np.array(ys)
-    for k in model.quat_q:
-        Y[:, k:k + 4] /= np.linalg.norm(Y[:, k:k + 4], axis=1, keepdims=True)
+    for k, m in model.unit_q:
+        Y[:, k:k + m] /= np.linalg.norm(Y[:, k:k + m], axis=1, keepdims=True)
     return np.array(ts), Y[:, :nq], Y[:, nq:]
 
 
 def _qdot(model):
     """q̇(q, v) (nq,): v for 1-dof joints; a free flyer's position moves with R v_lin (world axes); every
-    quaternion (free flyer, ball joint) with ½ quat ⊗ (ω, 0) (body-frame ω)."""
-    if not model.quat_q.size:
+    quaternion (free flyer, ball joint) with ½ quat ⊗ (ω, 0) (body-frame ω); a planar joint's (x, y) with R(θ) (v_x,
+    v_y) and its (cos θ, sin θ) with ω (−sin θ, cos θ)."""
+    if not model.unit_q.size:
         return lambda q, v: v
     one = np.flatnonzero(model.nqs == 1)
     one_q, one_v = model.idx_q[one], model.idx_v[one]
     free = np.flatnonzero(model.kind == FREEFLYER)
     free_q, free_v = model.idx_q[free], model.idx_v[free]
+    plane = np.flatnonzero(model.kind == PLANAR)
 
     def qdot(q, v):
         out = np.empty(model.nq)
@@ -363,5 +364,9 @@ def _qdot(model):
             a, b, c = v[r:r + 3]
             out[k:k + 4] = 0.5 * np.array([w * a + y * c - z * b, w * b + z * a - x * c,
                                            w * c + x * b - y * a, -(x * a + y * b + z * c)])
+        for j in plane:
+            k, r = model.idx_q[j], model.idx_v[j]
+            c, sn = q[k + 2], q[k + 3]
+            out[k:k + 4] = (c * v[r] - sn * v[r + 1], sn * v[r] + c * v[r + 1], -sn * v[r + 2], c * v[r + 2])
         return out
     return qdot

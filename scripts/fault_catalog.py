@@ -59,6 +59,7 @@ _URDFPLUS = "tests/crosscheck/test_urdfplus_forms.py"
 _REGRESSOR = "tests/crosscheck/test_regressor.py"
 _DERIV = "tests/crosscheck/test_derivatives.py"
 _LANES_MULTI = "tests/batch/test_lanes_multi_dof.py"
+_KINDS = "tests/crosscheck/test_joint_kinds.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
 _JD = "tests/crosscheck/test_joint_dynamics.py"
 _MJCF = "tests/crosscheck/test_mjcf_import.py"
@@ -93,8 +94,8 @@ AREA_TESTS = {
 FAULTS = (
     # ---------------------------------------------------------------- loader (io/urdf.py, spatial.py)
     Fault("urdf-spherical-damping-one-entry", "loader", "manipdyn/io/urdf.py",
-          'out += [float(x or 0.0)] * (3 if j.type == "spherical" else 1)',
-          'out += [float(x or 0.0)] * (1 if j.type == "spherical" else 1)',
+          'out += [float(x or 0.0)] * KINDS[_KIND[j.type]].nv',
+          'out += [float(x or 0.0)] * 1',
           ("tests/crosscheck/test_urdf_spherical.py",), "a spherical joint's <dynamics damping> on one of its three "
           "velocities: the model's damping (nv,) has the wrong length"),
     Fault("urdf-inverted-limits-kept", "loader", "manipdyn/io/urdf.py",
@@ -376,8 +377,9 @@ FAULTS = (
           "rotor(mdl.armature, A[s], tau[s])", "rotor(mdl.armature, V[s], tau[s])",
           (_JD,), "the one-state RNEA adds armature ⊙ q̇ instead of armature ⊙ q̈"),
     Fault("registry-integrate-fall-through", "kinematics", "manipdyn/joints.py",
-          "            if kind[j] == REVOLUTE or kind[j] == PRISMATIC:\n                out[s, a] = Q[s, a] + V[s, b]",
-          "            if kind[j] != FREEFLYER:\n                out[s, a] = Q[s, a] + V[s, b]",
+          "            if kind[j] == REVOLUTE or kind[j] == PRISMATIC or kind[j] == HELICAL:\n"
+          "                out[s, a] = Q[s, a] + V[s, b]",
+          "            if kind[j] != FREEFLYER and kind[j] != PLANAR:\n                out[s, a] = Q[s, a] + V[s, b]",
           ("tests/unit/test_joint_registry.py",), "integrate adds q and v of a kind the registry does not hold"),
     Fault("lanes-multi-coriolis-dropped", "rnea", "manipdyn/dynamics/rnea.py",
           "add(scale(2.0, cross(w_in, vl)), cross(va, vl))))   # Eq. 6", "scale(2.0, cross(w_in, vl))))   # Eq. 6",
@@ -605,8 +607,8 @@ FAULTS = (
           "v + h / 6 * (k1v + k2v + 2 * k3v + 2 * k4v)",
           ("tests/unit/test_integrate.py",), "RK4 velocity update with weights 1, 1, 2, 2 (still consistent, wrong order)"),
     Fault("integrate-rkmk-bracket-sign", "integrators", "manipdyn/simulation.py",
-          "out[:, b] += 0.5 * a1 + ad(xi[:, b], a1) / 12.0",
-          "out[:, b] += -0.5 * a1 + ad(xi[:, b], a1) / 12.0",
+          "out[:, b] += 0.5 * a1 + ad(S[b], xi[:, b], a1) / 12.0",
+          "out[:, b] += -0.5 * a1 + ad(S[b], xi[:, b], a1) / 12.0",
           ("tests/unit/test_floating_simulate.py", _BALL_SIM),
           "RK4 on a free flyer or a ball joint with dexp⁻¹ = v − ½[ξ, v] + …: second order"),
     Fault("plots-free-body-plotted", "viz", "manipdyn/viz/plots.py",
@@ -620,17 +622,17 @@ FAULTS = (
           ("tests/unit/test_free_bodies.py",), "the adaptive reference moves a free body's position by its body-frame "
           "linear velocity (q̇ = v), not R v"),
     Fault("integrate-rkmk-ball-block-dropped", "integrators", "manipdyn/simulation.py",
-          "              if k == BALL or k == FREEFLYER]",
-          "              if k == FREEFLYER]",
+          "    blocks = [slice(int(b), int(b) + int(n)) for b, n in zip(model.idx_v, model.nvs) if n > 1]",
+          "    blocks = [slice(int(b), int(b) + int(n)) for b, n in zip(model.idx_v, model.nvs) if n > 3]",
           (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
           "RKMK without a ball joint's dexp⁻¹ block (ξ̇ = v on the ball's 3 entries): second order"),
     Fault("integrate-rkmk-ball-bracket-order", "integrators", "manipdyn/simulation.py",
-          "            return np.cross(xi, w)",
-          "            return np.cross(w, xi)",
+          "                               np.cross(x[:, 3:6], y[:, 3:6])], axis=1) @ Sb.T",
+          "                               np.cross(y[:, 3:6], x[:, 3:6])], axis=1) @ Sb.T",
           (_BALL_SIM + "::test_rkmk_is_fourth_order_on_ball_blocks",),
           "the ball block's so(3) bracket [ξ, w] taken as w × ξ (both dexp⁻¹ terms' signs flipped): second order"),
     Fault("integrate-adaptive-quaternion-not-renormalised", "integrators", "manipdyn/simulation.py",
-          "        Y[:, k:k + 4] /= np.linalg.norm(Y[:, k:k + 4], axis=1, keepdims=True)",
+          "        Y[:, k:k + m] /= np.linalg.norm(Y[:, k:k + m], axis=1, keepdims=True)",
           "        pass",
           (_BALL_SIM + "::test_quaternions_stay_unit_and_energy_is_conserved",),
           "the adaptive integrator returns its quaternions as DOP853 leaves them (off unit norm by its tolerance)"),
@@ -731,7 +733,7 @@ FAULTS = (
           "out[s, b], out[s, b + 1], out[s, b + 2] = _log_quat(Q1, Q0, s, a)",
           (_BALL,), "difference of a ball: log(quat1⁻¹ quat0), q0 ⊖ q1 instead of q1 ⊖ q0"),
     Fault("ball-christoffel-bracket-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
-          "ad = _ad(xi) if kind == FREEFLYER else skew(xi)", "ad = _ad(xi) if kind == FREEFLYER else -skew(xi)",
+          "        ad = Sb @ _ad(xi @ Sb) @ Sb.T", "        ad = -Sb @ _ad(xi @ Sb) @ Sb.T",
           (_BALL,), "christoffel_coriolis: a ball's so(3) bracket [e_i, e_j] of the wrong sign"),
     Fault("ff-log6-coefficient-cancels", "integrators", "manipdyn/joints.py",
           "return (1.0 - 0.5 * th / np.tan(0.5 * th)) / th2",
@@ -768,8 +770,8 @@ FAULTS = (
           "playback interpolates quaternions by normalised lerp of the samples (lags a 2.5 rad turn by 0.068 rad, "
           "takes the long way to a sample given as −q)"),
     Fault("viz-ball-rates-by-gradient", "viz", "manipdyn/viz/plots.py",
-          "    if model.quat_q.size:\n        lo, hi",
-          "    if model.floating:\n        lo, hi",
+          "    if model.nq != model.nv:          # quaternions, a planar joint's (cos, sin): rates by difference",
+          "    if model.floating:                # quaternions, a planar joint's (cos, sin): rates by difference",
           (_BALL_VIZ + "::test_rates_of_a_uniform_rotation_and_the_plot_labels",),
           "a ball joint's rates by differences of its quaternion entries (nq columns) instead of q ⊖ q (body ω)"),
     Fault("viz-slider-does-not-seek", "viz", "manipdyn/viz/page.py",
@@ -1030,6 +1032,26 @@ FAULTS = (
     Fault("kernel-form-mass-slot", "rnea", "manipdyn/model.py",
           "F[3 * nb:4 * nb, 0, 0] = model.mass", "F[3 * nb:4 * nb, 0, 1] = model.mass",
           (_RNEA,), "the kernel form stores the masses where core.unpack does not read them (every body massless)"),
+    Fault("helical-pitch-sign", "kinematics", "manipdyn/joints.py",
+          "        px, py, pz = h * q0 * x, h * q0 * y, h * q0 * z",
+          "        px, py, pz = -h * q0 * x, -h * q0 * y, -h * q0 * z",
+          (_KINDS,), "a helical joint slides against its pitch (a left-handed thread where the pitch says right)"),
+    Fault("planar-integrate-rotation", "integrators", "manipdyn/joints.py",
+          "    tx, ty = ka * vx - kb * vy, kb * vx + ka * vy",
+          "    tx, ty = ka * vx + kb * vy, kb * vx + ka * vy",
+          (_KINDS,), "a planar joint's integrate turns its body-frame velocity the wrong way in SE(2)'s V(ω)"),
+    Fault("universal-second-axis", "loader", "manipdyn/joints.py",
+          "    return (REVOLUTE, np.asarray(axis1, float)), (REVOLUTE, np.asarray(axis2, float))",
+          "    return (REVOLUTE, np.asarray(axis1, float)), (REVOLUTE, np.asarray(axis1, float))",
+          (_KINDS,), "a universal joint's second revolute joint turns about its first axis"),
+    Fault("planar-plane-axes-handedness", "kinematics", "manipdyn/joints.py",
+          "    return (tx, ty, tz), (ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx)",
+          "    return (tx, ty, tz), (nz * ty - ny * tz, nx * tz - nz * tx, ny * tx - nx * ty)",
+          (_KINDS, "tests/unit/test_urdf_joint_types.py"), "a planar joint's y runs along −e₂ (a left-handed plane)"),
+    Fault("bracket-terms-block-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
+          "        out[:, b, b] += Sb @ G @ Sb.T",
+          "        out[:, b, b] -= Sb @ G @ Sb.T",
+          (_KINDS,), "the Christoffel route's bracket term of a multi-dof joint's own block has the wrong sign"),
 )
 
 

@@ -90,7 +90,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     (state.raise_kernel_error)."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
-    axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
+    axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
     mg, armature = mdl.mg, mdl.armature
     N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
     Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, Y, t, vJ, a0 = workspace(nb, nv)
@@ -105,7 +105,7 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
         the body frame),  I^A_i = I_i,  p^A_i = v_i ×* I_i v_i; with ``world`` also the bodies' world
         orientations Rw_i = Rw_λ Rl_i (for world-axes external wrenches)."""
         for i in range(nb):
-            joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
+            joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)
             for k in range(6):                # v_J = S_i q̇_i (as joints.joint_velocity; here 40 ns/body less)
                 x = 0.0
                 for r in range(iv[i], iv[i] + nvj[i]):

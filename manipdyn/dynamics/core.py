@@ -7,7 +7,7 @@ of a compiled call costs ~30 ns of dispatch, each reshape inside a kernel as muc
   I (5, nb) int64        = rows parent, kind, idx_q, idx_v, nv_j (one column per joint: rows are contiguous
                            views, ~40 ns cheaper per call to unpack than strided columns)
   F (4 nb + 1 + m, 3, 3) = blocks of 3×3 numbers:  F[0:nb] R0,  F[nb:2nb] inertia (about the CoM, body axes),
-                           F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[4nb, 0] −g,
+                           F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[3nb:4nb, 0, 1] pitch,  F[4nb, 0] −g,
                            F[4nb+1:4nb+1+m] S (nv, 6), padded to m = max(2, 2⌈nv/3⌉) blocks,
                            F[4nb+1+m:] the armature (nv,), padded to whole blocks,
 viewed again by ``unpack`` inside the kernels (slices, one reshape).
@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import njit
-from ..joints import REVOLUTE, joint_placement, joint_velocity, multi_dof, quat_layout, quat_rotation
+from ..joints import PRISMATIC, REVOLUTE, joint_placement, joint_velocity, multi_dof, quat_layout, quat_rotation
 from ..spatial import SINCOS_MAX, first_nonfinite, sincos
 
 
@@ -32,10 +32,10 @@ def kernel_arrays(model):
     return model.kernel.arrays
 
 
-ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature")
+ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature pitch")
 ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
     parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
-    kind (nb,) int     joints.REVOLUTE, PRISMATIC, FREEFLYER or BALL (the registry's codes, joints.KINDS)
+    kind (nb,) int     the joint's code in the registry (joints.KINDS, joints.IN_MODEL)
     iq, iv (nb,) int   joint i's first entry in q and in v
     nvj (nb,) int      joint i's number of velocities
     S (nv, 6)          motion subspace rows [linear; angular] in the body frame (joints.motion_subspace)
@@ -43,7 +43,8 @@ ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views 
     R0 (nb, 3, 3)      joint frame in the parent body at q = 0;   p0 (nb, 3) its origin
     mass (nb,)         body mass;   com (nb, 3) centre of mass (body frame);   inertia (nb, 3, 3) about the CoM
     mg (3,)            −g, the base acceleration that stands for gravity
-    armature (nv,)     rotor inertia per velocity (Model.armature): M + diag(armature), τ += armature ⊙ q̈"""
+    armature (nv,)     rotor inertia per velocity (Model.armature): M + diag(armature), τ += armature ⊙ q̈
+    pitch (nb,)        a helical joint's pitch, m/rad (0 for every other kind)"""
 
 
 @njit(cache=True, inline="always")
@@ -55,7 +56,7 @@ def unpack(I, F):
     B = F[2 * nb:3 * nb]
     return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:nv],
                        B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0],
-                       F[4 * nb + 1 + m:].reshape(-1)[:nv])
+                       F[4 * nb + 1 + m:].reshape(-1)[:nv], F[3 * nb:4 * nb, 0, 1])
 
 
 # -- forward kinematics: the one pass -----------------------------------------------------------------
@@ -95,8 +96,8 @@ def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
 @njit(cache=True, inline="always")
 def fk_place(mdl, i, q, Rl, pl, Rw, pw):
     """Body i's placement in its parent (Rl, pl)[i] and in the world (Rw, pw)[i] (its parent's done first)."""
-    parent, kind, iq, axis, R0, p0 = mdl.parent, mdl.kind, mdl.iq, mdl.axis, mdl.R0, mdl.p0
-    joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
+    parent, kind, iq, axis, pitch, R0, p0 = mdl.parent, mdl.kind, mdl.iq, mdl.axis, mdl.pitch, mdl.R0, mdl.p0
+    joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)
     j = parent[i]
     if j < 0:
         for a in range(3):
@@ -313,17 +314,18 @@ def lane_record(even, odd, depth, i, rows):
 
 @njit(cache=True, inline="always")
 def on_lanes(mdl, nq, multi=False):
-    """True when the lane steps apply to the model (nq: a state's q entries): every joint is a screw joint
-    (revolute, prismatic: one coordinate, one velocity) about z — the z-aligned form the batch routes pass
-    (``Model.kernel.lane_arrays``, model.z_aligned) — or, for a kernel whose steps take them (``multi``), a free
-    flyer or a ball joint (``joints.multi_dof``). Else a lane kernel runs its scalar kernel, which takes any joint."""
+    """True when the lane steps apply to the model (nq: a state's q entries): every joint is revolute or prismatic
+    about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, model.z_aligned) — or, for a
+    kernel whose steps take them (``multi``), a free flyer or a ball joint (``joints.multi_dof``). Any other kind
+    (helical, planar) sends the batch to the lane kernel's scalar kernel, which takes every joint of the registry."""
     nb = mdl.parent.shape[0]
     ok = True
     for i in range(nb):
-        if mdl.nvj[i] == 1:
+        k = mdl.kind[i]
+        if k == REVOLUTE or k == PRISMATIC:
             ok &= mdl.axis[i, 0] == 0.0 and mdl.axis[i, 1] == 0.0 and mdl.axis[i, 2] == 1.0
         else:
-            ok &= multi and multi_dof(mdl.kind[i])
+            ok &= multi and multi_dof(k)
     return ok and (multi or nq == nb)
 
 
@@ -470,11 +472,11 @@ def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
 def joint_placements_kernel(I, F, Q, R, p):
     """Placement of every body in its parent for every state: R (N, nb, 3, 3), p (N, nb, 3)."""
     mdl = unpack(I, F)
-    kind, iq, axis, R0, p0 = mdl.kind, mdl.iq, mdl.axis, mdl.R0, mdl.p0
+    kind, iq, axis, pitch, R0, p0 = mdl.kind, mdl.iq, mdl.axis, mdl.pitch, mdl.R0, mdl.p0
     for s in range(Q.shape[0]):
         q, Rs, ps = Q[s], R[s], p[s]
         for i in range(I.shape[1]):
-            joint_placement(i, kind, iq, axis, R0, p0, q, Rs, ps)
+            joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rs, ps)
 
 
 # -- Python entry points --------------------------------------------------------------------------------

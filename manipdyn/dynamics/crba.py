@@ -60,9 +60,10 @@ def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
     carried as centre of mass and inertia about it). arrays = core.unpack(I, F); W from merge_weights."""
     parent, kind, iq, axis, R0, p0 = arrays.parent, arrays.kind, arrays.iq, arrays.axis, arrays.R0, arrays.p0
+    pitch = arrays.pitch
     com, inertia = arrays.com, arrays.inertia
     for i in range(parent.shape[0]):
-        joint_placement(i, kind, iq, axis, R0, p0, q, R, p)
+        joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p)
     for i in range(parent.shape[0]):           # start from each body's own CoM and inertia (loops: cheaper
         for a in range(3):                     # than slice copies of these strided views)
             cC[i, a] = com[i, a]

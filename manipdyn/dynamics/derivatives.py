@@ -85,7 +85,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
-    axis, R0, p0, mass, com, inertia = mdl.axis, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
+    axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
     mg, armature = mdl.mg, mdl.armature
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     R33, P3 = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3))    # five allocations, cut into blocks
@@ -105,7 +105,7 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     def motion(q, v, a):
         """Forward pass (i = 1 … nb): placements, J_i, v_i, a_i, V_i, A_i, B_i, Y_i, f_i, Ẏ_i."""
         for i in range(nb):
-            joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)
+            joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)
             j = parent[i]
             for x in range(3):
                 for y in range(3):

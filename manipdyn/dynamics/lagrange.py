@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..joints import BALL, FREEFLYER
+from ..joints import motion_subspace
 from ..spatial import first_nonfinite, first_nonfinite_entry, sandwich3, skew
 from .core import fk_pass, kernel_arrays, unpack
 from .kinematics import body_point, com_jacobians, point_jacobian, supports
@@ -158,7 +158,7 @@ def christoffel_coriolis(model, q, v):
     dM = mass_matrix_derivatives(model, Q, terms)            # dM[n, k, i, j] = ∂M_ij/∂q_k
     C = 0.5 * (np.einsum("nkij,nk->nij", dM, V) + np.einsum("njik,nk->nij", dM, V)
                - np.einsum("nijk,nk->nij", dM, V))
-    if model.quat_q.size:
+    if np.any(model.nvs > 1):
         C += _bracket_terms(model, _links_mass_matrix(model, *terms[1:]), V)
     return unbatch(check_output("christoffel_coriolis", "C", C, model, dict(q=Q, v=V)), single)
 
@@ -173,27 +173,26 @@ def _ad(x):
 
 def _bracket_terms(model, M, V):
     """½ Σ_i v_i (⟨[X_i, X_j], X_k⟩ − ⟨[X_j, X_k], X_i⟩ + ⟨[X_k, X_i], X_j⟩) as a matrix [k, j]. Only the
-    directions of one free flyer or one ball joint fail to commute (directions of different joints act on
-    different factors of q); for each such block b, with ξ = v[b], f = (M v)[b]:
+    directions of one joint of several velocities (free flyer, ball, planar) fail to commute (directions of
+    different joints act on different factors of q); for each such block b, with ξ = v[b], f = (M v)[b] and the
+    joint's motion subspace S_b (n, 6) (orthonormal rows spanning a subalgebra of se(3)):
       first:  M[:, b] ad_ξ  (columns j of the block)
-      second: ⟨f, [e_k, e_j]⟩: free flyer [[0, −[f_v]×], [−[f_v]×, −[f_ω]×]]; ball −[f]×  (the block itself)
+      second: ⟨f, [e_k, e_j]⟩ = S_b G(S_bᵀ f) S_bᵀ, G(φ) = [[0, −[φ_v]×], [−[φ_v]×, −[φ_ω]×]]  (the block itself:
+              a free flyer's G, a ball joint's −[f]×)
       third:  −ad_ξᵀ M[b, :]  (rows k of the block),
-    ad_ξ the free flyer's se(3) ``_ad``, a ball joint's so(3) [ξ]×."""
+    ad_ξ = S_b ad(S_bᵀ ξ) S_bᵀ with se(3)'s ``_ad`` (a ball joint's [ξ]×, a planar joint's se(2) bracket)."""
     N, nv = V.shape
     out = np.zeros((N, nv, nv))
-    for kind, a in zip(model.kind, model.idx_v):
-        if kind not in (FREEFLYER, BALL):
+    for kind, axis, h, a, n in zip(model.kind, model.axis, model.pitch, model.idx_v, model.nvs):
+        if n == 1:
             continue
-        b = slice(a, a + (6 if kind == FREEFLYER else 3))
+        b, Sb = slice(a, a + n), motion_subspace(kind, axis, h)
         xi, f = V[:, b], np.einsum("nij,nj->ni", M[:, b], V)
-        ad = _ad(xi) if kind == FREEFLYER else skew(xi)
+        ad = Sb @ _ad(xi @ Sb) @ Sb.T
         out[:, :, b] += M[:, :, b] @ ad
-        if kind == FREEFLYER:
-            Fv, Fw = skew(f[:, :3]), skew(f[:, 3:])
-            out[:, a:a + 3, a + 3:a + 6] -= Fv
-            out[:, a + 3:a + 6, a:a + 3] -= Fv
-            out[:, a + 3:a + 6, a + 3:a + 6] -= Fw
-        else:
-            out[:, b, b] -= skew(f)
+        phi = f @ Sb
+        G = np.zeros((N, 6, 6))
+        G[:, :3, 3:], G[:, 3:, :3], G[:, 3:, 3:] = -skew(phi[:, :3]), -skew(phi[:, :3]), -skew(phi[:, 3:])
+        out[:, b, b] += Sb @ G @ Sb.T
         out[:, b, :] -= np.swapaxes(ad, 1, 2) @ M[:, b, :]
     return 0.5 * out

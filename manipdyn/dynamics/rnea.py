@@ -483,10 +483,10 @@ def outward(mdl, work, q, v, a, orient, terms):
     (``inertial``), if terms the origin velocity v'_i (Eqs. 4, 11: no torque needs it), and if orient its
     world orientation Rw_i = Rw_λ R."""
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
-    axis, R0, p0, mg = mdl.axis, mdl.R0, mdl.p0, mdl.mg
+    axis, pitch, R0, p0, mg = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mg
     Rl, Rw, pl, w, dw, vel, dv = work.Rl, work.Rw, work.pl, work.w, work.dw, work.vel, work.dv
     for i in range(parent.shape[0]):
-        joint_placement(i, kind, iq, axis, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
+        joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
         j = parent[i]
         if j < 0:                                          # the fixed base: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g
             w_in, dw_in, v_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)

@@ -43,6 +43,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import ModelError
+from ..joints import KINDS
 from ..model import BALL, FREEFLYER, PRISMATIC, MimicModel
 
 __all__ = ["to_mjcf", "REVOLUTE_ARM", "EQ_SOLREF", "EQ_SOLIMP"]
@@ -206,6 +207,10 @@ def to_mjcf(model, *, axis_sign=None, solref=EQ_SOLREF, solimp=EQ_SOLIMP, revolu
     mimic = ()
     if isinstance(model, MimicModel):
         model, mimic = model.full, model.mimic
+    bare = [(n, KINDS[int(k)].name) for n, k in zip(model.joint_names, model.kind) if not KINDS[int(k)].mjcf]
+    if bare:
+        raise ModelError(f"model {model.name!r}: joint {bare[0][0]!r} is a {bare[0][1]} joint, which MJCF has no type "
+                         f"for (MJCF joints: free, ball, slide, hinge)")
     root = ET.Element("mujoco", model=model.name)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false",
                   balanceinertia="false")

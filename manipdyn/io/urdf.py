@@ -56,18 +56,21 @@ import yourdfpy
 from lxml import etree
 
 from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
-from ..joints import KINDS
+from ..joints import KINDS, universal_pair
 from ..model import (FREEFLYER, QUIRK_KINDS, Constraint, Frame, MimicModel, Model, Quirk,
                      check_gravity, with_joint_dynamics)
 from ..spatial import combine_inertias, rpy_matrix
 
 MOVING = {name: k.code for k in KINDS for name in k.urdf}   # the registry's URDF names: revolute, continuous,
-#                                                             prismatic, spherical (PyBullet's and MuJoCo's extension)
+#      prismatic, floating, planar; spherical (PyBullet's extension), screw and universal (Drake's <drake:joint>)
 SUPPORTED = set(MOVING) | {"fixed"}
 ROOT_JOINTS = (None, "free_flyer")   # accepted values of root_joint
 ROOT_JOINT_NAME = "root_joint"       # the free flyer's name (Pinocchio's)
 _KIND = {**MOVING, "free_flyer": FREEFLYER}
-_NO_AXIS = ("free_flyer", "spherical")     # joints without an axis or position limits
+_NO_AXIS = ("free_flyer", "floating", "spherical", "universal")   # joints without an axis (or position limits)
+_UNBOUNDED = _NO_AXIS + ("planar",)                               # joints without position limits
+DRAKE = "http://drake.mit.edu"       # the namespace of Drake's URDF extensions (<drake:joint>, its screw pitch)
+UNIVERSAL_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))   # Drake's universal joint: about x, then about the turned y
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 # The URDF number grammar: optional sign, digits with an optional fraction (or a fraction alone), an
@@ -89,7 +92,8 @@ MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data'
 def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
               root=None, tips=None, prune=False, max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep",
               non_psd_inertia: str = "refuse", mimic: bool = False, joint_dynamics=None):
-    """Read a URDF file into a Model (revolute, continuous, prismatic and fixed joints).
+    """Read a URDF file into a Model (revolute, continuous, prismatic, fixed, floating and planar joints; PyBullet's
+    spherical; Drake's ``<drake:joint>`` screw and universal joints: the registry's URDF names, manipdyn.joints).
 
     Parameters: path to the .urdf file; root_joint None (fixed base) or "free_flyer" (the root link is a
     free body, as Pinocchio's ``buildModelFromUrdf(path, pin.JointModelFreeFlyer())``; see the module
@@ -141,9 +145,11 @@ def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 
     g = check_gravity(gravity, source)
     quirks = []
     root = _parse_xml(data, source, quirks)
+    pitches = _drake_joints(root, source)
     _check_xml(root, source, strict, quirks)
     model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer",
-                   zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia, quirks=quirks)
+                   zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia, quirks=quirks,
+                   pitches=pitches)
     model = dataclasses.replace(model, constraints=_constraints(root, model, source),
                                 actuated=_actuated(root, model, source))
     quirks += [Quirk("mimic", j, f"= {mult:g} * {t} + {off:g}: " + ("honoured (mimic=True)" if mimic else
@@ -153,6 +159,31 @@ def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 
     model = with_joint_dynamics(model, joint_dynamics, source)
     _warn(model, source)
     return _mimic_model(model, source) if mimic else model
+
+
+def _drake_joints(root, source):
+    """Drake's URDF joint extensions read as joints: every <drake:joint> becomes a <joint> (Drake writes its screw and
+    universal joints so), and each screw joint's <drake:screw_thread_pitch value> (metres per turn, right-handed) is
+    taken out and returned as the helical pitch, metres per radian: {joint name: value / 2π}. URDFError for a screw
+    joint without exactly one pitch, or a pitch that is not a finite number within ±MAX_LENGTH."""
+    for e in root.findall(f"{{{DRAKE}}}joint"):
+        e.tag = "joint"
+    out = {}
+    for j in root.findall("joint"):
+        found = j.findall(f"{{{DRAKE}}}screw_thread_pitch")
+        where = f"joint {j.get('name')!r}"
+        if j.get("type") == "screw" and len(found) != 1:
+            raise URDFError(f"{source}: {where}: a screw joint needs one <drake:screw_thread_pitch value=...> "
+                            f"(metres per turn; xmlns:drake=\"{DRAKE}\")")
+        for e in found:
+            if j.get("type") != "screw":
+                raise URDFError(f"{source}: {where}: <drake:screw_thread_pitch> on a {j.get('type')!r} joint")
+            x = _bounded(_numbers(e, "value", 1, where, source), MAX_LENGTH, "pitch", e, "value", where, source)
+            if x is None:
+                raise URDFError(f"{source}: {where}: <drake:screw_thread_pitch> has no value attribute")
+            out[j.get("name")] = float(x[0]) / (2.0 * math.pi)
+            j.remove(e)
+    return out
 
 
 def _check_policy(zero_mass_inertia, non_psd_inertia, mimic, source):
@@ -412,13 +443,12 @@ def _check_joint(j, joint_names, source, strict=False, quirks=None):
     if kind is None:
         raise URDFError(f"{source}: {where} has no type attribute")
     if kind not in SUPPORTED:
-        why = "floating/planar joints (free bases) are not supported" \
-            if kind in ("floating", "planar") else "unknown joint type"
-        raise URDFError(f"{source}: {where}: type {kind!r}: {why}")
+        raise URDFError(f"{source}: {where}: type {kind!r}: unknown joint type (known: "
+                        f"{', '.join(sorted(SUPPORTED))})")
     for e in j.findall("origin"):
         _check_origin(e, where, source)
     for e in j.findall("axis"):
-        _check_axis(e, where, source, moving=kind not in ("fixed", "spherical"))
+        _check_axis(e, where, source, moving=kind not in ("fixed",) + _NO_AXIS)
     limits = j.findall("limit")
     if not limits and kind in ("revolute", "prismatic"):
         raise URDFError(f"{source}: {where}: a {kind} joint needs <limit effort=... velocity=...> "
@@ -427,8 +457,8 @@ def _check_joint(j, joint_names, source, strict=False, quirks=None):
         _check_limit(e, where, kind, source, strict, quirks)
     for e in j.findall("mimic"):
         _check_mimic(e, name, joint_names, source)
-        if kind == "spherical":
-            raise URDFError(f"{source}: {where}: a spherical joint cannot be a <mimic> joint (a mimic relates angles "
+        if kind in ("spherical", "floating", "planar", "universal"):     # (a fixed joint's <mimic>: ignored)
+            raise URDFError(f"{source}: {where}: a {kind} joint cannot be a <mimic> joint (a mimic relates angles "
                             f"or displacements)")
     for e in j.findall("dynamics"):            # Model.damping, Model.friction (docs/design.md §3, Joint dynamics)
         for k in ("damping", "friction"):
@@ -553,14 +583,20 @@ def _walk(children, root):
 
 
 def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep", non_psd_inertia="refuse",
-           quirks=None) -> Model:
+           quirks=None, pitches=None) -> Model:
     """Walk the tree from the root, numbering moving joints depth-first and merging fixed-joint links.
 
     free: the root link is body 0, carried by a free flyer (joint 0, parent −1); else the fixed base −1.
-    Inertial quirks (non-PSD ones with non_psd_inertia="keep", and the free-root one) are appended to ``quirks``."""
+    A ``floating`` joint is a free flyer too: it must hang from the fixed base (the root link and links fixed to it).
+    A ``universal`` joint is expanded into the two revolute joints it is (joints.universal_pair): "<joint>.1" about
+    x, carrying a massless body "<child link>:<joint>.1", and "<joint>.2" about y of that body, carrying the child
+    (the MJCF reader's names for the joints of one body).
+    Inertial quirks (non-PSD ones with non_psd_inertia="keep", and the free-root one) are appended to ``quirks``;
+    pitches: {screw joint: pitch, m/rad} (``_drake_joints``)."""
     quirks = [] if quirks is None else quirks
     links, children, root = _tree(robot, source)
     joints, parts, frames, merged, notes = [], {-1: []}, {}, {root: []}, []
+    names = {j.name for j in robot.joints}
     if free:
         if any(j.name == ROOT_JOINT_NAME and j.type in MOVING for j in robot.joints):
             raise URDFError(f"{source}: joint {ROOT_JOINT_NAME!r} exists already; the free flyer needs the name")
@@ -576,6 +612,26 @@ def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep",
             body, R, p = fp.body, fp.R @ Ro, fp.p + fp.R @ po
             if j.type == "fixed":
                 merged[root if body < 0 else joints[body][0].child].append(link)
+            elif j.type == "floating" and (body >= 0 or free):
+                raise URDFError(f"{source}: joint {j.name!r}: a floating joint must hang from the fixed base "
+                                + ("(root_joint='free_flyer' already frees the root link: load without it)" if free
+                                   else f"(the root link {root!r}); its parent {j.parent!r} moves"))
+            elif j.type == "universal":
+                mid = f"{link}:{j.name}.1"        # the MJCF reader's name for a body between two joints
+                taken = [x for x in (mid, f"{j.name}.1", f"{j.name}.2") if x in links or x in names]
+                if taken:
+                    raise URDFError(f"{source}: joint {j.name!r}: the universal joint's two revolute joints and its "
+                                    f"middle body need the names {j.name}.1, {j.name}.2, {mid}; {taken[0]!r} is taken")
+                (_, a1), (_, a2) = universal_pair(*UNIVERSAL_AXES)
+                turn = yourdfpy.Limit(effort=math.inf, velocity=math.inf, lower=-math.inf, upper=math.inf)
+                joints.append((yourdfpy.Joint(name=f"{j.name}.1", type="revolute", parent=j.parent, child=mid,
+                                              axis=a1, limit=turn, dynamics=j.dynamics), body, R, p))
+                parts[len(joints) - 1], merged[mid] = [(0.0, np.zeros(3), np.zeros((3, 3)))], []   # massless
+                frames[mid] = Frame(mid, len(joints) - 1, np.eye(3), np.zeros(3))
+                joints.append((yourdfpy.Joint(name=f"{j.name}.2", type="revolute", parent=mid, child=link, axis=a2,
+                               limit=turn, dynamics=j.dynamics), len(joints) - 1, np.eye(3), np.zeros(3)))
+                body, R, p = len(joints) - 1, np.eye(3), np.zeros(3)
+                parts[body], merged[link] = [], []
             else:
                 joints.append((j, body, R, p))
                 body, R, p = len(joints) - 1, np.eye(3), np.zeros(3)
@@ -597,7 +653,8 @@ def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep",
         why = _free_root_shape(root, joints, frames, parts, gravity) if note else None
         if why:
             quirks.append(Quirk("free_root", root, f"{note[0]}; it looks free: {why}"))
-    return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes, non_psd_inertia, quirks)
+    return _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes, non_psd_inertia, quirks,
+                     pitches or {})
 
 
 def _inertial_quirks(links, root, joints, free, policy):
@@ -616,7 +673,7 @@ def _inertial_quirks(links, root, joints, free, policy):
                     else "dropped (zero_mass_inertia='drop': the link is massless)")
             out.append(Quirk("zero_mass_inertia", name, f"mass 0, inertia diagonal "
                              f"{np.diag(np.asarray(x.inertia, float)).tolist()}: {what}"))
-    carried = [j.child for j, *_ in joints if j.type != "free_flyer"] + ([root] if free else [])
+    carried = [j.child for j, *_ in joints if j.type != "free_flyer" and j.child in links] + ([root] if free else [])
     out += [Quirk("no_inertial", c, "no <inertial>: a massless link" + (" on a moving joint" if c != root else ""))
             for c in carried if links[c].inertial is None]
     x = links[root].inertial
@@ -684,7 +741,7 @@ def _part_index(frames, parts):
 
 
 def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes, non_psd_inertia="refuse",
-              quirks=None) -> Model:
+              quirks=None, pitches=None) -> Model:
     """The Model's arrays from the walk's joints (joint, parent body, R0, p0) and merged body parts; with
     non_psd_inertia="keep", a "non_psd_inertia" quirk per body whose inertia is not PSD goes to ``quirks``."""
     nb = len(joints)                       # joints = bodies (a free flyer included)
@@ -722,7 +779,8 @@ def _assemble(robot, source, gravity, root, joints, parts, frames, merged, notes
         lower=lim[:, 0], upper=lim[:, 1], effort=lim[:, 2], velocity=lim[:, 3],
         gravity=np.array(gravity, float).reshape(3), frames=frames,
         merged={k: tuple(v) for k, v in merged.items()}, mimic=mimic, source=source, notes=tuple(notes),
-        damping=_dynamics(joints, "damping"), friction=_dynamics(joints, "friction"))
+        damping=_dynamics(joints, "damping"), friction=_dynamics(joints, "friction"),
+        pitch=np.array([(pitches or {}).get(j.name, 0.0) for j, *_ in joints], float).reshape(nb))
 
 
 def _dynamics(joints, key):
@@ -730,11 +788,11 @@ def _dynamics(joints, key):
     joint's three take its value."""
     out = []
     for j, *_ in joints:
-        if j.type == "free_flyer":
+        if j.type in ("free_flyer", "floating"):
             out += [0.0] * 6
         else:
             x = getattr(j.dynamics, key, None) if j.dynamics is not None else None
-            out += [float(x or 0.0)] * (3 if j.type == "spherical" else 1)
+            out += [float(x or 0.0)] * KINDS[_KIND[j.type]].nv
     return np.array(out, float)
 
 
@@ -759,7 +817,7 @@ def _limits(j):
     """(lower, upper, effort, velocity): continuous joints are unbounded, a missing lower/upper is 0 (the
     URDF default, as urdfdom reads it), a continuous joint without <limit> has unbounded effort/velocity, a
     free flyer and a spherical joint are unbounded."""
-    if j.type in _NO_AXIS:
+    if j.type in _UNBOUNDED or (j.type == "screw" and j.limit is None):
         return -np.inf, np.inf, np.inf, np.inf
     L = j.limit
     get = lambda v, d: d if (L is None or v is None) else float(v)  # noqa: E731

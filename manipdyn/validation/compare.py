@@ -26,7 +26,7 @@ from ..dynamics.rnea import gravity_torques
 from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea, rnea_terms
 from ..configuration import FREE_RANGE
-from ..model import FREEFLYER, PRISMATIC
+from ..model import FREEFLYER, PLANAR, PRISMATIC
 from .closed import PROXIMAL, closed_chain_terms
 from .measure import error
 from .reference import Reference
@@ -110,6 +110,10 @@ def random_states(model, n, rng):
     q[:, model.idx_q[one]] = rng.uniform(lo, hi, (n, one.size))
     for i in np.flatnonzero(model.nqs > 1):                # free flyer: position in a cube; orientations uniform
         k = model.idx_q[i]
+        if model.kind[i] == PLANAR:                         # planar: position in a square, angle uniform
+            th = rng.uniform(-np.pi, np.pi, n)
+            q[:, k:k + 4] = np.column_stack([rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 2)), np.cos(th), np.sin(th)])
+            continue
         if model.kind[i] == FREEFLYER:
             q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 3))
             k += 3

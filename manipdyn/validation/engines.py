@@ -65,6 +65,7 @@ from ..errors import InputError, ManipdynError, MissingExtraError
 from ..extras import install_command, require
 from ..io.load import robot_format
 from ..model import BALL, FREEFLYER, PRISMATIC, REVOLUTE
+from ..joints import TYPE_NAMES
 from ..spatial import combine_inertias, rpy_matrix
 from .compare import random_states
 from .measure import error
@@ -890,6 +891,11 @@ def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeRep
     """Every engine against manipdyn on the same seeded random states: τ, M, q̈, causes, neutralised."""
     if np.any(model.kind[1:] == FREEFLYER) or (np.any(model.kind == FREEFLYER) and not model.floating):
         raise InputError(f"{path}: the engines referee compares fixed-base models and a free-flyer root only")
+    other = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in _KIND_NAME]
+    if other:
+        raise InputError(f"{path}: the engines referee compares revolute, prismatic, ball and free-flyer joints "
+                         f"(what every engine has), not {', '.join(other[:5])}; validate --against pinocchio compares "
+                         f"every kind")
     rng = np.random.default_rng(seed)
     Q, V, A = random_states(model, n_states, rng)
     T = rng.normal(0.0, 5.0, V.shape)

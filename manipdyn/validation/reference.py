@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ManipdynError
+from ..joints import HELICAL, PLANAR
 from ..extras import require
 
 
@@ -31,8 +32,16 @@ class Reference:
         from ..io.load import robot_format
         P = pin()
         self.model = model
-        free = model.floating or any(np.ndim(v) == 1 for v in model.locked.values())   # a locked free flyer:
-        root = (P.JointModelFreeFlyer(),) if free else ()                               # its pose (7,)
+        added = model.floating and model.body_names[0] == model.root_link   # root_joint="free_flyer" (a file's
+        free = added or any(np.ndim(v) == 1 and len(v) == 7 for v in model.locked.values())   # floating joint
+        root = (P.JointModelFreeFlyer(),) if free else ()       # is in the file); a locked free flyer: its pose (7,)
+        odd = [n for n, k, a in zip(model.joint_names, model.kind, model.axis) if k == PLANAR and not a[2] == 1.0]
+        if odd:
+            raise ManipdynError(f"{urdf_path}: joint {odd[0]!r} is planar with a normal other than z; Pinocchio's URDF "
+                                f"reader moves every planar joint in its frame's xy plane (it ignores <axis>)")
+        if np.any(model.kind == HELICAL) or "<drake:joint" in open(urdf_path, errors="replace").read():
+            raise ManipdynError(f"{urdf_path}: Pinocchio's URDF reader has no screw or universal joint type "
+                                f"(<drake:joint>)")
         if robot_format(urdf_path) == "mjcf":          # an MJCF file: its free joint, if any, is in the file
             self.pm = P.buildModelFromMJCF(str(urdf_path))
             composite = [n for n, j in zip(self.pm.names[1:], self.pm.joints[1:])

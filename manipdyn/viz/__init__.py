@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ConstraintError, GeometryWarning, InputError, SingularError  # noqa: F401 (re-exported)
 from ..io.trajectory import read_trajectory_file
-from ..joints import BALL, FREEFLYER, REVOLUTE
+from ..joints import BALL, FREEFLYER, PLANAR, REVOLUTE
 from . import scene as _scene
 from .scene import MAX_FRAMES, PlaybackWarning  # noqa: F401 (re-exported)
 
@@ -225,18 +225,20 @@ def demo_motion(model, urdf_path) -> dict:
     lo, hi = _ranges(model)
     mid, amp = 0.5 * (lo + hi), np.minimum(0.4 * (hi - lo), 0.8)
     wave = np.sin(2 * np.pi * np.outer(t, 0.25 + 0.05 * np.arange(model.njoints)))
-    if not model.quat_q.size and not model.constraints:
+    if model.nq == model.njoints and not model.constraints:
         mid, amp = _upright_centre(model, lo, hi, wave)
     swing = mid + amp * wave
     if model.constraints:
         turn = (hi - lo >= 2 * np.pi - 1e-9) & (model.kind == REVOLUTE)   # a crank turns once
         swing[:, turn] = lo[turn] + np.pi + 2 * np.pi * t[:, None] / t[-1]
     Q = swing
-    if model.quat_q.size:                   # a free flyer stays at the origin; a ball joint turns ±0.8 rad
-        from ..configuration import integrate, neutral        # about (1, 1, 0)/√2; 1-dof joints swing
-        turn = np.zeros((len(t), model.nv))
+    if model.nq != model.njoints:           # a free flyer stays at the origin; a ball joint turns ±0.8 rad
+        from ..configuration import integrate, neutral        # about (1, 1, 0)/√2; a planar joint turns ±0.8 rad
+        turn = np.zeros((len(t), model.nv))                   # and slides ±0.2 m; 1-dof joints swing
         for j in np.flatnonzero(model.kind == BALL):
             turn[:, model.idx_v[j]:model.idx_v[j] + 3] = 0.8 * np.outer(wave[:, j], [1.0, 1.0, 0.0]) / np.sqrt(2.0)
+        for j in np.flatnonzero(model.kind == PLANAR):
+            turn[:, model.idx_v[j]:model.idx_v[j] + 3] = np.outer(wave[:, j], [0.2, 0.0, 0.8])
         Q = integrate(model, np.tile(neutral(model), (len(t), 1)), turn)
         one = np.flatnonzero(model.nqs == 1)
         Q[:, model.idx_q[one]] = swing[:, one]

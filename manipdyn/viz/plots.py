@@ -26,7 +26,7 @@ def rates(model, t, Q):
     T = len(t)
     if T < 2:
         return np.zeros((T, model.nv)), np.zeros((T, model.nv))
-    if model.quat_q.size:
+    if model.nq != model.nv:          # quaternions, a planar joint's (cos, sin): rates by difference
         lo, hi = np.r_[0, np.arange(T - 1)], np.r_[np.arange(1, T), T - 1]
         V = difference(model, Q[lo], Q[hi]) / (t[hi] - t[lo])[:, None]
     else:

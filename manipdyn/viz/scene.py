@@ -25,7 +25,7 @@ import numpy as np
 from ..configuration import difference, integrate, neutral, normalize
 from ..dynamics.core import forward_kinematics
 from ..errors import InputError
-from ..joints import BALL, PRISMATIC, REVOLUTE
+from ..joints import BALL, HELICAL, PRISMATIC, REVOLUTE
 from .geometry import load_visuals, meshcat_module
 
 ROOT = "manipdyn"
@@ -188,7 +188,7 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
             if not model.floating:
                 parts.append((f"{nodes[-1]}/base_plate", g.Cylinder(float(1.2 * rj), float(1.8 * rj)),
                               _T(_Y_TO_Z, [0, 0, -0.6 * rj]), BASE_RGBA))
-        elif model.kind[b] == REVOLUTE:
+        elif model.kind[b] == REVOLUTE or model.kind[b] == HELICAL:
             parts.append((f"{nodes[b]}/joint", g.Cylinder(float(2.6 * rj), float(rj)), _T(_axis_frame(model.axis[b]),
                                                                                              np.zeros(3)), JOINT_RGBA))
         elif model.kind[b] == PRISMATIC:
@@ -196,7 +196,7 @@ def _mechanism(g, model, nodes, drawn, rt, rj):
                           _T(_axis_frame(model.axis[b]), np.zeros(3)), JOINT_RGBA))
         elif model.kind[b] == BALL:                 # a ball joint: a sphere about its centre
             parts.append((f"{nodes[b]}/joint", g.Sphere(float(1.3 * rj)), np.eye(4), JOINT_RGBA))
-        else:                                       # the free-flying root body: a hub
+        else:                                       # a free flyer's or planar joint's body: a hub
             parts.append((f"{nodes[b]}/joint", g.Sphere(float(1.5 * rj)), np.eye(4), BASE_RGBA))
         for k, e in enumerate(e for e in ends if np.linalg.norm(e) > 1e-9):
             geom, T = _segment(g, np.zeros(3), np.asarray(e, float), (1.3 if b < 0 else 1.0) * rt)

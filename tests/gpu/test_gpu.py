@@ -219,7 +219,7 @@ def test_gpu_takes_free_flyers_and_ball_joints(probe, name, N):
     ("f_ext_nan", "InputError", ["rnea on the GPU, row 3", "f_ext", "force"]),
     ("f_ext_name", "InputError", ["no_such_frame"]),
     ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"]),
-    ("free_flyer", "InputError", ["do not take the joints", "root_joint", "taken by rnea, aba and mass_matrix"])])
+    ("free_flyer", "InputError", ["do not take the joints", "root_joint", "free flyers and ball joints in rnea, aba and mass_matrix"])])
 def test_gpu_errors_name_the_row_and_the_entry(probe, key, kind, words):
     got = probe["errors"][key]
     assert got is not None and got[0] == kind, got

@@ -117,7 +117,7 @@ REFUSED.update({
     "mimic-no-joint-attribute": (robot(j1='<mimic multiplier="2"/>'), ["joint 'j1'", "<mimic joint=None>"]),
     # types and names
     "joint-type-unknown": (robot(j1_type="hinge"), ["joint 'j1'", "unknown joint type"]),
-    "joint-type-floating": (robot(j1_type="floating"), ["joint 'j1'", "not supported"]),
+    "joint-type-screw-no-pitch": (robot(j1_type="screw"), ["joint 'j1'", "needs one <drake:screw_thread_pitch"]),
     "duplicate-link": (robot(extra='<link name="l2"/>'), ["duplicate link name(s): l2"]),
     "duplicate-joint": (robot(extra='<joint name="j2" type="fixed"><parent link="base"/><child link="x"/></joint>'),
                         ["duplicate joint name(s): j2"]),

@@ -81,7 +81,7 @@ BAD = {
     "negative mass": GOOD.replace('<mass value="1.0"/>', '<mass value="-1.0"/>'),
     "not positive semi-definite": GOOD.replace('ixy="0"', 'ixy="5"'),
     "unknown joint type": GOOD.replace('type="revolute"', 'type="hinge"'),
-    "not supported": GOOD.replace('type="revolute"', 'type="floating"'),
+    "needs one <drake:screw_thread_pitch": GOOD.replace('type="revolute"', 'type="screw"'),
     "is not a URDF number": GOOD.replace('<mass value="1.0"/>', '<mass value="nan"/>'),
     "ENTITY": GOOD.replace('<?xml version="1.0"?>', '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa">]>'),
     "has no direction": GOOD.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>'),
