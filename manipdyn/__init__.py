@@ -24,7 +24,7 @@ from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, Iner
 from .io.urdf import load_urdf, load_urdf_string
 from .io.mjcf_read import load_mjcf, load_mjcf_string
 from .io.load import load_model
-from .model import BALL, FREEFLYER, PRISMATIC, REVOLUTE, Frame, MimicModel, Model, Quirk, with_joint_dynamics
+from .model import BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, Frame, MimicModel, Model, Quirk, with_joint_dynamics
 from .reduce import reduce
 from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
                           constrained_inverse_dynamics, project)
@@ -46,6 +46,6 @@ __all__ = ["constrained_forward_dynamics", "constrained_inverse_dynamics", "proj
            "MimicModel", "Quirk", "QuirkWarning",
            "REVOLUTE", "PRISMATIC", "ManipdynError", "URDFError", "ModelError", "InputError",
            "SingularError", "DivergenceError", "ConstraintError", "NumericalError", "InertiaWarning",
-           "FloatingBaseWarning", "FREEFLYER", "BALL", "neutral", "integrate", "difference", "random_configuration",
+           "FloatingBaseWarning", "FREEFLYER", "BALL", "HELICAL", "PLANAR", "neutral", "integrate", "difference", "random_configuration",
            "normalize", "joint_torque_regressor", "dynamic_parameters", "model_with_parameters",
            "with_joint_dynamics"]

@@ -21,7 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError
-from .joints import BALL, FREEFLYER, PLANAR, PRISMATIC, difference_kernel, integrate_kernel, neutral_q
+from .joints import (BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, difference_kernel, integrate_kernel,
+                     neutral_q)
 from .dynamics.state import as_batch, check_model, check_scalar, unbatch
 from .model import QUAT_TOL
 
@@ -129,6 +130,8 @@ def random_configuration(model, rng=None, n=None) -> np.ndarray:
             u = rng.normal(size=(N, 4))
             Q[:, k:k + 4] = u / np.linalg.norm(u, axis=1, keepdims=True)
             continue
+        if model.kind[i] not in (REVOLUTE, PRISMATIC, HELICAL):      # every kind has its branch
+            raise ValueError(f"random_configuration: joint kind {int(model.kind[i])} has no branch (manipdyn.joints)")
         lo, hi = float(model.lower[i]), float(model.upper[i])
         if not (np.isfinite(lo) and np.isfinite(hi)):
             r = PRISMATIC_RANGE if model.kind[i] == PRISMATIC else REVOLUTE_RANGE

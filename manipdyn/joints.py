@@ -206,9 +206,9 @@ def joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p):
     q0, q1, q2 = q[iq], q[min(iq + 1, last)], q[min(iq + 2, last)]          # q1..q6: a free flyer's, ball's
     q3, q4, q5, q6 = q[min(iq + 3, last)], q[min(iq + 4, last)], q[min(iq + 5, last)], q[min(iq + 6, last)]
     x, y, z, h = axis[i, 0], axis[i, 1], axis[i, 2], pitch[i]
-    if kind == REVOLUTE:                       # R_J = Rot(z, θ), p_J = 0
+    if kind == REVOLUTE or kind == HELICAL:    # R_J = Rot(z, θ), p_J = h θ z (a revolute joint's pitch h is 0)
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, np.sin(q0), np.cos(q0))
-        px = py = pz = 0.0
+        px, py, pz = h * q0 * x, h * q0 * y, h * q0 * z
     elif kind == PRISMATIC:                    # R_J = 1, p_J = d z
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
         px, py, pz = q0 * x, q0 * y, q0 * z
@@ -218,9 +218,6 @@ def joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p):
     elif kind == FREEFLYER:                    # free flyer: R_J = R(quat), p_J = [x y z]
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_rotation(q3, q4, q5, q6)
         px, py, pz = q0, q1, q2
-    elif kind == HELICAL:                      # helical: R_J = Rot(z, θ), p_J = h θ z
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, np.sin(q0), np.cos(q0))
-        px, py, pz = h * q0 * x, h * q0 * y, h * q0 * z
     elif kind == PLANAR:                       # planar: R_J = Rot(z, θ) from q's cos θ, sin θ; p_J = x e₁ + y e₂
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rodrigues(x, y, z, q3, q2)
         (e0, e1, e2), (f0, f1, f2) = plane_axes(x, y, z)

@@ -26,7 +26,7 @@ from .constraints import constrained_forward_dynamics, project
 from .dynamics.aba import forward_dynamics, passive_torques
 from .dynamics.state import as_batch, as_real, check_finite, check_scalar
 from .errors import DivergenceError, InputError, NumericalError
-from .joints import FREEFLYER, PLANAR, motion_subspace, quat_rotation
+from .joints import BALL, FREEFLYER, PLANAR, motion_subspace, quat_rotation
 
 
 @dataclass(frozen=True)
@@ -348,6 +348,9 @@ def _qdot(model):
     v_y) and its (cos θ, sin θ) with ω (−sin θ, cos θ)."""
     if not model.unit_q.size:
         return lambda q, v: v
+    odd = set(model.kind[model.nqs > 1].tolist()) - {FREEFLYER, BALL, PLANAR}
+    if odd:                                              # every entry of q̇ below has its kind's formula
+        raise ValueError(f"simulate: joint kinds {sorted(odd)} have no q̇(q, v) (manipdyn.joints)")
     one = np.flatnonzero(model.nqs == 1)
     one_q, one_v = model.idx_q[one], model.idx_v[one]
     free = np.flatnonzero(model.kind == FREEFLYER)

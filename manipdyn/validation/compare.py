@@ -26,7 +26,7 @@ from ..dynamics.rnea import gravity_torques
 from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea, rnea_terms
 from ..configuration import FREE_RANGE
-from ..model import FREEFLYER, PLANAR, PRISMATIC
+from ..model import BALL, FREEFLYER, PLANAR, PRISMATIC
 from .closed import PROXIMAL, closed_chain_terms
 from .measure import error
 from .reference import Reference
@@ -114,6 +114,8 @@ def random_states(model, n, rng):
             th = rng.uniform(-np.pi, np.pi, n)
             q[:, k:k + 4] = np.column_stack([rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 2)), np.cos(th), np.sin(th)])
             continue
+        if model.kind[i] not in (FREEFLYER, BALL):          # every kind has its branch
+            raise ValueError(f"random_states: joint kind {int(model.kind[i])} has no branch (manipdyn.joints)")
         if model.kind[i] == FREEFLYER:
             q[:, k:k + 3] = rng.uniform(-FREE_RANGE, FREE_RANGE, (n, 3))
             k += 3

@@ -39,7 +39,8 @@ class Reference:
         if odd:
             raise ManipdynError(f"{urdf_path}: joint {odd[0]!r} is planar with a normal other than z; Pinocchio's URDF "
                                 f"reader moves every planar joint in its frame's xy plane (it ignores <axis>)")
-        if np.any(model.kind == HELICAL) or "<drake:joint" in open(urdf_path, errors="replace").read():
+        universal = any(b.endswith(f":{j}") for j, b in zip(model.joint_names, model.body_names))   # (io/urdf.py)
+        if robot_format(urdf_path) != "mjcf" and (np.any(model.kind == HELICAL) or universal):
             raise ManipdynError(f"{urdf_path}: Pinocchio's URDF reader has no screw or universal joint type "
                                 f"(<drake:joint>)")
         if robot_format(urdf_path) == "mjcf":          # an MJCF file: its free joint, if any, is in the file
