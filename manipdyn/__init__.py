@@ -24,7 +24,9 @@ from .errors import (ConstraintError, DivergenceError, FloatingBaseWarning, Iner
 from .io.urdf import load_urdf, load_urdf_string
 from .io.mjcf_read import load_mjcf, load_mjcf_string
 from .io.load import load_model
-from .model import BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, Frame, MimicModel, Model, Quirk, with_joint_dynamics
+from .joints import BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE
+from .model import Frame, MimicModel, Model, with_joint_dynamics
+from .quirks import Quirk
 from .reduce import reduce
 from .constraints import (assemble, complete_state, constrained_forward_dynamics,  # noqa: E402
                           constrained_inverse_dynamics, project)

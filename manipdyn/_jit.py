@@ -29,7 +29,8 @@ from pathlib import Path
 import numba
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_SOURCES = ("_jit.py", "spatial.py", "joints.py", "dynamics/core.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
+KERNEL_SOURCES = ("_jit.py", "spatial.py", "joints.py", "dynamics/model_arrays.py", "dynamics/forward_kinematics.py",
+                  "dynamics/kernel_inputs.py", "dynamics/lanes.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
                   "dynamics/derivatives.py", "dynamics/regressor.py", "dynamics/coriolis.py", "dynamics/energy.py",
                   "dynamics/kinematics.py", "dynamics/lagrange.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
@@ -114,7 +115,7 @@ class entry:
     """A kernel's machine code for one fixed list of argument types, called without numba's dispatch.
 
     numba's dispatcher resolves the type of every argument on every call (~25–35 ns per array, measured);
-    a one-state call whose inputs are already checked (``state.fast``: float64 ndarrays of the model's
+    a one-state call whose inputs are already checked (``arguments.fast``: float64 ndarrays of the model's
     shapes) calls ``entry.call`` instead: the compiled function for ``types``, loaded from the disk cache
     (or compiled) on first use. It checks nothing — an argument of another dtype or number of dimensions
     would be read as the declared type — so its callers pass exactly these types. Arrays are declared with
@@ -140,7 +141,7 @@ class entry:
 MODEL = (numba.types.Array(numba.int64, 2, "C"),
          numba.types.Array(numba.float64, 3, "C"))   # Model.kernel's (I, F): read-only arrays, which no kernel
 #                                                      writes; declared writable so that their empty views can
-#                                                      stand for "no rows" (core.no_wrenches) without allocating
+#                                                      stand for "no rows" (kernel_inputs.no_wrenches) without allocating
 A1, A2, A3 = (numba.types.Array(numba.float64, n, "A") for n in (1, 2, 3))   # float64 arrays, any strides
 I1 = numba.types.Array(numba.int64, 1, "A")                                   # int64 indices, any strides
 C2, C3 = (numba.types.Array(numba.float64, n, "C") for n in (2, 3))   # results a call allocates itself, in C

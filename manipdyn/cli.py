@@ -114,7 +114,8 @@ def _progress_bar():
 
 def _referee(args) -> int:
     """validate --against ENGINES: τ, M, q̈ of each engine against manipdyn, disagreements explained."""
-    from .validation.engines import format_referee, parse_engines, referee
+    from .validation.adapters import parse_engines
+    from .validation.referee import format_referee, referee
 
     engines = parse_engines(args.against)
     states = args.states if args.states is not None else 100
@@ -305,7 +306,7 @@ def add_mimic_option(p):
 
 
 def _inspect(args) -> int:
-    from .model import QUIRK_KINDS
+    from .quirks import QUIRK_KINDS
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -336,7 +337,8 @@ def _inspect(args) -> int:
 
 def inspect_dict(model, warnings_seen=()) -> dict:
     """What ``inspect --json`` writes: sizes, joints in q order, closures, mimic map, quirks, notes, summary."""
-    from .model import QUIRK_KINDS, MimicModel
+    from .model import MimicModel
+    from .quirks import QUIRK_KINDS
     full = model.full if isinstance(model, MimicModel) else model
     out = dict(name=full.name, source=str(full.source), root_link=full.root_link, nq=model.nq, nv=model.nv,
                floating=full.floating, joints=list(model.joint_names), v_names=list(full.v_names),

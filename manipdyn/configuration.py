@@ -23,7 +23,7 @@ import numpy as np
 from .errors import InputError
 from .joints import (BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, difference_kernel, integrate_kernel,
                      neutral_q)
-from .dynamics.state import as_batch, check_model, check_scalar, unbatch
+from .dynamics.arguments import as_batch, check_model, check_scalar, unbatch
 from .model import QUAT_TOL
 
 __all__ = ["neutral", "integrate", "difference", "random_configuration", "normalize", "QUAT_TOL"]

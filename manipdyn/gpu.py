@@ -12,7 +12,7 @@ read where they lie, or with ``__dlpack__`` (through CuPy) — or numpy arrays, 
 a numba device array (N, nv): ``cupy.asarray(tau)`` or ``torch.as_tensor(tau, device="cuda")`` take it without a
 copy, ``tau.copy_to_host()`` brings it back.
 
-The same source as the CPU (docs/design.md §4c): a lane kernel's step for one state — ``core.placement_lane``,
+The same source as the CPU (docs/design.md §4c): a lane kernel's step for one state — ``lanes.placement_lane``,
 ``rnea.motion_lane``, ``rnea.inertial_lane``, ``rnea.inward_lane``, with a record's rows L numbers long — is the
 innermost loop's body on the CPU (L = LANES, a block) and one thread's work here (L = N, the whole batch), so that
 a warp's 32 threads read and write 32 consecutive numbers (coalesced). What differs is only the driver below: which
@@ -34,15 +34,16 @@ import numpy as np
 from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi, articulated_lane,
                            articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
-from .dynamics.core import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
-                            placement_model, quat_model, quat_placement_lane, scatter_lane, unpack)
+from .dynamics.lanes import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
+                             placement_model, quat_model, quat_placement_lane, scatter_lane)
+from .dynamics.model_arrays import unpack
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
                             merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
 from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
                             torque_multi_lane, wrench_up_lane)
-from .dynamics.state import as_real, check_finite, frame_of
+from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
 from .joints import BALL, FREEFLYER, PRISMATIC, REVOLUTE, TYPE_NAMES
@@ -341,8 +342,9 @@ def to_device(x, name, n, call):
 
 
 def _model(model, call, multi=True):
-    """The lane steps' model (z-aligned frames, model.z_aligned) of a Model whose joints they take: screw joints, and
-    free flyers and ball joints for the dynamics calls (``multi``; the frames' drivers take one velocity a joint)."""
+    """The lane steps' model (z-aligned frames, kernel_form.z_aligned) of a Model whose joints they take: screw
+    joints, and free flyers and ball joints for the dynamics calls (``multi``; the frames' drivers take one velocity
+    a joint)."""
     if type(model) is not Model:
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays

@@ -151,7 +151,7 @@ def plane_axes(nx, ny, nz):
 @njit(cache=True, inline="always")
 def multi_dof(kind):
     """True for the kinds whose S selects the last nv_j entries of [linear; angular] (a free flyer's 1₆, a ball's
-    [0; 1₃]) and whose rotation is a quaternion: what the lane steps take beside the screw joints (core.on_lanes)."""
+    [0; 1₃]) and whose rotation is a quaternion: what the lane steps take beside the screw joints (lanes.on_lanes)."""
     return kind == FREEFLYER or kind == BALL
 
 
@@ -197,7 +197,7 @@ def rodrigues(x, y, z, s, c):
 def joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p):
     """R[i] = R0_i R_J(q), p[i] = p0_i + R0_i p_J(q): body i in its parent (Eqs. 8–12 for prismatic joints: p
     evaluated at the current d), from the model's per-joint arrays (kind, iq: q's first entry of the joint,
-    axis, pitch (helical joints), R0, p0; core.unpack) and the whole configuration q."""
+    axis, pitch (helical joints), R0, p0; model_arrays.unpack) and the whole configuration q."""
     # Indexed, not handed rows: a row view per body costs a reference-count pair (17 ns per body of forward
     # kinematics, measured). Every array is read before the branches, which then hold scalars only: an array
     # whose last use lies inside a branch makes numba keep an atomic reference-count pair per call.

@@ -20,12 +20,12 @@ import numpy as np
 from types import MappingProxyType
 
 from .errors import InputError
-from .spatial import skew
-from .joints import (BALL, COORDS, FREEFLYER, HELICAL, IN_MODEL, NQ, NV, OMEGA_AT, PLANAR, PRISMATIC, QUAT_AT, RATES,
-                     REVOLUTE, TYPE_NAMES, UNIT_AT, UNIT_LEN, motion_subspace)
+from .joints import (BALL, COORDS, FREEFLYER, HELICAL, IN_MODEL, NQ, NV, OMEGA_AT, PLANAR, QUAT_AT, RATES, TYPE_NAMES,
+                     UNIT_AT, UNIT_LEN)
+from .kernel_form import KernelForm
+from .quirks import QUIRK_KINDS
 
-__all__ = ["Model", "KernelForm", "Frame", "Constraint", "Quirk", "QUIRK_KINDS", "MimicModel", "check_gravity", "REVOLUTE", "PRISMATIC",
-           "FREEFLYER", "BALL", "HELICAL", "PLANAR", "QUAT_TOL",
+__all__ = ["Model", "Frame", "Constraint", "MimicModel", "check_gravity", "QUAT_TOL",
            "JOINT_DYNAMICS", "FRICTION_EPS", "check_joint_dynamics", "with_joint_dynamics"]
 
 JOINT_DYNAMICS = ("armature", "damping", "friction")   # the per-velocity joint parameters of a Model
@@ -100,54 +100,6 @@ class Frame:
     body: int
     R: np.ndarray          # (3, 3) frame axes in the body frame
     p: np.ndarray          # (3,)   frame origin in the body frame
-
-
-# What the loader reports about a file (Model.quirks), one kind per engine difference or data flaw:
-QUIRK_KINDS = {
-    "zero_mass_inertia": "mass 0 but a nonzero rotational inertia (kept or dropped: load_urdf zero_mass_inertia=)",
-    "point_mass": "an <inertial> with <mass> but no <inertia>: a point mass at its <origin> (Pinocchio 4.1's reading)",
-    "non_psd_inertia": "a body's inertia is not positive semi-definite: loaded as written (load_urdf "
-                       "non_psd_inertia=\"keep\"; the default refuses it)",
-    "no_inertial": "a link carried by a moving joint has no <inertial> (a massless body unless fixed links add mass)",
-    "triangle": "principal moments violate the triangle inequality I1 + I2 >= I3",
-    "rotated_root_inertial": "the root link's <inertial><origin rpy> is not zero",
-    "free_root": "the root body carries mass and the tree's shape says it is a free body (legs, or a heavy body "
-                 "with a hanging appendage, or no joint at all): load with root_joint=\"free_flyer\"",
-    "mimic": "a <mimic> joint (honoured with mimic=True, else loaded as an independent joint)",
-    "version": "<robot version> that urdfdom 6 (Pinocchio 4.1's reader) refuses; manipdyn loads the file",
-    "xml_version": "an XML declaration whose version is not 1.x (<?xml version=\"0.0\"?>): read as XML 1.0, as "
-                   "urdfdom (Pinocchio), MuJoCo, PyBullet and Drake ignore it",
-    "xml_text": "whitespace before the XML declaration, or NUL bytes (a C string's terminator) after the document: "
-                "removed before parsing, as urdfdom (Pinocchio), MuJoCo and PyBullet read such files",
-    "inverted_limits": "a joint <limit> with lower > upper: read as no position limit (PyBullet's reading; urdfdom "
-                       "keeps the numbers); limits never enter the dynamics (load_urdf strict=True refuses it)",
-    "unknown_element": "an element manipdyn does not read (reported, never dropped in silence)",
-    "joint_dynamics": "an MJCF joint's stiffness, springref or springdamper is nonzero: read, not applied yet (its "
-                      "armature, damping and frictionloss are applied: Model.armature, damping, friction)",
-    "free_armature": "an MJCF free joint's armature: applied as Pinocchio applies model.armature, armature ⊙ v̇ with v "
-                     "the body-frame twist; MuJoCo adds it to d/dt of its world-frame linear velocity, so its τ differs "
-                     "by armature · R (ω × v_lin) on the linear rows (M and the energy are the same)",
-    "joint_ref": "an MJCF joint's ref (MuJoCo's qpos0) is nonzero: folded into the joint's placement, so q is MuJoCo's "
-                 "qpos and q = 0 is not the pose drawn in the file",
-    "passive_force": "an MJCF element that adds passive forces manipdyn does not apply (a body's gravcomp, a tendon's "
-                     "stiffness or damping, <option> fluid density, viscosity or wind); MuJoCo's mj_rne leaves them out "
-                     "too",
-    "equality_softness": "an MJCF equality's solref, solimp or a weld's torquescale: MuJoCo's constraint softness (or "
-                         "the scale of its rows), not a model parameter; manipdyn's closures are rigid",
-    "inactive_equality": "an MJCF equality with active=\"false\": not read as a closure (MuJoCo starts with it off)",
-}
-
-
-@dataclass(frozen=True)
-class Quirk:
-    """One thing the loader noticed in a file: kind (a key of QUIRK_KINDS), the link, joint or element it
-    concerns, and a detail sentence."""
-    kind: str
-    name: str
-    detail: str
-
-    def as_dict(self) -> dict:
-        return {"kind": self.kind, "name": self.name, "detail": self.detail}
 
 
 @dataclass(frozen=True, eq=False)
@@ -300,7 +252,7 @@ class Model:
     quat_v: np.ndarray = field(init=False, repr=False)  # (k,) v index of the matching body-frame ω's wx
     unit_q: np.ndarray = field(init=False, repr=False)  # (u, 2) [start, length] in q of every block of unit norm: a
     #                                                     quaternion (4), a planar joint's (cos θ, sin θ) (2)
-    kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (KernelForm below)
+    kernel: "KernelForm" = field(init=False, repr=False)  # what the compiled kernels read (kernel_form.py)
     passive: bool = field(init=False, repr=False)       # a damping or friction entry is nonzero (joint torques)
 
     def __reduce__(self):
@@ -487,168 +439,3 @@ def _dof_names(model, names) -> tuple:
     for i, j in enumerate(model.joint_names):
         out += [f"{j}.{c}" for c in names[int(model.kind[i])]] or [j]
     return tuple(out)
-
-
-# -- the kernel form: everything derived from a Model for the compiled kernels, built once --------------------
-
-@dataclass(frozen=True, eq=False, slots=True)
-class KernelForm:
-    """What the compiled kernels (and the one-state fast paths) read of a Model, derived once when the model is
-    built (``Model.kernel``): the Model holds the description, this holds the same numbers laid out for the
-    kernels, as MuJoCo's mjModel holds its arrays or Pinocchio's Model its derived tree data. Read-only.
-
-    The kernels take the whole model as two arrays, ``I`` and ``F`` (each array argument of a compiled call
-    costs ~30 ns of dispatch, so 13 named arrays would cost a one-state call ~0.4 µs more); ``dynamics.core.unpack``
-    turns them back into the named views of ``core.ModelArrays`` inside every kernel, and is the only reader of
-    the layout below.
-    """
-    q_shape: tuple             # (nq,): one configuration
-    v_shape: tuple             # (nv,): one velocity, acceleration or torque
-    arrays: tuple              # (I, F), the two below, as the kernels take them
-    I: np.ndarray              # (5, nb) int64, rows: parent, kind, idx_q, idx_v, nv_j (joints in q order)
-    F: np.ndarray              # (4 nb + 1 + m + ⌈nv/9⌉, 3, 3) float64, blocks of 3×3: [0, nb) R0; [nb, 2nb) inertia
-    #                            about the CoM; [2nb, 3nb) rows (axis, p0, com); [3nb, 4nb) mass in [·, 0, 0], pitch
-    #                            in [·, 0, 1]; 4nb: −g
-    #                            in row 0; then m = max(2, 2⌈nv/3⌉) blocks holding S (nv, 6) row by row ([linear;
-    #                            angular], joints.motion_subspace); then the armature (nv,) (Model.armature)
-    config: tuple              # (kind (nb,), continuous (nb,) bool, idx_q (nb,), idx_v (nb,)): configuration kernels
-    joint_index: MappingProxyType  # joint name -> index in q order (O(1) lookups on large models)
-    frame_rows: MappingProxyType   # frame name -> (body, X (4, 3) = [R; p]: the frame in its body)
-    one_state_rows: MappingProxyType  # (frame name, reference) -> X (5, 3) = [R; p; (body, 0, local)]
-    wrench_rows: MappingProxyType  # (frame name, "local" | "world") -> P (13,) = [R (9, row by row: the frame's
-    #                                axes into the body's, identity for "world"); origin in the body (3); body]
-    closure_ints: np.ndarray   # (nc, 3) int64 [parent body, child body, number of orientation pairs (−1: coupling)]
-    closure_floats: np.ndarray  # (nc, 24) [pp (3), pc (3), a_1..a_3 (9), b_1..b_3 (9)]; a coupling: [ratio, 0, ...]
-    closure_labels: tuple      # (m,) the name of every closure row ("<closure>.x|y|z|r1|r2|r3|c")
-    result_shapes: tuple       # one state's result of a route (dynamics/route.py), by route.SHAPES: (nv,), (nv, nv),
-    #                            (nv, 10 nb) (the regressor)
-    lane_arrays: tuple         # (I, F) of the same model in z-aligned body frames (``z_aligned``): what the lane
-    #                            kernels take (a batch's route; the GPU)
-    lane_turns: np.ndarray     # (nb, 3, 3) C_i: body i's z-aligned frame in its own (x_body = C_i x_lane); a
-    #                            wrench's rows are turned with it as they are laid out (state.wrench_rows(lanes=True))
-    lane_frame_rows: MappingProxyType   # frame_rows in those frames
-
-    @classmethod
-    def of(cls, model) -> "KernelForm":
-        """The kernel form of a Model (called once, by Model.__post_init__)."""
-        nb = model.njoints
-        I = np.zeros((5, nb), np.int64)
-        if nb:
-            I[:] = np.vstack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
-        F = _floats(model, model.R0, model.inertia, model.axis, model.p0, model.com)
-        config = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
-                  np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
-        frame_rows, one_state, wrench = {}, {}, {}
-        for name, fr in model.frames.items():
-            R, p = np.asarray(fr.R, float), np.asarray(fr.p, float)
-            X = np.ascontiguousarray(np.vstack([R, p]))
-            frame_rows[name] = (int(fr.body), X)
-            for reference in ("local_world_aligned", "local"):
-                one_state[name, reference] = np.vstack([X, [float(fr.body), 0.0, float(reference == "local")]])
-            for axes in ("local", "world"):
-                wrench[name, axes] = np.concatenate([(R if axes == "local" else np.eye(3)).ravel(), p, [float(fr.body)]])
-        ints, floats, labels = _closure_form(model.constraints)
-        *turned, turn = z_aligned(model)
-        Fz = _floats(model, *turned)
-        lane_frames = {}
-        for name, (b, X) in frame_rows.items():
-            C = turn[b] if b >= 0 else np.eye(3)             # the frame in the body's z-aligned frame: Cᵀ R, Cᵀ p
-            lane_frames[name] = (b, np.ascontiguousarray(np.vstack([C.T @ X[:3], C.T @ X[3]])))
-        arrays = [I, F, Fz, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
-                  *wrench.values(), turn, *(x for _, x in lane_frames.values())]
-        for a in arrays:
-            a.setflags(write=False)
-        return cls((model.nq,), (model.nv,), (I, F), I, F, config,
-                   MappingProxyType({name: i for i, name in enumerate(model.joint_names)}),
-                   MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
-                   ints, floats, labels,
-                   ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)),
-                   (I, Fz), turn, MappingProxyType(lane_frames))
-
-
-def _floats(model, R0, inertia, axis, p0, com):
-    """F, the kernels' float array (KernelForm's layout), of the model with these joint frames, inertias, axes,
-    origins and centres of mass (the model's own, or ``z_aligned``'s)."""
-    nb = model.njoints
-    S = np.concatenate([motion_subspace(int(k), a, h) for k, a, h in zip(model.kind, axis, model.pitch)]) if nb \
-        else np.zeros((0, 6))
-    m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
-    F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
-    F[:nb], F[nb:2 * nb] = R0, inertia
-    F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = axis, p0, com
-    F[3 * nb:4 * nb, 0, 0] = model.mass
-    F[3 * nb:4 * nb, 0, 1] = model.pitch
-    F[4 * nb, 0] = -np.asarray(model.gravity, float)
-    F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
-    F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature
-    return F
-
-
-def z_turn(k) -> np.ndarray:
-    """C, the rotation that turns e_z into the unit vector k (C e_z = k): the identity for k = e_z, a half turn
-    about x for k = −e_z, else the shortest turn, about u = e_z × k / |e_z × k|, by Rodrigues with cos = k_z and
-    sin = |e_z × k| taken from k itself (``spatial.axis_angle`` takes an angle, whose sin and cos would round: this
-    way a turn onto a coordinate axis is exact)."""
-    k = np.asarray(k, float)
-    c, s = k[2], np.hypot(k[0], k[1])
-    if s == 0.0:
-        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
-    u = np.array([-k[1] / s, k[0] / s, 0.0])
-    return c * np.eye(3) + s * skew(u) + (1.0 - c) * np.outer(u, u)
-
-
-def z_aligned(model):
-    """The model's joint frames, inertias, axes, origins and centres of mass with every 1-dof joint's body frame
-    turned so that its joint axis is z (the chapter's z'_i, docs/design.md §4c): body i's frame becomes C_i
-    (``z_turn`` of its axis; the identity for a ball or free joint), so R^{i−1}_i = R0'_i Rot(z, q),
-    R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i, c'_i = C_iᵀ c_i, I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world
-    placements are the same numbers: only what is written in a body's own axes changes.
-    Returns (R0', I', axis', p0', c', C), each (nb, 3, 3) or (nb, 3)."""
-    nb = model.njoints
-    C = np.array([z_turn(model.axis[i]) if model.nvs[i] == 1 else np.eye(3) for i in range(nb)]).reshape(nb, 3, 3)
-    Cp = np.array([C[j] if j >= 0 else np.eye(3) for j in model.parent]).reshape(nb, 3, 3)
-    Ct = np.swapaxes(C, 1, 2)
-    R0 = np.swapaxes(Cp, 1, 2) @ np.asarray(model.R0, float) @ C
-    J = Ct @ np.asarray(model.inertia, float) @ C
-    axis = np.where(np.asarray(model.nvs)[:, None] == 1, [0.0, 0.0, 1.0], model.axis)   # C e_z = k: exactly z
-    p0 = np.einsum("nji,nj->ni", Cp, np.asarray(model.p0, float))
-    com = np.einsum("nji,nj->ni", C, np.asarray(model.com, float))
-    return R0, 0.5 * (J + np.swapaxes(J, 1, 2)), axis.reshape(nb, 3), p0, com, C
-
-
-def perpendicular_pair(e):
-    """Two unit vectors completing e (3,) to a right-handed orthonormal basis."""
-    t = np.eye(3)[np.argmin(np.abs(e))]
-    n1 = np.cross(e, t)
-    n1 /= np.linalg.norm(n1)
-    return n1, np.cross(e, n1)
-
-
-def orientation_pairs(c):
-    """(a, b) direction pairs of a closure's orientation rows, a in the parent body frame, b in the child's
-    (constraints/closures.py: Φ = a·b)."""
-    if c.type == "revolute":
-        n1, n2 = perpendicular_pair(c.axis_p)
-        return [(n1, c.axis_c), (n2, c.axis_c)]
-    if c.type == "fixed":
-        A, B = c.Rp, c.Rc
-        return [(A[:, 1], B[:, 2]), (A[:, 2], B[:, 0]), (A[:, 0], B[:, 1])]
-    return []
-
-
-def _closure_form(constraints):
-    """(ints (nc, 3), floats (nc, 24), row labels) of KernelForm for a tuple of Constraint."""
-    nc = len(constraints)
-    ints, floats, labels = np.zeros((nc, 3), np.int64), np.zeros((nc, 24)), []
-    for k, c in enumerate(constraints):
-        if c.type == "coupling":
-            ints[k], floats[k, 0] = (c.parent, c.child, -1), c.ratio
-            labels.append(f"{c.name}.c")
-            continue
-        pairs = orientation_pairs(c)
-        ints[k] = c.parent, c.child, len(pairs)
-        floats[k, :3], floats[k, 3:6] = c.pp, c.pc
-        for m, (a, b) in enumerate(pairs):
-            floats[k, 6 + 3 * m:9 + 3 * m], floats[k, 15 + 3 * m:18 + 3 * m] = a, b
-        labels += [f"{c.name}.{x}" for x in ("x", "y", "z")] + [f"{c.name}.r{m + 1}" for m in range(len(pairs))]
-    return ints, floats, tuple(labels)

@@ -24,7 +24,7 @@ import numpy as np
 from .configuration import check_quaternions
 from .constraints import constrained_forward_dynamics, project
 from .dynamics.aba import forward_dynamics, passive_torques
-from .dynamics.state import as_batch, as_real, check_finite, check_scalar
+from .dynamics.arguments import as_batch, as_real, check_finite, check_scalar
 from .errors import DivergenceError, InputError, NumericalError
 from .joints import BALL, FREEFLYER, PLANAR, motion_subspace, quat_rotation
 

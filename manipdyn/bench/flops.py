@@ -77,16 +77,16 @@ def _objects(x, flop=False):
 def _count(model):
     """{rnea, aba, mass_matrix: flops per state} of the lane kernels on one block of the model's states."""
     from .. import _jit, spatial
-    from ..dynamics import aba, core, crba, rnea
+    from ..dynamics import aba, crba, kernel_inputs, lanes, rnea
     from ..validation import random_states
     if not _jit.NOJIT:
         raise RuntimeError("the flop count runs the kernels as Python: set MANIPDYN_NOJIT=1")
-    L = core.LANES
+    L = lanes.LANES
     I, F = model.kernel.lane_arrays                 # the form the batch routes pass (z-aligned frames)
     F = _objects(F)
     Q, V, A = (_objects(x, flop=True) for x in random_states(model, L, np.random.default_rng(0)))
     X, xb, xp = F[:1, :0, :], I[0, :0], F[0, :0, :]
-    mods = (aba, core, crba, rnea, spatial)
+    mods = (aba, crba, kernel_inputs, lanes, rnea, spatial)
     saved = [m.np for m in mods]
     for m in mods:
         m.np = _Numpy()

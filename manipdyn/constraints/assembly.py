@@ -18,9 +18,9 @@ import numpy as np
 
 from ..configuration import check_quaternions, integrate
 from ..dynamics.crba import mass_matrix
-from ..dynamics.state import as_batch, as_real, check_finite, check_output, check_scalar, quiet
+from ..dynamics.arguments import as_batch, as_real, check_finite, check_output, check_scalar, quiet
 from ..errors import ConstraintError, InputError, SingularError
-from ..model import FREEFLYER, PRISMATIC
+from ..joints import FREEFLYER, PRISMATIC
 from .closures import RANK_RTOL, _closure_terms, independent_rows, row_labels
 from .dynamics import actuation, dofs, moving_dofs
 

@@ -1,5 +1,5 @@
 """Loop-closure kinematics: Φ(q), the constraint Jacobian Φ_q and the bias Φ̇_q q̇, exact — one compiled
-source (``closure_rows``) on the one forward kinematics (core.fk_pass) and the frame Jacobians of
+source (``closure_rows``) on the one forward kinematics (forward_kinematics.fk_pass) and the frame Jacobians of
 kinematics.py, used by ``closure_terms`` and by the closed-chain KKT kernel (constraints/fast.py).
 
 For a closure between frame A (on the parent body) and frame B (on the child body), world coordinates:
@@ -23,11 +23,13 @@ import numba
 import numpy as np
 
 from .._jit import A2, A3, MODEL, entry, njit
-from ..dynamics.core import fk_pass, kernel_arrays, nonfinite_input, unpack
+from ..dynamics.forward_kinematics import fk_pass
+from ..dynamics.kernel_inputs import nonfinite_input
+from ..dynamics.model_arrays import kernel_arrays, unpack
 from ..spatial import cross3, rot3
 from ..dynamics.kinematics import body_point, point_jacobian, point_jacobian_dot, point_velocity
-from ..dynamics.state import (as_batch, as_real, check_finite, check_model, check_output, quiet,
-                              raise_kernel_error, unbatch)
+from ..dynamics.arguments import (as_batch, as_real, check_finite, check_model, check_output, quiet, raise_kernel_error,
+                                  unbatch)
 from ..errors import InputError
 
 
@@ -44,7 +46,7 @@ def n_rows(model) -> int:
 
 def closure_arrays(model):
     """Closures in kernel form (``model.kernel``): ints CI (nc, 3) = [parent, child, n_pairs], floats
-    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, model.orientation_pairs); a coupling has
+    CF (nc, 24) = [pp, pc, a_1..a_3, b_1..b_3] (orientation pairs, kernel_form.orientation_pairs); a coupling has
     n_pairs = −1 and CF[k, 0] = its ratio."""
     return model.kernel.closure_ints, model.kernel.closure_floats
 

@@ -15,7 +15,8 @@ import numpy as np
 
 from ..dynamics.crba import mass_matrix
 from ..dynamics.rnea import rnea
-from ..dynamics.state import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, fast, check_scalar, joint_indices, unbatch)
+from ..dynamics.arguments import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, check_scalar,
+                                  fast, joint_indices, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
 from ..joints import FREEFLYER
 from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels

@@ -8,7 +8,8 @@ import numba
 import numpy as np
 
 from .._jit import A2, I1, MODEL, entry, njit
-from ..dynamics.core import kernel_arrays, no_wrenches, nonfinite_input
+from ..dynamics.kernel_inputs import no_wrenches, nonfinite_input
+from ..dynamics.model_arrays import kernel_arrays
 from ..spatial import cholesky, cholesky_solve, first_nonfinite
 from ..dynamics.crba import crba_kernel
 from ..dynamics.rnea import rnea_kernel
@@ -19,7 +20,7 @@ from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, clo
 @njit(cache=True)
 def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
-    (I, F): core.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
+    (I, F): model_arrays.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
     Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite, -3 if
     G M⁻¹ Gᵀ is not (the kept rows G are dependent to working precision)."""
     N, nq, nv = Q.shape[0], Q.shape[1], V.shape[1]

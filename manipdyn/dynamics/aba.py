@@ -21,7 +21,7 @@ With (R, p) body i's placement in its parent λ (x_λ = R x_i + p, ``core``):
 Gravity enters as the base acceleration a_0 = −a_g = [−g; 0] (RBDA §5.3, docs/design.md §6).
 
 External wrenches enter inside the kernel (Table 7.1: p^A_i = v_i ×* I_i v_i − f^x_i, f^x_i in body
-coordinates), as ``state.wrench_rows`` lays them out: one row per named frame (body, the frame's origin in
+coordinates), as ``arguments.wrench_rows`` lays them out: one row per named frame (body, the frame's origin in
 it, [force; moment about that origin] in body axes, or in world axes which the kernel turns into the body's).
 
 ``forward_dynamics(..., method="cholesky")``: the M⁻¹ route, Cholesky of M (CRBA) with the right-hand side
@@ -41,10 +41,11 @@ from . import mimic
 from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite,
                        force_cross, force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up,
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
-from .core import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                   motion_model, multi_rates, no_wrenches, on_lanes, placement_lanes,
-                   quat_placement_lanes, scatter_lanes, set3, set6, shift_code,
-                   tree_depth, unpack, wrench_rows_of)
+from .kernel_inputs import no_wrenches, wrench_rows_of
+from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
+                    motion_model, multi_rates, on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3,
+                    set6, shift_code, tree_depth)
+from .model_arrays import unpack
 from .crba import crba, crba_kernel, crba_lanes
 from .rnea import rnea, rnea_kernel, rnea_lanes
 from .route import route
@@ -85,9 +86,9 @@ def singular_threshold(inertia, mass):
 @njit(cache=True, fastmath=False)              # as derivatives.py (its note)
 def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
-    on body (K,) about point (K, 3), in world axes if ``world`` (``state.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
+    on body (K,) about point (K, 3), in world axes if ``world`` (``arguments.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
     -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
-    (state.raise_kernel_error)."""
+    (arguments.raise_kernel_error)."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
@@ -274,9 +275,9 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 # -- the lane kernel: the three passes across a block of states ------------------------------------------------
 # As rnea's lane kernel (docs/design.md §4c): a batch runs as blocks of LANES states, the state index last, and every
 # innermost loop runs over a block's lanes. A body's record (ARTICULATED rows of LANES numbers): R^λ_i (9) and p (3)
-# (core.placement_lanes), v_i, c_i (6 each), I^A_i (21: the blocks of [[C, Bᵀ], [B, A]] as spatial.inertia_up names
-# them — C and A as core.get_sym3 stores a symmetric 3×3, B row-major), p^A_i (6), U_i (6), D_i, u_i, a_i (6); two
-# arrays by depth parity (core.lane_record). A free flyer or a ball joint (n velocities, S = [0; 1_n]) keeps its pass-2
+# (lanes.placement_lanes), v_i, c_i (6 each), I^A_i (21: the blocks of [[C, Bᵀ], [B, A]] as spatial.inertia_up names
+# them — C and A as lanes.get_sym3 stores a symmetric 3×3, B row-major), p^A_i (6), U_i (6), D_i, u_i, a_i (6); two
+# arrays by depth parity (lanes.lane_record). A free flyer or a ball joint (n velocities, S = [0; 1_n]) keeps its pass-2
 # factors in a record of its own (MULTI rows, ``articulated_multi``).
 _V, _C, _IA, _IB, _IAA, _PA, _U, _D, _A = 12, 18, 24, 30, 39, 45, 51, 57, 59      # first rows: v, c, I^A (C, B, A),
 ARTICULATED = 65                                                              # p^A, U, D (then u), a
@@ -287,9 +288,9 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     """``aba_kernel``'s q̈ (and code) for a batch, block by block across lanes: the batch entry of aba.
 
     Runs ``aba_kernel`` itself for external wrenches and for a model with a joint the lanes do not take
-    (``core.on_lanes``), and
+    (``lanes.on_lanes``), and
     for a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` (its code
-    then names the joint or the entry; a bad input's code is ≥ 0, and ``state.raise_kernel_error`` names it from
+    then names the joint or the entry; a bad input's code is ≥ 0, and ``arguments.raise_kernel_error`` names it from
     the inputs). Agrees with the one-state kernel to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
     if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
@@ -402,7 +403,7 @@ def velocity_lane(mm, B, par, Z, l, L):
 
 @njit(cache=True, inline="always")
 def velocity_multi_lane(mm, B, par, Z, l, L):
-    """``velocity_lane`` for a free flyer or a ball joint: v_J = S q̇ (``core.multi_rates``)."""
+    """``velocity_lane`` for a free flyer or a ball joint: v_J = S q̇ (``lanes.multi_rates``)."""
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
     vl, va = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ v_λ
     jl, ja = multi_rates(mm, Z, mm[3], l, L)
@@ -485,7 +486,7 @@ def tri(r, c):
 
 @njit(cache=True, inline="always")
 def inertia_row(a, b):
-    """The record row that holds I^A's entry (a, b), a ≥ b, of [[C, Bᵀ], [B, A]] (C, A: core.get_sym3's order)."""
+    """The record row that holds I^A's entry (a, b), a ≥ b, of [[C, Bᵀ], [B, A]] (C, A: lanes.get_sym3's order)."""
     if b >= 3:
         return _IAA + (a - 3 if a == b else a - 3 + b - 3 + 2)
     if a >= 3:
@@ -718,7 +719,7 @@ def aba_one(I, F, q, v, tau, out):
 
 @njit(cache=True)
 def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
-    """One state with one external wrench in ``state.fast_wrenches``' form: aba_kernel with N = 1."""
+    """One state with one external wrench in ``arguments.fast_wrenches``' form: aba_kernel with N = 1."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                       out[np.newaxis, :])
@@ -792,7 +793,7 @@ def cholesky_one(I, F, q, v, tau, out):
 
 @njit(cache=True)
 def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
-    """One state with one external wrench in ``state.fast_wrenches``' form: cholesky_states with N = 1, scalar."""
+    """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1, scalar."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], False)

@@ -28,7 +28,9 @@ import numpy as np
 
 from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..spatial import add_force_cross, dot6, first_nonfinite_entry, force_cross, motion_cross, row6, sandwich3
-from .core import fk_pass, nonfinite_input, unpack
+from .forward_kinematics import fk_pass
+from .kernel_inputs import nonfinite_input
+from .model_arrays import unpack
 from .route import route
 
 
@@ -45,7 +47,7 @@ def coriolis_kernel(I, F, Q, V, C):
     Ic, Bc, J, dJ = M6[:nb], M6[nb:], B6[:nv], B6[nv:]
 
     def bodies(q, v):
-        """Outward: forward kinematics (core.fk_pass); each body's velocity v_i about the world origin
+        """Outward: forward kinematics (forward_kinematics.fk_pass); each body's velocity v_i about the world origin
         (v_P + p × ω), its columns J_r = [R l + p × R a; R a] and J̇_r = v_i × J_r, its spatial inertia I_i about
         the world origin and B_i = ½ (v ×* I − I v× + (I v) ×̄) (E&W Eq. 22). I is symmetric and (v×)ᵀ = −v×*,
         so −I v× = (v ×* I)ᵀ: B = ½ (Z + Zᵀ + h ×̄) with Z = v ×* I (column by column), h = I v, and

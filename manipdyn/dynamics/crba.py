@@ -14,7 +14,7 @@ M[rows of i, r] = S_iᵀ F; carried to each ancestor (f ← R f, n ← R n + p �
 Eqs. 15–16), M[rows of k, r] = S_kᵀ F; M is symmetric and bodies on different branches do not couple.
 A free-flyer root has S = 1₆: its six columns are the composite's momenta of a unit body twist.
 
-Kernel convention (dynamics/state.py): Q (N, nq), M (N, nv, nv); return −1, the flat index of the first
+Kernel convention (dynamics/arguments.py): Q (N, nq), M (N, nv, nv); return −1, the flat index of the first
 non-finite q, or −2 − nb − k for the first non-finite entry k (flat) of M (an intermediate overflowed).
 """
 from __future__ import annotations
@@ -28,9 +28,9 @@ from ..model import MimicModel
 from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
-from .core import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
-                   quat_placement_lanes,
-                   shift_code, tree_depth, unpack)
+from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
+                    quat_placement_lanes, shift_code, tree_depth)
+from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
 
@@ -58,7 +58,7 @@ def merge_weights(parent, mass, mC, W):
 def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
     """Pass 1: placements (R, p)[i] of every body in its parent (joints.joint_placement), then the
     composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
-    carried as centre of mass and inertia about it). arrays = core.unpack(I, F); W from merge_weights."""
+    carried as centre of mass and inertia about it). arrays = model_arrays.unpack(I, F); W from merge_weights."""
     parent, kind, iq, axis, R0, p0 = arrays.parent, arrays.kind, arrays.iq, arrays.axis, arrays.R0, arrays.p0
     pitch = arrays.pitch
     com, inertia = arrays.com, arrays.inertia
@@ -136,8 +136,8 @@ def crba_one(I, F, q, M):
 # -- the lane kernel: the same two passes across a block of states ----------------------------------------------
 # As rnea's lane kernel (docs/design.md §4c): a batch runs as blocks of LANES states, the state index last, and every
 # innermost loop runs over a block's lanes. A body's record (COMPOSITE rows of LANES numbers): R^{λ}_i (9, row-major)
-# and p (3) from core.placement_lanes, then the composite's centre of mass c (3) and its inertia about it I_c
-# (6: xx, yy, zz, xy, xz, yz). Records live in two arrays by the parity of the body's depth (core.lane_record):
+# and p (3) from lanes.placement_lanes, then the composite's centre of mass c (3) and its inertia about it I_c
+# (6: xx, yy, zz, xy, xz, yz). Records live in two arrays by the parity of the body's depth (lanes.lane_record):
 # a merge reads a child's record and writes its parent's, in the other array.
 COMPOSITE = 21
 
@@ -145,7 +145,7 @@ COMPOSITE = 21
 @njit(cache=True, fastmath=CONTRACT)
 def crba_lanes(I, F, Q, M):
     """``crba_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of
-    mass_matrix. A model with a joint the lanes do not take (``core.on_lanes``) runs ``crba_kernel``; so does a
+    mass_matrix. A model with a joint the lanes do not take (``lanes.on_lanes``) runs ``crba_kernel``; so does a
     block with a non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
     if not on_lanes(unpack(I, F), nq, True):
@@ -191,7 +191,7 @@ def crba_lanes(I, F, Q, M):
 
 @njit(cache=True, fastmath=CONTRACT)
 def quat_composite_lanes(i, mdl, B, Z):
-    """Pass 1 for a free flyer or a ball joint: its quaternion placement (core.quat_placement_lanes), its own inertia
+    """Pass 1 for a free flyer or a ball joint: its quaternion placement (lanes.quat_placement_lanes), its own inertia
     (a function of its own, as rnea.outward_multi_lanes: the screw joints' loops compile as they would alone)."""
     quat_placement_lanes(i, mdl, B, Z)
     own_inertia_lanes(i, mdl, B)

@@ -24,7 +24,7 @@ these give, for j ⪯ i (j an ancestor of i or i itself):
 The q-derivative is taken in the tangent space, as Pinocchio's: joint j moves to q ⊕ δ_j (``integrate``), so
 a free-flyer root's six columns are body-frame twists and every matrix is (nv, nv).
 
-External wrenches (``state.wrench_rows``): a wrench fixed in the body ("local": constant in body axes, as
+External wrenches (``arguments.wrench_rows``): a wrench fixed in the body ("local": constant in body axes, as
 Pinocchio's ``fext``) turns with the body, so −f^ext sits in f_i and its derivative is the rigid-motion term
 J ×* F above. A wrench fixed in world axes ("world") about a point p fixed in the body keeps its direction:
 its derivative lacks the turning of the wrench about p, R_j ×* f^ext with R_j = [p × ω_j; ω_j] (ω_j the
@@ -49,15 +49,9 @@ from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, i
                        spd_inverse, world_inertia, world_motion)
 from .aba import aba_kernel
 from .route import is_dask, lazy, run_chunks, thread_count
-from .core import finite_state, kernel_arrays, no_wrenches, unpack
-from .state import (
-    as_batch,
-    fast_shape,
-    raise_kernel_error,
-    raise_output_error,
-    unbatch,
-    wrench_rows,
-)
+from .kernel_inputs import finite_state, no_wrenches
+from .model_arrays import kernel_arrays, unpack
+from .arguments import as_batch, fast_shape, raise_kernel_error, raise_output_error, unbatch, wrench_rows
 
 _QVA, _QVT = ("q", "v", "a"), ("q", "v", "tau")
 OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "dqdd_dtau")
@@ -80,7 +74,7 @@ def first_nonfinite3(D, s):
 @njit(cache=True, fastmath=False)
 def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ (N, nv, nv) into dq, dv, da for every state of Q (N, nq), V, A (N, nv), with the
-    external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``state.wrench_rows``; body axes,
+    external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``arguments.wrench_rows``; body axes,
     or world axes with ``world``). Returns -1; ≥ 0 a non-finite input (its state); −2 − nb − k a non-finite
     result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
     mdl = unpack(I, F)

@@ -1,5 +1,5 @@
 """Energies, from the links' motion (not from M): the physical laws the tests check the dynamics against.
-Both read the one forward kinematics (core.fk_pass), compiled, for any joint type:
+Both read the one forward kinematics (forward_kinematics.fk_pass), compiled, for any joint type:
 
     T = Σ_links ½ m |v_C|² + ½ ω'ᵀ I ω',   v_C = v_o + ω × R c (world),  ω' = Rᵀ ω (body axes)
     V = −Σ_links m gᵀ c_world  (= Σ m (−g)ᵀ c_world)
@@ -9,13 +9,15 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import A1, A2, MODEL, entry, njit
-from .core import fk_pass, kernel_arrays, nonfinite_input, unpack
-from .state import as_batch, fast, fast_shape, raise_kernel_error
+from .forward_kinematics import fk_pass
+from .kernel_inputs import nonfinite_input
+from .model_arrays import kernel_arrays, unpack
+from .arguments import as_batch, fast, fast_shape, raise_kernel_error
 
 
 @njit(cache=True, inline="always")
 def energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
-    """T of one state (v (nv,)) or V (v with no entries: potential energy); Rl … vw are core.fk_pass's
+    """T of one state (v (nv,)) or V (v with no entries: potential energy); Rl … vw are forward_kinematics.fk_pass's
     scratch arrays. Non-finite input gives a non-finite energy."""
     mass, com, inertia, mg = mdl.mass, mdl.com, mdl.inertia, mdl.mg
     fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw)

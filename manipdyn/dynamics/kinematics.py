@@ -1,5 +1,5 @@
 """Frame placements, geometric Jacobians and their time derivatives, for any tree and joint type — read
-off the one forward kinematics (core.fk_pass), compiled.
+off the one forward kinematics (forward_kinematics.fk_pass), compiled.
 
 Jacobian rows are [linear; angular] as in Pinocchio. Two references:
 - ``"local_world_aligned"`` (default): world-aligned axes at the frame's origin (Pinocchio's
@@ -26,9 +26,12 @@ from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
 from ..spatial import (SINCOS_MAX, add, compose, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6,
                        sandwich3, sub)
-from .core import (LANES, fk_pass, fk_path, gather_lanes, get3, get_rotation, kernel_arrays, lane_record,
-                   nonfinite_input, on_lanes, placement_lanes, set3, shift_code, tree_depth, unpack)
-from .state import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
+from .forward_kinematics import fk_pass, fk_path
+from .kernel_inputs import nonfinite_input
+from .lanes import (LANES, gather_lanes, get3, get_rotation, lane_record, on_lanes, placement_lanes, set3, shift_code,
+                    tree_depth)
+from .model_arrays import kernel_arrays, unpack
+from .arguments import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
 
 REFERENCES = ("local_world_aligned", "local")
 
@@ -55,7 +58,7 @@ def point_jacobian(parent, iv, nvj, S, b, Rw, pw, x, J):
 @njit(cache=True, inline="always")
 def point_jacobian_dot(parent, iv, nvj, S, b, Rw, pw, ww, vw, x, xd, dJ):
     """J̇ (6, nv) of point_jacobian along the motion: ω_j = ww[j], ȯ_j = vw[j] (world angular velocity of
-    body j and velocity of its origin, core.fk_pass), ẋ = xd; column [l̇ + ȧ × (x − o_j) + a × (ẋ − ȯ_j); ȧ]
+    body j and velocity of its origin, forward_kinematics.fk_pass), ẋ = xd; column [l̇ + ȧ × (x − o_j) + a × (ẋ − ȯ_j); ȧ]
     with ȧ = ω_j × a, l̇ = ω_j × l."""
     dJ[:, :] = 0.0
     j = b
@@ -146,7 +149,7 @@ def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
 
 # -- the lane kernel: placements and Jacobians across a block of states ------------------------------------------
 # As the dynamics' lane kernels (docs/design.md §4c): blocks of LANES states, the state index last, steps and a
-# driver. A path body's record (WORLD rows of LANES numbers): R, p in its parent (core.placement_lane), then its
+# driver. A path body's record (WORLD rows of LANES numbers): R, p in its parent (lanes.placement_lane), then its
 # world placement Rw (9), pw (3); two arrays by depth parity. The frame's block: Rf (9), pf (3); J's block: 6 × nv
 # rows (row-major).
 WORLD = 24
@@ -208,7 +211,7 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
 
 @njit(cache=True, fastmath=CONTRACT)
 def world_lanes(i, mdl, B, P, Z):
-    """Body i's placement in its parent (``core.placement_lane``), then ``world_lane``, every lane of the block."""
+    """Body i's placement in its parent (``lanes.placement_lane``), then ``world_lane``, every lane of the block."""
     placement_lanes(i, mdl, B, Z)
     for l in range(LANES):
         world_lane(B, P, l, LANES)
@@ -217,7 +220,7 @@ def world_lanes(i, mdl, B, P, Z):
 @njit(cache=True, inline="always")
 def world_lane(B, P, l, L):
     """At lane l: a body's world placement Rw = Rw_λ R, pw = pw_λ + Rw_λ p (rows 12–23 of B) from its parent's (P)
-    and its own in the parent (rows 0–11) (``core.fk_place``)."""
+    and its own in the parent (rows 0–11) (``forward_kinematics.fk_place``)."""
     Rw, pw = compose((get3(P, 12, l, L), get3(P, 15, l, L), get3(P, 18, l, L)), get3(P, 21, l, L),
                      get_rotation(B, l, L), get3(B, 9, l, L))
     set3(B, 12, l, L, Rw[0])

@@ -22,9 +22,10 @@ import numpy as np
 from .._jit import njit
 from ..joints import motion_subspace
 from ..spatial import first_nonfinite, first_nonfinite_entry, sandwich3, skew
-from .core import fk_pass, kernel_arrays, unpack
+from .forward_kinematics import fk_pass
+from .model_arrays import kernel_arrays, unpack
 from .kinematics import body_point, com_jacobians, point_jacobian, supports
-from .state import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
+from .arguments import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
 
 __all__ = ["lagrange_mass_matrix", "christoffel_coriolis", "mass_matrix_derivatives"]
 

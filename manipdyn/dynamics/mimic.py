@@ -8,7 +8,7 @@ Independent coordinates follow Pinocchio's mimic model: the full q order with th
 
 ``TAKES_MIMIC`` is the one list of the public calls that take a MimicModel: each of them sends it here, handing
 over the full-model function the map is built on (so that this module imports no algorithm); every other call
-refuses a MimicModel with a message naming these (``state.check_model``): give it ``mm.full`` and
+refuses a MimicModel with a message naming these (``arguments.check_model``): give it ``mm.full`` and
 ``mm.full_state(q, v, a)``.
 """
 from __future__ import annotations

@@ -44,14 +44,11 @@ import numpy as np
 from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..errors import InputError
 from ..spatial import first_nonfinite_entry, motion_to_child
-from .core import finite_state, unpack
+from .kernel_inputs import finite_state
+from .model_arrays import unpack
 from .rnea import outward, rnea_workspace
 from .route import route
-from .state import (
-    as_real,
-    check_finite,
-    check_model,
-)
+from .arguments import as_real, check_finite, check_model
 
 NP = 10                                          # dynamic parameters per body
 PARAMETER_NAMES = ("m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
@@ -119,7 +116,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     """Y[s] = [(ⁱX_j S_j)ᵀ A_i]_{j, i} for every state s: the outward pass, then each body's block A_i
     projected onto its own and its ancestors' motion subspaces (module docstring).
 
-    I, F: the model in core form (``core.kernel_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb) result.
+    I, F: the model in core form (``model_arrays.kernel_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb) result.
     Returns -1, ≥ 0 for a non-finite input (state index), or −2 − nb − k for a non-finite entry at flat
     index k of Y.
     """

@@ -20,7 +20,7 @@ qx qy qz qw], v = [linear; angular] in the body frame) is the same recursion: it
 [f'; n'] the root body needs, in its own frame about its origin.
 
 External wrenches (f_ext = {frame: (force, moment)}: what the environment applies on that body, about the
-frame's origin, in the frame's axes or in world axes) reach the kernel as rows (``state.wrench_rows``): the
+frame's origin, in the frame's axes or in world axes) reach the kernel as rows (``arguments.wrench_rows``): the
 wrench (N, K, 6) = [force; moment] in body axes ("local") or world axes ("world": the kernel turns it into the
 body with the orientation it accumulates in the same outward pass), the body (K,) and the frame's origin in
 body axes (K, 3), about which the moment is taken.
@@ -35,12 +35,12 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
-from .core import (LANES, finite_state, gather_lanes, get3, get_rotation, inertial_model, kernel_arrays, lane_record,
-                   motion_model, multi_rates, no_wrenches, on_lanes, placement_lanes,
-                   quat_placement_lanes, scatter_lanes, set3, shift_code, tree_depth,
-                   unpack, wrench_rows_of)
+from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
+from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record, motion_model, multi_rates,
+                    on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3, shift_code, tree_depth)
+from .model_arrays import kernel_arrays, unpack
 from .route import route
-from .state import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
+from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -105,7 +105,7 @@ def rnea_one(I, F, q, v, a, tau):
 
 @njit(cache=True)
 def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
-    """τ (nv,) of one state with one external wrench in ``state.fast_wrenches``' form: ``rnea_kernel``, N = 1."""
+    """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form: ``rnea_kernel``, N = 1."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
                        tau[np.newaxis, :], F[:0, :, :])
@@ -159,7 +159,7 @@ def rnea_workspace(nb):
 def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
 
-    I, F: the model in core form (``core.kernel_arrays``); Q (N, nq), V, A (N, nv); X (N, K, 6) external
+    I, F: the model in core form (``model_arrays.kernel_arrays``); Q (N, nq), V, A (N, nv); X (N, K, 6) external
     wrenches [force; moment about xp[k]] on bodies xb (K,) int, in body axes (world=False) or world axes
     (world=True), K = 0 for none; tau (N, nv) result; T (N, nb, NT) per-link terms (TERMS, then R), or an
     array with no rows to skip them. The bodies' world orientations are accumulated only when world
@@ -186,7 +186,7 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
 
 # -- the lane kernel: the same recursion across a block of states ------------------------------------------------
-# A batch runs as blocks of LANES states (core.gather_lanes: the state index last). For each body, one loop over
+# A batch runs as blocks of LANES states (lanes.gather_lanes: the state index last). For each body, one loop over
 # the block's lanes does what ``outward`` does for one state, and the compiler turns it into vector instructions
 # (4 states per instruction with AVX2); ``sincos`` replaces libm's sin and cos, which would keep it scalar.
 # A body's record (RECORD rows of LANES numbers): R^{i−1}_i (9, row-major), p^{i−1}_i (3), ω'_i, ω̇'_i, v̇'_i,
@@ -203,7 +203,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
     External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
     itself for what the lanes do not cover — per-link terms, a joint other than a screw joint, a free flyer or a
-    ball (``core.on_lanes``) — and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
+    ball (``lanes.on_lanes``) — and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
     then names the state or entry, as the one-state form's does).
     Every lane is computed alone, so a state's τ does not depend on the batch around it; it agrees with the
     one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
@@ -258,7 +258,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
 def outward_lanes(i, mdl, B, par, Z, nq):
     """Body i's record B for every lane of the block (Eqs. 3–14, as ``outward`` and ``inertial`` for one state):
     its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'; the base's for a root), then
-    f'_i = m v̇'_C and n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (core.gather_lanes; nq rows of
+    f'_i = m v̇'_C and n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (lanes.gather_lanes; nq rows of
     q). Three loops, not one: the model's numbers that each needs fit in the vector registers (one loop spilled
     them: 13.7 → 11.5 ns per lane)."""
     placement_lanes(i, mdl, B, Z)

@@ -3,22 +3,22 @@
 A public algorithm that maps states to one array per state (``rnea``, the bias forces, ``aba``, the Cholesky
 route, the CRBA, the Coriolis matrix, the regressor) is its signature and docstring under ``@route(...)``, the
 declaration of its path: the compiled entries that compute it (``_jit.entry``: one state, a batch), the names of
-its state arguments (``q…`` has nq entries, every other name nv: ``state.is_config``), the name and shape of one
+its state arguments (``q…`` has nq entries, every other name nv: ``arguments.is_config``), the name and shape of one
 state's result, whether it takes external wrenches, and how a MimicModel maps onto it. The path, the same for
 every such call (docs/design.md §2):
 
-  1. one float64 state of a plain Model (``state.fast``): the one-state entry, no checks in Python — the
+  1. one float64 state of a plain Model (``arguments.fast``): the one-state entry, no checks in Python — the
      kernel checks finiteness itself and returns a code;
   2. one state with one wrench {frame: (force (3,), moment (3,))} of float64 arrays: the one-state wrench entry;
-  3. float64 batches of the model's shapes (``state.fast_shape``): the batch entry;
+  3. float64 batches of the model's shapes (``arguments.fast_shape``): the batch entry;
   4. a MimicModel: the route's map onto the full model (``dynamics/mimic.py``; the calls that have one are
      ``mimic.TAKES_MIMIC``, every other refuses it by name);
-  5. anything else: ``state.as_batch``'s checks and conversions (an error names the argument), the wrenches
-     checked and laid out (``state.wrench_rows``), then the batch entry (one state without wrenches: the
+  5. anything else: ``arguments.as_batch``'s checks and conversions (an error names the argument), the wrenches
+     checked and laid out (``arguments.wrench_rows``), then the batch entry (one state without wrenches: the
      one-state entry, so that a state's numbers do not depend on its dtype) — except Dask arrays of states
      (N, n): a Dask array of the results comes back, each chunk of rows a batch of this call computed when
      asked, on the scheduler's workers (``Route.lazy``; the Dask extra);
-  6. a kernel code other than −1: ``state.raise_kernel_error``, the typed error naming the input, the joint or
+  6. a kernel code other than −1: ``arguments.raise_kernel_error``, the typed error naming the input, the joint or
      the result entry at fault.
 
 A batch of N ≥ 2 · MIN_CHUNK states is cut into contiguous chunks, one per thread (``threads``, default: every
@@ -42,11 +42,11 @@ import numpy as np
 from ..errors import InputError, ManipdynError
 from ..extras import require
 from ..model import MimicModel, Model
-from .state import (as_batch, check_f_ext, fast, fast_shape, fast_wrenches, is_config, raise_kernel_error, unbatch,
-                    wrench_rows)
+from .arguments import (as_batch, check_f_ext, fast, fast_shape, fast_wrenches, is_config, raise_kernel_error, unbatch,
+                        wrench_rows)
 
 
-_MISSING = NotImplemented      # a state argument the call was not given (state.fast's sentinel too)
+_MISSING = NotImplemented      # a state argument the call was not given (arguments.fast's sentinel too)
 SHAPES = ("v", "vv", "regressor")   # one state's result: (nv,), (nv, nv), (nv, 10 nb) — Model.kernel.result_shapes
 CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 MIN_CHUNK = 128     # states per thread at least (on average): a thread's start and join cost ~20 µs, 128 ABA states ~80 µs
@@ -218,7 +218,7 @@ class Route:
     one       entry of the one-state kernel: one(I, F, *state, out)
     batch     entry of the batch kernel: batch(I, F, *states, [X, body, point, world,] out, *tail)
     tail      constant arguments after out (rnea's empty per-link terms)
-    wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``state.wrench_rows``
+    wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``arguments.wrench_rows``
     wrench_one  entry for one state with one wrench: (I, F, *state, force, moment, row, world, out)
     mimic     mimic(model, *states, **wrench keywords) for a MimicModel, or None (refused, by name)
     lanes     True: the batch entry is a lane kernel, which takes the model in z-aligned frames

@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 
 from ..errors import ManipdynError
-from .urdf import MAX_BYTES, _parse_xml
+from .safe_xml import MAX_BYTES, parse_xml
 
 __all__ = ["load_model", "robot_format"]
 
@@ -19,7 +19,7 @@ def robot_format(path, max_bytes=MAX_BYTES) -> str:
         data = fh.read(max_bytes + 1)
     if len(data) > max_bytes:
         raise ManipdynError(f"{path}: larger than the size limit of {max_bytes} bytes (pass max_bytes=...)")
-    tag = _parse_xml(data, path, None, root_tag=None, error=ManipdynError).tag
+    tag = parse_xml(data, path, None, root_tag=None, error=ManipdynError).tag
     if tag not in ("robot", "mujoco"):
         raise ManipdynError(f"{path}: root element <{tag}>: neither URDF (<robot>) nor MJCF (<mujoco>)")
     return "urdf" if tag == "robot" else "mjcf"

@@ -43,8 +43,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import ModelError
-from ..joints import KINDS
-from ..model import BALL, FREEFLYER, PRISMATIC, MimicModel
+from ..joints import BALL, FREEFLYER, KINDS, PRISMATIC
+from ..model import MimicModel
 
 __all__ = ["to_mjcf", "REVOLUTE_ARM", "EQ_SOLREF", "EQ_SOLIMP"]
 

@@ -1,6 +1,6 @@
 """MJCF (MuJoCo's XML) -> Model: the reader (``io/mjcf.py`` is the writer). Open kinematic trees and their closures.
 
-What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's grammar, ``urdf._NUMBER``):
+What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's grammar, ``safe_xml.NUMBER``):
 
 - ``<compiler angle="degree|radian" eulerseq inertiafromgeom="true|false|auto" autolimits inertiagrouprange>``
   (every ``<compiler>`` element, in file order); ``<option gravity>`` and ``<flag gravity="disable">`` (unless
@@ -59,7 +59,7 @@ Read and applied: a joint's ``armature``, ``damping``, ``frictionloss`` (≥ 0) 
 ``damping`` and ``friction`` of each of its velocities (docs/design.md §3, Joint dynamics: M + diag(armature) as
 MuJoCo; damping and friction as joint torques in forward dynamics and simulation, friction regularised by tanh where
 MuJoCo's frictionloss is a soft constraint of its solver). A ``joint_dynamics=`` keyword sets or overrides them.
-Read with a quirk (model.QUIRK_KINDS): a joint's nonzero ``stiffness``, ``springref``, ``springdamper``
+Read with a quirk (quirks.QUIRK_KINDS): a joint's nonzero ``stiffness``, ``springref``, ``springdamper``
 ("joint_dynamics": not applied yet); a body's
 ``gravcomp``, a tendon's ``stiffness``/``damping`` and ``<option density viscosity wind>`` (fluid forces)
 ("passive_force": MuJoCo's mj_rne leaves them out too);
@@ -101,12 +101,12 @@ import os
 import numpy as np
 
 from ..errors import MJCFError, QuirkWarning
-from ..joints import NV
-from ..model import (BALL, FREEFLYER, PRISMATIC, QUIRK_KINDS, REVOLUTE, Constraint, Frame, Model, Quirk, check_gravity,
-                     with_joint_dynamics)
+from ..joints import BALL, FREEFLYER, NV, PRISMATIC, REVOLUTE
+from ..model import Constraint, Frame, Model, check_gravity, with_joint_dynamics
+from ..quirks import QUIRK_KINDS, Quirk
 from ..spatial import combine_inertias
-from .urdf import (MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, _LIST, _NUMBER, _SPACE, _check_psd, _parse_xml,
-                   _show, _triangle)
+from .safe_xml import LIST, MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, NUMBER, SPACE, parse_xml, show
+from .urdf import _check_psd, _triangle
 
 __all__ = ["load_mjcf", "load_mjcf_string", "MAX_BODIES", "MAX_INCLUDES", "MAX_INCLUDE_DEPTH"]
 
@@ -196,7 +196,7 @@ def load_mjcf_string(text, *, source="<string>", gravity=None, strict=False, max
     if len(data) > max_bytes:
         raise MJCFError(f"{source}: larger than the size limit of {max_bytes} bytes (pass max_bytes=... to raise it)")
     quirks = []
-    xml = _parse_xml(data, source, quirks, root_tag="mujoco", error=MJCFError)
+    xml = parse_xml(data, source, quirks, root_tag="mujoco", error=MJCFError)
     _expand_includes(xml, source, base_dir, max_bytes - len(data))
     reader = _Reader(xml, source, strict, zero_mass_inertia, quirks)
     g = reader.gravity() if gravity is None else check_gravity(gravity, source)
@@ -220,17 +220,17 @@ def _warn(model, source):
 def _confined(name, base_dir, source):
     """The real path of an <include file=...> inside base_dir; MJCFError for absolute paths and escapes."""
     if base_dir is None:
-        raise MJCFError(f"{source}: <include file={_show(name or '')}>: includes need a folder (load_mjcf of a file, "
+        raise MJCFError(f"{source}: <include file={show(name or '')}>: includes need a folder (load_mjcf of a file, "
                         f"or base_dir= for text)")
     if not name or "\x00" in name or os.path.isabs(name) or name.startswith(("/", "\\")) or ":" in name:
-        raise MJCFError(f"{source}: <include file={_show(name or '')}>: an absolute, URL or empty path is refused "
+        raise MJCFError(f"{source}: <include file={show(name or '')}>: an absolute, URL or empty path is refused "
                         f"(includes are relative to the model's folder)")
     base = os.path.realpath(base_dir)
     real = os.path.realpath(os.path.join(base, name))
     if os.path.commonpath([real, base]) != base or real == base:
-        raise MJCFError(f"{source}: <include file={_show(name)}>: resolves outside the model's folder {base!r}")
+        raise MJCFError(f"{source}: <include file={show(name)}>: resolves outside the model's folder {base!r}")
     if not os.path.isfile(real):
-        raise MJCFError(f"{source}: <include file={_show(name)}>: no such file in the model's folder")
+        raise MJCFError(f"{source}: <include file={show(name)}>: no such file in the model's folder")
     return real
 
 
@@ -245,16 +245,16 @@ def _expand_includes(xml, source, base_dir, budget):
         if count > MAX_INCLUDES:
             raise MJCFError(f"{source}: more than {MAX_INCLUDES} <include> elements")
         if depth > MAX_INCLUDE_DEPTH:
-            raise MJCFError(f"{source}: <include file={_show(inc.get('file') or '')}>: includes nested deeper "
+            raise MJCFError(f"{source}: <include file={show(inc.get('file') or '')}>: includes nested deeper "
                             f"than {MAX_INCLUDE_DEPTH}")
         path = _confined(inc.get("file"), base_dir, source)
         with open(path, "rb") as fh:
             data = fh.read(max(budget, 0) + 1)
         budget -= len(data)
         if budget < 0:
-            raise MJCFError(f"{source}: with <include file={_show(inc.get('file'))}> the model exceeds the size "
+            raise MJCFError(f"{source}: with <include file={show(inc.get('file'))}> the model exceeds the size "
                             f"limit (pass max_bytes=... to raise it)")
-        sub = _parse_xml(data, f"{source}: include {inc.get('file')!r}", None, root_tag="mujoco", error=MJCFError)
+        sub = parse_xml(data, f"{source}: include {inc.get('file')!r}", None, root_tag="mujoco", error=MJCFError)
         parent, at = inc.getparent(), inc.getparent().index(inc)
         parent.remove(inc)
         children = [c for c in sub if isinstance(c.tag, str)]
@@ -317,7 +317,7 @@ class _Reader:
             return
         for key in e.keys():
             if key not in _ATTRS[tag]:
-                detail = f"{where}: <{e.tag} {key}={_show(e.get(key))}>: not an MJCF attribute manipdyn knows; not read"
+                detail = f"{where}: <{e.tag} {key}={show(e.get(key))}>: not an MJCF attribute manipdyn knows; not read"
                 if self.strict:
                     raise MJCFError(f"{self.source}: {detail} (strict=True)")
                 self.quirks.append(Quirk("unknown_element", f"<{e.tag} {key}>", detail))
@@ -328,10 +328,10 @@ class _Reader:
         text = e.get(key) if text is None else text
         if text is None:
             return None
-        at = f"{self.source}: {where}: <{e.tag} {key}={_show(text)}>"
-        if not _LIST.fullmatch(text):
-            bad = next(t for t in _SPACE.split(text) if t and not _NUMBER.fullmatch(t))
-            raise MJCFError(f"{at}: {_show(bad, 30)} is not a number (plain decimal: sign, digits, fraction, "
+        at = f"{self.source}: {where}: <{e.tag} {key}={show(text)}>"
+        if not LIST.fullmatch(text):
+            bad = next(t for t in SPACE.split(text) if t and not NUMBER.fullmatch(t))
+            raise MJCFError(f"{at}: {show(bad, 30)} is not a number (plain decimal: sign, digits, fraction, "
                             f"exponent; no nan, inf, hex, '_' or non-ASCII digits)")
         x = [float(t) for t in text.split()]
         if len(x) not in counts:
@@ -342,7 +342,7 @@ class _Reader:
 
     def bounded(self, x, bound, what, e, key, where):
         if x is not None and np.any(np.abs(x) > bound):
-            raise MJCFError(f"{self.source}: {where}: <{e.tag} {key}={_show(e.get(key) or '')}>: {what} beyond the "
+            raise MJCFError(f"{self.source}: {where}: <{e.tag} {key}={show(e.get(key) or '')}>: {what} beyond the "
                             f"bound {bound:g}")
         return x
 
@@ -367,15 +367,15 @@ class _Reader:
         src = self.source
         angle = c.get("angle", "degree")
         if angle not in ("degree", "radian"):
-            raise MJCFError(f"{src}: <compiler angle={_show(angle)}>: expected degree or radian")
+            raise MJCFError(f"{src}: <compiler angle={show(angle)}>: expected degree or radian")
         self.deg = angle == "degree"
         seq = c.get("eulerseq", "xyz")
         if len(seq) != 3 or any(ch not in "xyzXYZ" for ch in seq):
-            raise MJCFError(f"{src}: <compiler eulerseq={_show(seq)}>: three of x, y, z, X, Y, Z")
+            raise MJCFError(f"{src}: <compiler eulerseq={show(seq)}>: three of x, y, z, X, Y, Z")
         self.seq = seq
         self.fromgeom = c.get("inertiafromgeom", "auto")
         if self.fromgeom not in ("true", "false", "auto"):
-            raise MJCFError(f"{src}: <compiler inertiafromgeom={_show(self.fromgeom)}>: expected true, false or auto")
+            raise MJCFError(f"{src}: <compiler inertiafromgeom={show(self.fromgeom)}>: expected true, false or auto")
         self.autolimits = c.get("autolimits", "true") == "true"
         self.alignfree = c.get("alignfree", "false")
         e = next(iter(self.xml.findall("compiler")), None)
@@ -387,11 +387,11 @@ class _Reader:
         if "settotalmass" in c:
             self.total = float(self.nums(e, "settotalmass", (1,), "compiler", c["settotalmass"])[0])
             if not 0 < self.total <= MAX_MASS:
-                raise MJCFError(f"{src}: <compiler settotalmass={_show(c['settotalmass'])}>: outside (0, {MAX_MASS:g}]")
+                raise MJCFError(f"{src}: <compiler settotalmass={show(c['settotalmass'])}>: outside (0, {MAX_MASS:g}]")
         for key, ok in (("coordinate", ("local",)), ("balanceinertia", ("false",)),
                         ("boundmass", ("0",)), ("boundinertia", ("0",))):
             if key in c and (ok is None or c[key] not in ok):
-                raise MJCFError(f"{src}: <compiler {key}={_show(c[key])}> changes the model's frames or masses: "
+                raise MJCFError(f"{src}: <compiler {key}={show(c[key])}> changes the model's frames or masses: "
                                 f"not supported")
 
     def gravity(self):
@@ -411,7 +411,7 @@ class _Reader:
             for key, n in (("density", 1), ("viscosity", 1), ("wind", 3)):
                 x = self.nums(e, key, (n,), "option")
                 if x is not None and np.any(x != 0):
-                    self.quirks.append(Quirk("passive_force", f"option {key}", f"<option {key}={_show(e.get(key))}>: "
+                    self.quirks.append(Quirk("passive_force", f"option {key}", f"<option {key}={show(e.get(key))}>: "
                                              f"fluid forces, not applied"))
 
     def defaults(self):
@@ -424,7 +424,7 @@ class _Reader:
             if name is None:
                 raise MJCFError(f"{self.source}: a nested <default> has no class attribute")
             if name in self.classes:
-                raise MJCFError(f"{self.source}: <default class={_show(name)}> is defined twice")
+                raise MJCFError(f"{self.source}: <default class={show(name)}> is defined twice")
             own = {tag: dict(v) for tag, v in (self.classes[parent] if parent else {}).items()}
             for c in d:
                 if isinstance(c.tag, str) and c.tag != "default":
@@ -441,7 +441,7 @@ class _Reader:
                     why = (f"a {c.tag} equality constrains {'tendon lengths' if c.tag == 'tendon' else 'a flex'}, "
                            f"not rigid bodies or joints: not supported" if c.tag in ("tendon", "flex", "flexvert")
                            else "not an equality manipdyn knows (connect, weld, joint)")
-                    raise MJCFError(f"{src}: <equality><{c.tag} name={_show(c.get('name') or '')}>: {why}")
+                    raise MJCFError(f"{src}: <equality><{c.tag} name={show(c.get('name') or '')}>: {why}")
         for t in self.xml.findall("tendon"):
             for c in t:
                 if not isinstance(c.tag, str):
@@ -457,7 +457,7 @@ class _Reader:
     def cls(self, e, inherited):
         name = e.get("class", inherited)
         if name not in self.classes:
-            raise MJCFError(f"{self.source}: <{e.tag} name={e.get('name')!r} class={_show(name)}>: no such default "
+            raise MJCFError(f"{self.source}: <{e.tag} name={e.get('name')!r} class={show(name)}>: no such default "
                             f"class")
         return name
 
@@ -539,7 +539,7 @@ class _Reader:
             where = f"body {name!r}"
             cc_here = e.get("childclass", cc)
             if cc_here not in self.classes:
-                raise MJCFError(f"{src}: {where}: childclass={_show(cc_here)}: no such default class")
+                raise MJCFError(f"{src}: {where}: childclass={show(cc_here)}: no such default class")
             items = self.expand(e, cc_here, where)
             self.known(e, where)
             for c, *_ in items:
@@ -593,7 +593,7 @@ class _Reader:
             self.tick()
             cn = c.get("childclass", cf)
             if cn not in self.classes:
-                raise MJCFError(f"{self.source}: {where}: <frame childclass={_show(cn)}>: no such default class")
+                raise MJCFError(f"{self.source}: {where}: <frame childclass={show(cn)}>: no such default class")
             self.known(c, f"{where}: <frame name={c.get('name')!r}>")
             R2, p2 = self.frame(c, None, f"{where}: <frame name={c.get('name')!r}>")
             stack += [(x, Rf @ R2, pf + Rf @ p2, cn, True) for x in reversed(c)]
@@ -626,7 +626,7 @@ class _Reader:
         kind = "free" if j.tag == "freejoint" else (self.attr(j, "type", jcls) or "hinge")
         jw = f"joint {jname!r} (in body {body!r})"
         if kind not in ("hinge", "slide", "ball", "free"):
-            raise MJCFError(f"{src}: {jw}: type {_show(kind)}: unknown joint type (hinge, slide, ball, free)")
+            raise MJCFError(f"{src}: {jw}: type {show(kind)}: unknown joint type (hinge, slide, ball, free)")
         if kind == "free" and (j.get("align") or self.alignfree) in ("true",):
             raise MJCFError(f"{src}: {jw}: align / <compiler alignfree> (the free body's frame moved to its inertial "
                             f"frame): not supported yet")
@@ -648,7 +648,7 @@ class _Reader:
             return len(joints) - 1, np.eye(3), -a, a
         u = self.num(j, "axis", jcls, jw, (3,), (0, 0, 1))
         if not np.any(u):
-            raise MJCFError(f"{src}: {jw}: <joint axis={_show(self.attr(j, 'axis', jcls))}> has no direction")
+            raise MJCFError(f"{src}: {jw}: <joint axis={show(self.attr(j, 'axis', jcls))}> has no direction")
         u = u / np.max(np.abs(u))
         a, u = pf + Rf @ a, Rf @ (u / np.linalg.norm(u))        # through the enclosing <frame>s, if any
         dyn = self.joint_quirks(j, jcls, jname, jw, kind)
@@ -713,7 +713,7 @@ class _Reader:
         rng = self.num(j, "range", jcls, jw, (2,))
         limited = self.attr(j, "limited", jcls) or "auto"
         if limited not in ("true", "false", "auto"):
-            raise MJCFError(f"{self.source}: {jw}: limited={_show(limited)}: expected true, false or auto")
+            raise MJCFError(f"{self.source}: {jw}: limited={show(limited)}: expected true, false or auto")
         on = rng is not None and (limited == "true" or (limited == "auto" and self.autolimits))
         if not on:
             return (-np.inf, np.inf), kind == "hinge"
@@ -737,7 +737,7 @@ class _Reader:
                     continue
                 k = len(names)
                 name = c.get("name") or f"equality{k}"
-                where = f"<equality><{c.tag} name={_show(name)}>"
+                where = f"<equality><{c.tag} name={show(name)}>"
                 if name in names:
                     raise MJCFError(f"{self.source}: {where}: the name is used twice")
                 names.add(name)
@@ -746,12 +746,12 @@ class _Reader:
                 get = lambda key: c.get(key, self.classes[cls].get("equality", {}).get(key))  # noqa: E731
                 active = get("active") or "true"
                 if active not in ("true", "false"):
-                    raise MJCFError(f"{self.source}: {where}: active={_show(active)}: expected true or false")
+                    raise MJCFError(f"{self.source}: {where}: active={show(active)}: expected true or false")
                 if active == "false":
                     self.quirks.append(Quirk("inactive_equality", name, f"{where}: active=\"false\": not a closure "
                                              f"of the model (MuJoCo starts with it off)"))
                     continue
-                soft = [f"{key}={_show(get(key))}" for key in ("solref", "solimp") if get(key) is not None]
+                soft = [f"{key}={show(get(key))}" for key in ("solref", "solimp") if get(key) is not None]
                 if c.tag == "joint":
                     out.append(self.joint_equality(c, name, where, joints, get))
                     continue
@@ -759,7 +759,7 @@ class _Reader:
                     poses = _poses_at_qpos0(joints)
                 ts = self.nums(c, "torquescale", (1,), where, get("torquescale")) if c.tag == "weld" else None
                 if ts is not None and ts[0] != 1:
-                    soft.append(f"torquescale={_show(get('torquescale'))}")
+                    soft.append(f"torquescale={show(get('torquescale'))}")
                 out.append(self.body_equality(c, name, where, frames, poses, ts is not None and ts[0] == 0, get))
                 if soft:
                     self.quirks.append(Quirk("equality_softness", name, f"{where}: {', '.join(soft)}: MuJoCo's "
@@ -775,7 +775,7 @@ class _Reader:
                 raise MJCFError(f"{self.source}: {where}: needs {key}")
             return frames["world"]
         if self.names.get(n) != kind:
-            raise MJCFError(f"{self.source}: {where}: {key}={_show(n)}: no such {kind}")
+            raise MJCFError(f"{self.source}: {where}: {key}={show(n)}: no such {kind}")
         return frames[n]
 
     def body_equality(self, c, name, where, frames, poses, point_only, get):
@@ -832,9 +832,9 @@ class _Reader:
                 ids.append(None)
                 continue
             if n not in idx:
-                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)}: no such joint")
+                raise MJCFError(f"{self.source}: {where}: {key}={show(n)}: no such joint")
             if joints[idx[n]]["kind"] in (FREEFLYER, BALL):
-                raise MJCFError(f"{self.source}: {where}: {key}={_show(n)} is a "
+                raise MJCFError(f"{self.source}: {where}: {key}={show(n)} is a "
                                 f"{'free' if joints[idx[n]]['kind'] == FREEFLYER else 'ball'} joint; a joint equality "
                                 f"relates hinge and slide joints")
             ids.append(idx[n])
@@ -842,7 +842,7 @@ class _Reader:
         poly = self.nums(c, "polycoef", (5,), where, get("polycoef"))
         poly = np.array([0.0, 1.0, 0, 0, 0]) if poly is None else poly
         if np.any(poly[2:]):
-            raise MJCFError(f"{self.source}: {where}: polycoef={_show(get('polycoef'))}: a polynomial coupling "
+            raise MJCFError(f"{self.source}: {where}: polycoef={show(get('polycoef'))}: a polynomial coupling "
                             f"(quadratic or higher terms): not supported (the closure model's coupling is linear)")
         b1 = i1
         if i2 is None or poly[1] == 0:                      # q1 = 0: the coupling of body1's parent and body1
@@ -936,7 +936,7 @@ class _Reader:
         if kind not in _MASS_GEOMS:
             why = ("mesh inertia is not supported yet" if kind == "mesh" else "a geom of this type cannot give mass"
                    if kind in ("plane", "hfield", "sdf") else "unknown geom type")
-            raise MJCFError(f"{self.source}: {w}: type {_show(kind)} contributes to the body's inertia "
+            raise MJCFError(f"{self.source}: {w}: type {show(kind)} contributes to the body's inertia "
                             f"(inertiafromgeom): {why}")
         if (self.attr(g, "shellinertia", cls) or "false") == "true":
             raise MJCFError(f"{self.source}: {w}: shellinertia: not supported yet")
@@ -952,7 +952,7 @@ class _Reader:
         need = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}[kind]
         if len(size) < need or np.any(size[:need] <= 0):
             raise MJCFError(f"{self.source}: {w}: a {kind} needs {need} positive size(s), got "
-                            f"{_show(self.attr(g, 'size', cls) or '')}")
+                            f"{show(self.attr(g, 'size', cls) or '')}")
         vol, Id = _solid(kind, size[:need])                 # Id: principal moments per unit mass
         m = float(mass[0]) if mass is not None else density * vol
         if not m <= MAX_MASS:

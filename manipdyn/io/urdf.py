@@ -1,4 +1,5 @@
-"""URDF -> Model, and the hardened XML parse (``_parse_xml``) both robot readers use (``io/mjcf_read.py`` reads MJCF).
+"""URDF -> Model: the URDF loader. Its closure elements are read by io/urdf_closures.py; the hardened XML parse,
+the number grammar and the bounds it checks are io/safe_xml.py's (the MJCF reader, io/mjcf_read.py, shares them).
 
 The file is parsed once with a hardened parser (no DTD, no entities, no network, a size limit), every
 number manipdyn reads is checked on the raw XML against one grammar and physical bounds, its elements are
@@ -8,21 +9,21 @@ name), fixed joints merged into the moving body they hang from. The walk is impl
 (no recursion limit) and in time linear in the number of links; Pinocchio is never imported.
 
 What the loader refuses (URDFError naming the file, the link or joint, the attribute and its value):
-- numbers outside the URDF grammar ``_NUMBER`` (plain decimal: optional sign, digits with an optional
+- numbers outside the URDF grammar ``safe_xml.NUMBER`` (plain decimal: optional sign, digits with an optional
   fraction, an optional exponent). Python's float() also reads ``1_0``, non-ASCII digits, ``nan``, ``inf``
   and surrounding Unicode spaces; urdfdom (Pinocchio's reader) does not, and neither do we. Numbers that
   overflow (``1e400``) are refused too. Vectors must have exactly their count of numbers.
-- masses, inertias and lengths beyond ``MAX_MASS``, ``MAX_INERTIA``, ``MAX_LENGTH`` (see there: the bounds
-  keep every computation of the model finite) and negative masses or effort/velocity limits;
+- masses, inertias and lengths beyond ``MAX_MASS``, ``MAX_INERTIA``, ``MAX_LENGTH`` (io/safe_xml.py: the
+  bounds keep every computation of the model finite) and negative masses or effort/velocity limits;
 - joint axes that are zero (an axis that is not unit is normalised, with a note);
 - revolute/prismatic joints without ``<limit effort= velocity=>`` (urdfdom refuses them too; a missing
   lower/upper is 0, as the URDF specification and urdfdom say), with ``strict=True`` limits with lower > upper;
 - mimic joints naming a joint that does not exist, or themselves;
-- files larger than ``max_bytes`` (default ``MAX_BYTES``);
+- files larger than ``max_bytes`` (default ``MAX_BYTES``, io/safe_xml.py);
 - inertias that are not positive semi-definite beyond round-off (per body after merging), unless
   ``non_psd_inertia="keep"`` (Pinocchio, PyBullet and Drake load them): then a "non_psd_inertia" quirk names each.
 
-What the loader reads as other engines do, with a quirk (see model.QUIRK_KINDS): an XML declaration whose version
+What the loader reads as other engines do, with a quirk (see quirks.QUIRK_KINDS): an XML declaration whose version
 is not 1.x (``<?xml version="0.0"?>``, which libxml2 refuses) is read as XML 1.0 ("xml_version"); an ``<inertial>``
 with ``<mass>`` but no ``<inertia>`` is a point mass at its ``<origin>`` ("point_mass", Pinocchio 4.1's reading);
 whitespace before the XML declaration and NUL bytes after the document (a C string's terminator), both of which
@@ -44,7 +45,6 @@ the world (UR, xArm, Z1 in example-robot-data).
 from __future__ import annotations
 
 import dataclasses
-import io
 import math
 import os
 import re
@@ -53,13 +53,14 @@ from collections import Counter
 
 import numpy as np
 import yourdfpy
-from lxml import etree
 
 from ..errors import FloatingBaseWarning, InertiaWarning, InputError, ModelError, QuirkWarning, URDFError
-from ..joints import KINDS, universal_pair
-from ..model import (FREEFLYER, QUIRK_KINDS, Constraint, Frame, MimicModel, Model, Quirk,
-                     check_gravity, with_joint_dynamics)
-from ..spatial import combine_inertias, rpy_matrix
+from ..joints import FREEFLYER, KINDS, universal_pair
+from ..model import Frame, MimicModel, Model, check_gravity, with_joint_dynamics
+from ..quirks import QUIRK_KINDS, Quirk
+from ..spatial import combine_inertias
+from .safe_xml import MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS, bounded, numbers, parse_xml, show
+from .urdf_closures import CLOSURE_TAGS, read_closures
 
 MOVING = {name: k.code for k in KINDS for name in k.urdf}   # the registry's URDF names: revolute, continuous,
 #      prismatic, floating, planar; spherical (PyBullet's extension), screw and universal (Drake's <drake:joint>)
@@ -72,21 +73,6 @@ _UNBOUNDED = _NO_AXIS + ("planar",)                               # joints witho
 DRAKE = "http://drake.mit.edu"       # the namespace of Drake's URDF extensions (<drake:joint>, its screw pitch)
 UNIVERSAL_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))   # Drake's universal joint: about x, then about the turned y
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-
-# The URDF number grammar: optional sign, digits with an optional fraction (or a fraction alone), an
-# optional exponent; ASCII digits only. Items of a vector are separated by XML white space.
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-_SPACE = re.compile(r"[ \t\n\r]+")
-_LIST = re.compile(r"[ \t\n\r]*(?:{0}(?:[ \t\n\r]+{0})*)?[ \t\n\r]*".format(_NUMBER.pattern))
-
-# Bounds that keep a model's computations finite. The heaviest machines built weigh ~1e9 kg and span
-# ~1e3 m; the bounds leave three orders of magnitude beyond that. With 1e5 bodies, the largest force
-# (m g) ~1e17 N, moment (m g L n) ~1e28 N m, mass-matrix entry (I + m L²) n ~1e29: products and squares
-# of these (energies, norms, condition numbers) stay far below the float range (1e308).
-MAX_MASS = 1e12        # kg, per link
-MAX_INERTIA = 1e12     # kg m², per entry of a link's inertia
-MAX_LENGTH = 1e6       # m, per coordinate of an origin (joint, inertial, constraint) and prismatic limits
-MAX_BYTES = 50_000_000  # default size limit of a URDF file; example-robot-data's largest is 0.21 MB
 
 
 def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool = False, locked=None,
@@ -110,7 +96,7 @@ def load_urdf(path, *, root_joint=None, gravity=(0.0, 0.0, -9.81), strict: bool 
     ``buildModelFromUrdf(path, mimic=True)``), mimic=False loads them as independent joints; joint_dynamics
     ``{joint: dict(armature=, damping=, friction=)}`` sets or overrides those joints' parameters (the file's
     ``<dynamics damping friction>`` are read; URDF has no armature), ``model.with_joint_dynamics``.
-    What the loader noticed is in ``model.quirks`` (see model.QUIRK_KINDS) and warned about once per kind.
+    What the loader noticed is in ``model.quirks`` (see quirks.QUIRK_KINDS) and warned about once per kind.
     Raises URDFError naming the file and element at fault, ModelError for a non-physical body, InputError
     for a root_joint other than None or "free_flyer" or a bad policy value.
     """
@@ -144,13 +130,13 @@ def load_urdf_string(text, *, source="<string>", root_joint=None, gravity=(0.0, 
                         f"(pass max_bytes=... to load_urdf to raise it)")
     g = check_gravity(gravity, source)
     quirks = []
-    root = _parse_xml(data, source, quirks)
+    root = parse_xml(data, source, quirks)
     pitches = _drake_joints(root, source)
     _check_xml(root, source, strict, quirks)
     model = _build(_read_elements(root, source), source, g, strict, free=root_joint == "free_flyer",
                    zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia, quirks=quirks,
                    pitches=pitches)
-    model = dataclasses.replace(model, constraints=_constraints(root, model, source),
+    model = dataclasses.replace(model, constraints=read_closures(root, model, source),
                                 actuated=_actuated(root, model, source))
     quirks += [Quirk("mimic", j, f"= {mult:g} * {t} + {off:g}: " + ("honoured (mimic=True)" if mimic else
                      "loaded as an independent joint (mimic=False)")) for j, t, mult, off in model.mimic]
@@ -178,7 +164,7 @@ def _drake_joints(root, source):
         for e in found:
             if j.get("type") != "screw":
                 raise URDFError(f"{source}: {where}: <drake:screw_thread_pitch> on a {j.get('type')!r} joint")
-            x = _bounded(_numbers(e, "value", 1, where, source), MAX_LENGTH, "pitch", e, "value", where, source)
+            x = bounded(numbers(e, "value", 1, where, source), MAX_LENGTH, "pitch", e, "value", where, source)
             if x is None:
                 raise URDFError(f"{source}: {where}: <drake:screw_thread_pitch> has no value attribute")
             out[j.get("name")] = float(x[0]) / (2.0 * math.pi)
@@ -226,53 +212,6 @@ def _check_root_joint(root_joint, source):
                          f"'free_flyer' (the root link is a free body, Pinocchio's JointModelFreeFlyer)")
 
 
-# A leading XML declaration's version pseudo-attribute (after an optional UTF-8 byte-order mark), its value in
-# XML 1.0's (4th edition) VersionNum grammar. libxml2 refuses a version that is not 1.x ("Unsupported version
-# '0.0'"); urdfdom's tinyxml2 (Pinocchio 4.1: checked), MuJoCo, PyBullet and Drake ignore it.
-_DECLARED_VERSION = re.compile(rb"(?:\xef\xbb\xbf)?<\?xml[ \t\r\n]+version[ \t\r\n]*=[ \t\r\n]*"
-                               rb"(['\"])([A-Za-z0-9_.:-]+)\1")
-_XML_1 = re.compile(rb"1\.[0-9]+")           # the versions libxml2 reads (XML 1.0 5th edition's VersionNum)
-
-
-def _parse_xml(data: bytes, source: str, quirks=None, root_tag="robot", error=URDFError):
-    """Well-formed XML with a <robot> root (``root_tag``; None: any root); DTDs and entities are refused (no
-    expansion, no network). Errors are ``error`` (URDFError; the MJCF reader passes MJCFError).
-
-    A leading XML declaration whose version is not 1.x is read as XML 1.0 (only its version value is replaced,
-    before parsing), with an "xml_version" quirk appended to ``quirks``; any other malformed declaration stays
-    malformed XML."""
-    if b"<!ENTITY" in data:                   # before parsing: nothing is expanded or fetched
-        raise error(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
-    lead = len(data) - len(data.lstrip(b" \t\r\n"))         # before a declaration: libxml2 refuses it
-    spaced, nul = lead > 0 and data[lead:].startswith(b"<?xml"), data.rstrip(b" \t\r\n").endswith(b"\0")
-    if spaced or nul:
-        what = ["whitespace before the XML declaration"] * spaced + ["NUL bytes after the document"] * nul
-        if quirks is not None:
-            quirks.append(Quirk("xml_text", "<?xml?>", f"{' and '.join(what)}: removed (libxml2 refuses them; "
-                                f"urdfdom, MuJoCo and PyBullet read the file)"))
-        data = data[lead if spaced else 0:].rstrip(b"\0 \t\r\n") if nul else data[lead:]
-    m = _DECLARED_VERSION.match(data)
-    if m and not _XML_1.fullmatch(m.group(2)):
-        version = m.group(2).decode("ascii")
-        data = data[:m.start(2)] + b"1.0" + data[m.end(2):]
-        if quirks is not None:
-            quirks.append(Quirk("xml_version", "<?xml?>", f"<?xml version={_show(version)}?>: not XML 1.x; read as "
-                                f"XML 1.0 (urdfdom, MuJoCo, PyBullet and Drake ignore the version)"))
-    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
-                             remove_comments=True)
-    try:
-        root = etree.parse(io.BytesIO(data), parser).getroot()
-    except etree.XMLSyntaxError as exc:
-        raise error(f"{source}: malformed XML: {exc}") from None
-    if root is None:
-        raise error(f"{source}: malformed XML: no root element")
-    if root.getroottree().docinfo.internalDTD is not None:
-        raise error(f"{source}: DOCTYPE/ENTITY declarations are refused (entity expansion)")
-    if root_tag is not None and root.tag != root_tag:
-        raise error(f"{source}: root element is <{root.tag}>, expected <{root_tag}>")
-    return root
-
-
 def _read_elements(root, source):
     """yourdfpy's readers applied to each <link> and <joint> of the checked tree: a yourdfpy Robot.
 
@@ -294,51 +233,14 @@ def _read_elements(root, source):
 
 # ---- checks on the raw XML, before yourdfpy (whose float() is not the URDF grammar) reads it -------------
 
-def _show(text, limit=60):
-    """An attribute value for a message: repr, cut to ``limit`` characters."""
-    return repr(text if len(text) <= limit else text[:limit] + "...")
-
-
-def _numbers(e, key, count, where, source):
-    """The ``count`` numbers of attribute ``key`` of element ``e`` (None if absent): URDF grammar, finite.
-
-    Returns a list of floats. Raises URDFError naming ``where`` (the link/joint), the element, the
-    attribute and its value.
-    """
-    text = e.get(key)
-    if text is None:
-        return None
-    at = lambda: f"{source}: {where}: <{e.tag} {key}={_show(text)}>"  # noqa: E731
-    if not _LIST.fullmatch(text):             # the slow path only to name the offending item
-        bad = next(t for t in _SPACE.split(text) if t and not _NUMBER.fullmatch(t))
-        raise URDFError(f"{at()}: {_show(bad, 30)} is not a URDF number (plain decimal: sign, digits, "
-                        f"fraction, exponent; no nan, inf, hex, '_' or non-ASCII digits)")
-    x = [float(t) for t in text.split()]      # only ASCII white space is left: split() is the grammar's
-    if len(x) != count:
-        raise URDFError(f"{at()}: {len(x)} number(s), expected {count}")
-    if not all(map(math.isfinite, x)):
-        raise URDFError(f"{at()}: overflows the float range")
-    return x
-
-
-def _bounded(x, bound, what, e, key, where, source):
-    """x (list of floats, or None) with every |x_k| <= bound; URDFError naming the attribute otherwise."""
-    for v in x or ():
-        if abs(v) > bound:
-            raise URDFError(f"{source}: {where}: <{e.tag} {key}={_show(e.get(key))}>: {what} {v:g} "
-                            f"beyond the bound {bound:g}")
-    return x
-
-
 def _check_origin(e, where, source):
     """<origin xyz rpy>: three numbers each, xyz within ±MAX_LENGTH metres."""
-    _bounded(_numbers(e, "xyz", 3, where, source), MAX_LENGTH, "coordinate", e, "xyz", where, source)
-    _numbers(e, "rpy", 3, where, source)
+    bounded(numbers(e, "xyz", 3, where, source), MAX_LENGTH, "coordinate", e, "xyz", where, source)
+    numbers(e, "rpy", 3, where, source)
 
 
 # Elements the loader reads or knowingly leaves to other tools; anything else is an "unknown_element" quirk.
-ROBOT_CHILDREN = {"link", "joint", "material", "transmission", "gazebo", "ros2_control", "constraint", "loop",
-                  "loop_constraint", "coupling", "joint_constraint"}
+ROBOT_CHILDREN = {"link", "joint", "material", "transmission", "gazebo", "ros2_control", *CLOSURE_TAGS}
 LINK_CHILDREN = {"inertial", "visual", "collision"}
 JOINT_CHILDREN = {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic", "calibration",
                   "safety_controller"}
@@ -359,7 +261,7 @@ def _check_version(root, source, strict, quirks):
     if ok and URDFDOM_VERSIONS[0] <= (int(parts[0]), int(parts[1])) <= URDFDOM_VERSIONS[1]:
         return
     why = ("not of the form 'x.y'" if not ok else "outside 1.0-1.2")
-    detail = (f"<robot version={_show(text)}>: {why}; urdfdom 6 (Pinocchio 4.1) refuses the file, manipdyn reads "
+    detail = (f"<robot version={show(text)}>: {why}; urdfdom 6 (Pinocchio 4.1) refuses the file, manipdyn reads "
               f"it as URDF 1.0")
     if strict:
         raise URDFError(f"{source}: {detail} (strict=True)")
@@ -462,7 +364,7 @@ def _check_joint(j, joint_names, source, strict=False, quirks=None):
                             f"or displacements)")
     for e in j.findall("dynamics"):            # Model.damping, Model.friction (docs/design.md §3, Joint dynamics)
         for k in ("damping", "friction"):
-            x = _numbers(e, k, 1, where, source)
+            x = numbers(e, k, 1, where, source)
             if x is not None and not 0.0 <= x[0] <= MAX_MASS:
                 raise URDFError(f"{source}: {where}: <dynamics {k}={x[0]!r}>: must be >= 0 and <= {MAX_MASS:g}")
 
@@ -471,26 +373,26 @@ def _check_axis(e, where, source, moving):
     """<axis xyz>: three numbers, not all zero on a moving joint (urdfdom reads a bare <axis> as zero)."""
     if e.get("xyz") is None:
         raise URDFError(f"{source}: {where}: <axis> has no xyz attribute")
-    a = _numbers(e, "xyz", 3, where, source)
+    a = numbers(e, "xyz", 3, where, source)
     if moving and not any(a):
-        raise URDFError(f"{source}: {where}: <axis xyz={_show(e.get('xyz'))}> has no direction")
+        raise URDFError(f"{source}: {where}: <axis xyz={show(e.get('xyz'))}> has no direction")
 
 
 def _check_limit(e, where, kind, source, strict=False, quirks=None):
     """<limit>: effort and velocity given and >= 0; prismatic limits within MAX_LENGTH; lower > upper is read as no
     limit with an "inverted_limits" quirk (PyBullet's reading; urdfdom keeps the numbers), an error with strict."""
-    values = {k: _numbers(e, k, 1, where, source) for k in ("lower", "upper", "effort", "velocity")}
+    values = {k: numbers(e, k, 1, where, source) for k in ("lower", "upper", "effort", "velocity")}
     for k in ("effort", "velocity"):
         if values[k] is None:
             raise URDFError(f"{source}: {where}: <limit> has no {k} attribute (URDF specification)")
         if values[k][0] < 0:
-            raise URDFError(f"{source}: {where}: <limit {k}={_show(e.get(k))}>: must be >= 0")
+            raise URDFError(f"{source}: {where}: <limit {k}={show(e.get(k))}>: must be >= 0")
     lo, hi = (values[k][0] if values[k] else 0.0 for k in ("lower", "upper"))   # URDF default: 0
     if kind == "prismatic":
         for k in ("lower", "upper"):
-            _bounded(values[k], MAX_LENGTH, "limit", e, k, where, source)
+            bounded(values[k], MAX_LENGTH, "limit", e, k, where, source)
     if lo > hi:
-        detail = f"<limit lower={_show(e.get('lower', '0'))} upper={_show(e.get('upper', '0'))}>: lower > upper"
+        detail = f"<limit lower={show(e.get('lower', '0'))} upper={show(e.get('upper', '0'))}>: lower > upper"
         if strict or quirks is None:
             raise URDFError(f"{source}: {where}: {detail} (strict=True; by default it is read as no limit)")
         quirks.append(Quirk("inverted_limits", where.split(" ", 1)[1].strip("'"),
@@ -522,7 +424,7 @@ def _check_mimic(e, name, joint_names, source):
     if target == name:
         raise URDFError(f"{source}: {where}: <mimic joint={target!r}> mimics itself")
     for k in ("multiplier", "offset"):
-        _numbers(e, k, 1, where, source)
+        numbers(e, k, 1, where, source)
 
 
 def _check_link(link, source):
@@ -536,13 +438,13 @@ def _check_link(link, source):
         if any(e.get(k) is None for e in inertias for k in _INERTIA_KEYS):
             raise URDFError(f"{source}: {where}: <inertia> needs all of {', '.join(_INERTIA_KEYS)}")
         for e in masses:
-            m = _numbers(e, "value", 1, where, source)[0]
+            m = numbers(e, "value", 1, where, source)[0]
             if m < 0:
-                raise URDFError(f"{source}: {where}: negative mass {m:g} (<mass value={_show(e.get('value'))}>)")
-            _bounded([m], MAX_MASS, "mass (kg)", e, "value", where, source)
+                raise URDFError(f"{source}: {where}: negative mass {m:g} (<mass value={show(e.get('value'))}>)")
+            bounded([m], MAX_MASS, "mass (kg)", e, "value", where, source)
         for e in inertias:
             for k in _INERTIA_KEYS:
-                _bounded(_numbers(e, k, 1, where, source), MAX_INERTIA, "inertia (kg m²)", e, k, where, source)
+                bounded(numbers(e, k, 1, where, source), MAX_INERTIA, "inertia (kg m²)", e, k, where, source)
         for e in inertial.findall("origin"):
             _check_origin(e, where, source)
 
@@ -659,7 +561,7 @@ def _build(robot, source, gravity, strict, free=False, zero_mass_inertia="keep",
 
 def _inertial_quirks(links, root, joints, free, policy):
     """zero_mass_inertia, point_mass, no_inertial and rotated_root_inertial quirks of the links (see
-    model.QUIRK_KINDS)."""
+    quirks.QUIRK_KINDS)."""
     out = []
     for name, link in links.items():
         x = link.inertial
@@ -876,139 +778,6 @@ def _triangle(Is, links, source, strict):
     return bad
 
 
-def _vec(e, key, default, source, where, bound=np.inf):
-    """A 3-vector attribute of an XML element (default if the element or attribute is absent), in the
-    URDF grammar, each coordinate within ±bound."""
-    x = None if e is None else _numbers(e, key, 3, where, source)
-    if x is None:
-        return np.array(default, float)
-    return np.array(_bounded(x, bound, "coordinate", e, key, where, source), float)
-
-
-def _constraints(root, model, source):
-    """Loop closures (yourdfpy ignores them), all into the one closure model (model.Constraint), in file order:
-    - <constraint name type="revolute|spherical|fixed"> with <parent link>, <parent_origin>, <parent_axis>,
-      <child ...> (manipdyn's form; axes in the link frames);
-    - URDF+ (Chignoli et al., arXiv 2411.19753; generalized_rbda's models): <loop name type> with
-      <predecessor link><origin/></predecessor>, <successor link><origin/></successor> and one <axis xyz> in
-      the loop frame (default 1 0 0, as its urdfdom fork); type revolute or continuous -> "revolute", fixed,
-      spherical; prismatic and planar loops are refused (no such closure here);
-    - <loop_constraint name> with <parent link>, <parent_origin>, <child link>, <child_origin> (URDF+'s older
-      form): generalized_rbda enforces the two points' coincidence only -> "spherical";
-    - <coupling name> with <predecessor link>, <successor link>, <ratio value> (default 1), and the older
-      <joint_constraint> with <parent>, <child>, <gear_ratio value>: a gear between joint coordinates ->
-      "coupling" (see model.Constraint).
-    Frames are mapped into body frames. Names are unique across all kinds."""
-    out, seen = [], set()
-    for e in root:
-        if not isinstance(e.tag, str) or e.tag not in _CLOSURE_READERS:
-            continue
-        name = e.get("name")
-        if not name or name in seen:
-            raise URDFError(f"{source}: a <{e.tag}> has no name or a duplicate name ({name!r})")
-        seen.add(name)
-        out.append(_CLOSURE_READERS[e.tag](e, name, f"{e.tag} {name!r}", model, source))
-    return tuple(out)
-
-
-def _side(model, link_el, org, axis, where, role, source):
-    """(body, link, R, p, axis) of one closure side in its body's frame: link_el names the link, org is its
-    <origin>-like element (xyz, rpy; absent = identity), axis (3,) in the link frame (or the origin frame if
-    the caller rotated it)."""
-    link = None if link_el is None else link_el.get("link")
-    if link not in model.frames:
-        raise URDFError(f"{source}: {where}: {role} link {link!r} is not defined")
-    fr = model.frames[link]
-    R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
-    p = _vec(org, "xyz", (0, 0, 0), source, where, bound=MAX_LENGTH)
-    return fr.body, link, fr.R @ R, fr.p + fr.R @ p, fr.R @ axis
-
-
-def _unit(axis, what, where, source):
-    """axis (3,) scaled to unit length (by its largest entry first: no overflow); URDFError if zero."""
-    if not np.any(axis):
-        raise URDFError(f"{source}: {where}: {what} has no direction")
-    axis = axis / np.max(np.abs(axis))
-    return axis / np.linalg.norm(axis)
-
-
-def _closure(name, kind, a, b, where, source, tag, ratio=0.0):
-    """The Constraint from two sides (body, link, R, p, axis); the sides must be different rigid bodies."""
-    if a[0] == b[0]:
-        raise URDFError(f"{source}: {where}: both sides are on the same rigid body ({a[1]!r}, {b[1]!r})")
-    return Constraint(name, kind, a[0], a[1], a[2], a[3], a[4], b[0], b[1], b[2], b[3], b[4], ratio=ratio, source=tag)
-
-
-def _read_constraint(e, name, where, model, source):
-    kind = e.get("type")
-    if kind not in ("revolute", "spherical", "fixed"):
-        raise URDFError(f"{source}: {where}: type {kind!r}; expected revolute, spherical or fixed")
-    sides = []
-    for role in ("parent", "child"):
-        axis = _unit(_vec(e.find(f"{role}_axis"), "xyz", (0, 0, 1), source, where), f"{role}_axis", where, source)
-        sides.append(_side(model, e.find(role), e.find(f"{role}_origin"), axis, where, role, source))
-    return _closure(name, kind, *sides, where, source, "constraint")
-
-
-_LOOP_TYPES = {"revolute": "revolute", "continuous": "revolute", "fixed": "fixed", "spherical": "spherical"}
-
-
-def _read_loop(e, name, where, model, source):
-    kind = e.get("type")
-    if kind not in _LOOP_TYPES:
-        why = "no such closure in manipdyn" if kind in ("prismatic", "planar") else "unknown type"
-        raise URDFError(f"{source}: {where}: type {kind!r}: {why}; expected revolute, continuous, fixed or spherical")
-    axis = _unit(_vec(e.find("axis"), "xyz", (1, 0, 0), source, where), "<axis>", where, source)
-    sides = []
-    for role in ("predecessor", "successor"):
-        el = e.find(role)
-        org = None if el is None else el.find("origin")
-        R = rpy_matrix(_vec(org, "rpy", (0, 0, 0), source, where))
-        sides.append(_side(model, el, org, R @ axis, where, role, source))   # the axis is in the loop frame
-    return _closure(name, _LOOP_TYPES[kind], *sides, where, source, "loop")
-
-
-def _read_loop_constraint(e, name, where, model, source):
-    sides = [_side(model, e.find(role), e.find(f"{role}_origin"), np.zeros(3), where, role, source)
-             for role in ("parent", "child")]
-    return _closure(name, "spherical", *sides, where, source, "loop_constraint")
-
-
-def _read_coupling(e, name, where, model, source, roles=("predecessor", "successor"), ratio_tag="ratio"):
-    sides = [_side(model, e.find(role), None, np.zeros(3), where, role, source) for role in roles]
-    r = e.find(ratio_tag)
-    ratio = 1.0 if r is None else _numbers(r, "value", 1, where, source)
-    if r is not None and ratio is None:
-        raise URDFError(f"{source}: {where}: <{ratio_tag}> has no value attribute")
-    ratio = 1.0 if r is None else _bounded(ratio, MAX_MASS, "ratio", r, "value", where, source)[0]
-    c = _closure(name, "coupling", *sides, where, source, e.tag, ratio=float(ratio))
-    for b in _path(model.parent, c.parent, c.child):
-        if model.kind[b] == FREEFLYER:
-            raise URDFError(f"{source}: {where}: the joints between {c.parent_link!r} and {c.child_link!r} include "
-                            f"the free flyer; a coupling relates 1-dof joints only")
-    return c
-
-
-def _path(parent, a, b):
-    """Bodies on the tree path between bodies a and b, below their common ancestor (parent[i] < i)."""
-    out = []
-    while a != b:
-        if a > b:
-            out.append(a)
-            a = parent[a]
-        else:
-            out.append(b)
-            b = parent[b]
-    return out
-
-
-_CLOSURE_READERS = {
-    "constraint": _read_constraint, "loop": _read_loop, "loop_constraint": _read_loop_constraint,
-    "coupling": _read_coupling,
-    "joint_constraint": lambda e, n, w, m, s: _read_coupling(e, n, w, m, s, ("parent", "child"), "gear_ratio"),
-}
-
-
 def _actuated(root, model, source):
     """Joints named in <transmission> elements, and (URDF+) moving joints not marked independent="false" when
     any joint carries the attribute (its default is true), in q order."""
@@ -1016,7 +785,7 @@ def _actuated(root, model, source):
     marked = {j.get("name"): j.get("independent") for j in root.findall("joint") if j.get("independent") is not None}
     for name, value in marked.items():
         if value not in ("true", "false"):
-            raise URDFError(f"{source}: joint {name!r}: independent={_show(value)}; expected \"true\" or \"false\"")
+            raise URDFError(f"{source}: joint {name!r}: independent={show(value)}; expected \"true\" or \"false\"")
     if marked:
         names |= {j for j in model.joint_names if marked.get(j, "true") == "true" and j != ROOT_JOINT_NAME}
     return tuple(j for j in model.joint_names if j in names)   # others (fixed or absent) are ignored

@@ -26,7 +26,7 @@ from ..dynamics.rnea import gravity_torques
 from ..dynamics.regressor import joint_torque_regressor
 from ..dynamics.rnea import rnea, rnea_terms
 from ..configuration import FREE_RANGE
-from ..model import BALL, FREEFLYER, PLANAR, PRISMATIC
+from ..joints import BALL, FREEFLYER, PLANAR, PRISMATIC
 from .closed import PROXIMAL, closed_chain_terms
 from .measure import error
 from .reference import Reference

@@ -17,8 +17,9 @@ from pathlib import Path
 
 from ..errors import InputError, ManipdynError
 from ..extras import require
-from .engines import (ADAPTERS, EngineMissing, EngineRefused, _import, _one_line, _quiet, available, referee,
-                      stripped_urdf)
+from .adapters import ADAPTERS, EngineMissing, EngineRefused, _import, _one_line, available
+from .referee import _quiet, referee
+from .referee_urdf import stripped_urdf
 from .zoo import robots_dir
 
 
@@ -83,7 +84,7 @@ def _load_only(name, path):
     elif name == "mujoco":
         import re
 
-        from .engines import MUJOCO_COMPILER
+        from .adapters import MUJOCO_COMPILER
         mujoco = _import("mujoco")
         text = re.sub(r"<mujoco\b.*?</mujoco\s*>", "", text, flags=re.S)
         before = mujoco.get_mju_user_warning()

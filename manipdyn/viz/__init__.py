@@ -254,7 +254,7 @@ def _upright_centre(model, lo, hi, wave, tries=48):
     """(centre (nv,), amplitude (nv,)) of a serial arm's demo swing: ±0.5 rad (less for short ranges)
     around the pose, among the middle of the ranges and ``tries`` seeded random poses within them, whose
     motion stays above the base best and, after that, is the most compact (it frames best)."""
-    from ..dynamics.core import forward_kinematics
+    from ..dynamics.forward_kinematics import forward_kinematics
     amp = np.minimum(0.3 * (hi - lo), 0.5)
     rng = np.random.default_rng(0)
     cands = [0.5 * (lo + hi)] + [lo + amp + (hi - lo - 2 * amp) * rng.random(model.nv) for _ in range(tries)]

@@ -179,8 +179,8 @@ def resolve_mesh(filename: str, urdf_path, package_dirs=None) -> Path:
 def load_visuals(urdf_path, package_dirs=None):
     """Every drawable <visual> of the URDF as Visual records; the others are skipped with a GeometryWarning.
 
-    The XML is read with the loader's hardened parser; meshcat is imported here, lazily."""
-    from ..io.urdf import _parse_xml
+    The XML is read with the loaders' hardened parser (io/safe_xml.py); meshcat is imported here, lazily."""
+    from ..io.safe_xml import parse_xml
     urdf_path = Path(urdf_path)
     package_dirs = check_package_dirs(package_dirs)
     try:
@@ -189,7 +189,7 @@ def load_visuals(urdf_path, package_dirs=None):
         raise URDFError(f"{urdf_path}: no such URDF file") from None
     if size > MAX_URDF_BYTES:
         raise URDFError(f"{urdf_path}: {size} bytes, more than the {MAX_URDF_BYTES} a URDF may have")
-    root = _parse_xml(urdf_path.read_bytes(), str(urdf_path))
+    root = parse_xml(urdf_path.read_bytes(), str(urdf_path))
     materials = {}
     for m in root.findall("material"):
         rgba = _material_rgba(m, {})

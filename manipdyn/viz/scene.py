@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..configuration import difference, integrate, neutral, normalize
-from ..dynamics.core import forward_kinematics
+from ..dynamics.forward_kinematics import forward_kinematics
 from ..errors import InputError
 from ..joints import BALL, HELICAL, PRISMATIC, REVOLUTE
 from .geometry import load_visuals, meshcat_module

@@ -82,7 +82,7 @@ def test_energy_and_closed_chain_batch_equals_rows():
 
 def test_one_state_f_ext_fast_path_equals_the_checked_batch():
     """One float64 state with f_ext takes the per-model wrench rows (state.fast_wrench_rows); a batch takes the
-    checked conversion (state.wrench_rows): the rows must agree, both frames, a frame with an offset in its body."""
+    checked conversion (arguments.wrench_rows): the rows must agree, both frames, a frame with an offset in its body."""
     import manipdyn as md
     model = load_urdf(BAXTER)
     rng = np.random.default_rng(14)

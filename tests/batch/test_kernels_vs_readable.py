@@ -22,7 +22,7 @@ from manipdyn.constraints.closures import RANK_RTOL, closure_terms, independent_
 from manipdyn.constraints.dynamics import _kkt
 from manipdyn.constraints.closures import CLOSURE, closure_arrays
 from manipdyn.constraints.fast import CONSTRAINED_FD
-from manipdyn.dynamics.core import kernel_arrays as core_arrays
+from manipdyn.dynamics.model_arrays import kernel_arrays as core_arrays
 from manipdyn.spatial import rpy_matrix
 from manipdyn.validation import random_states
 from manipdyn.validation.reference import Reference, pin

@@ -10,7 +10,7 @@ import pytest
 from conftest import AAU, assert_close, err, inertial_xml, urdf
 
 import manipdyn as md
-from manipdyn.dynamics.core import LANES
+from manipdyn.dynamics.lanes import LANES
 from manipdyn.errors import InputError, NumericalError
 from manipdyn.joints import PRISMATIC
 from manipdyn.spatial import SINCOS_MAX

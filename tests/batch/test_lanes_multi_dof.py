@@ -1,4 +1,4 @@
-"""The lane kernels on free flyers and ball joints (core.on_lanes with multi: rnea.motion_lane_multi, core.
+"""The lane kernels on free flyers and ball joints (lanes.on_lanes with multi: rnea.motion_lane_multi, core.
 quat_placement_lane, crba's columns of a multi-dof joint, aba.articulated_multi): floating-base robots and
 ball-jointed trees run at lane speed, not through the one-state kernels, and give Pinocchio's numbers.
 
@@ -18,7 +18,8 @@ from ball_models import random_tree
 from conftest import assert_close, err
 
 import manipdyn as md
-from manipdyn.dynamics.core import LANES, on_lanes, unpack
+from manipdyn.dynamics.lanes import LANES, on_lanes
+from manipdyn.dynamics.model_arrays import unpack
 from manipdyn.errors import InputError, SingularError
 from manipdyn.joints import BALL, FREEFLYER
 from manipdyn.validation import random_states
@@ -123,7 +124,7 @@ def test_lane_rnea_with_wrenches_on_a_floating_base():
 
 def test_a_non_finite_state_in_a_later_block_is_named(models):
     """A NaN in the second block's quaternion: the block runs the one-state form, whose error names the row and
-    the entry (state.raise_kernel_error)."""
+    the entry (arguments.raise_kernel_error)."""
     model, _, _ = models["ur5_floating"]
     Q, V, A = _states(model, 2 * LANES, 3)
     Q[LANES + 5, 4] = np.nan
@@ -148,7 +149,7 @@ def test_a_singular_ball_joint_is_named():
 
 def test_a_turned_and_offset_free_flyer_frame():
     """A free flyer whose joint frame is turned and offset in the base (R0 ≠ 1, p0 ≠ 0: the Model allows it; the
-    loaders give 1 and 0): the lane placement R0 R(quat) (core.quat_placement_lane) equals the one-state kernels'
+    loaders give 1 and 0): the lane placement R0 R(quat) (lanes.quat_placement_lane) equals the one-state kernels'
     (joints.joint_placement). (τ, M and q̈ do not depend on where the free body is, only on how it is turned.)"""
     model, _, _ = _ur5_floating()
     c, s = np.cos(0.7), np.sin(0.7)

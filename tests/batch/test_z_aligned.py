@@ -1,4 +1,4 @@
-"""The lane kernels' model: every 1-dof body frame turned so that its joint axis is z (model.z_aligned,
+"""The lane kernels' model: every 1-dof body frame turned so that its joint axis is z (kernel_form.z_aligned,
 Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the scalar kernels, which take
 any axis: the same τ and M from both forms on a tree with unaligned axes; the rotation C_i that turns e_z into the
 axis; the batch routes reaching the lane steps only with that form (any other falls back to the scalar kernel)."""
@@ -8,11 +8,12 @@ from conftest import AAU, assert_close
 from test_lanes import _tree
 
 import manipdyn as md
-from manipdyn.dynamics.core import on_lanes, unpack
+from manipdyn.dynamics.lanes import on_lanes
+from manipdyn.dynamics.model_arrays import unpack
 from manipdyn.dynamics.crba import crba_kernel
 from manipdyn.dynamics.rnea import NT, rnea_kernel
-from manipdyn.dynamics.state import wrench_rows
-from manipdyn.model import z_turn
+from manipdyn.dynamics.arguments import wrench_rows
+from manipdyn.kernel_form import z_turn
 from manipdyn.validation import random_states
 
 
@@ -58,7 +59,7 @@ def test_the_lane_form_is_the_same_model(name):
 
 def test_frames_and_wrenches_in_the_lane_form_are_the_same_points():
     """A frame's placement in its body, turned into the body's z-aligned frame, is the same point and axes in the
-    world: C_b (Cᵀ R, Cᵀ p) = (R, p); so is a wrench laid out for the lane kernels (``state.wrench_rows``)."""
+    world: C_b (Cᵀ R, Cᵀ p) = (R, p); so is a wrench laid out for the lane kernels (``arguments.wrench_rows``)."""
     model = md.load_urdf_string(_tree(tool=True))
     k = model.kernel
     for name, (b, X) in k.frame_rows.items():

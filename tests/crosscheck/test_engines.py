@@ -1,4 +1,4 @@
-"""Other engines as referees (manipdyn.validation.engines): what each engine does with one URDF quirk, the cause
+"""Other engines as referees (manipdyn.validation.referee): what each engine does with one URDF quirk, the cause
 the referee names for it (link and kind), and agreement once the engine's own parameters are fed back.
 
 The quirk files are tests/data/quirks/*.urdf: two revolute joints, the quirk on ``link1`` (or on the joints).
@@ -18,7 +18,10 @@ import pytest
 from conftest import AAU, ROOT
 
 from manipdyn.io.urdf import load_urdf
-from manipdyn.validation import engines as E
+from manipdyn.validation import adapters as A
+from manipdyn.validation import referee as R
+from manipdyn.validation.causes import neutralised
+from manipdyn.validation.referee_urdf import urdf_inertials
 
 QUIRKS = ROOT / "tests" / "data" / "quirks"
 NEUTRAL = 1e-13          # measured ≤ 4e-15 after neutralising, every engine, every file here
@@ -28,13 +31,13 @@ N = 10                   # random states per file
 
 
 def need(engine):
-    pytest.importorskip(E.MODULES[engine])
+    pytest.importorskip(A.MODULES[engine])
 
 
 def run(path, engine, n=N):
     with _nowarn():
         model = load_urdf(path)
-    rep = E.referee(model, path, [engine], n_states=n, seed=3)
+    rep = R.referee(model, path, [engine], n_states=n, seed=3)
     return model, rep.engines[0]
 
 
@@ -52,8 +55,8 @@ class _nowarn:
 def adapter(path, engine):
     with _nowarn():
         model = load_urdf(path)
-    with E._quiet():
-        return model, E.load_engine(engine, model, path)
+    with R._quiet():
+        return model, A.load_engine(engine, model, path)
 
 
 def kinds(res, link):
@@ -135,7 +138,7 @@ def test_triangle_violation_pinocchio_keeps_it():
     assert res.causes == [] and res.worst <= RAW
 
 
-@pytest.mark.parametrize("engine", E.ENGINES)
+@pytest.mark.parametrize("engine", A.ENGINES)
 @pytest.mark.parametrize("quirk, link", [("rotated_inertial", "link1"), ("fixed_child", "tool")])
 def test_rotated_inertial_frame_every_engine_rotates_it(engine, quirk, link):
     # fixed_child: a massive tool on a rotated fixed joint with a rotated inertial frame, which we merge into
@@ -148,7 +151,7 @@ def test_rotated_inertial_frame_every_engine_rotates_it(engine, quirk, link):
     assert res.worst <= (RAW_PB if engine == "pybullet" else RAW)     # measured 2.1e-14 / 2.5e-15
     assert res.worst_neutral <= NEUTRAL                                # measured 2.4e-15
     if engine != "pinocchio":            # the link's inertia in its frame is the file's R I Rᵀ, not the raw I
-        f = E.urdf_inertials(path)[link]
+        f = urdf_inertials(path)[link]
         assert np.max(np.abs(ad.links[link][2] - f.inertia)) < 1e-10 < np.max(np.abs(f.raw - f.inertia))
 
 
@@ -164,7 +167,7 @@ def test_damping_from_dynamics_agrees_with_mujoco_and_drake(engine):
     assert res.causes == [] and res.worst <= RAW               # measured ≤ 2.0e-15
     with _nowarn():
         bare = load_urdf(QUIRKS / "damping.urdf", joint_dynamics={j: dict(damping=0.0) for j in ("j1", "j2")})
-    res = E.referee(bare, QUIRKS / "damping.urdf", [engine], n_states=N, seed=3).engines[0]
+    res = R.referee(bare, QUIRKS / "damping.urdf", [engine], n_states=N, seed=3).engines[0]
     assert res.err["tau"] > 1e-2 and res.err["M"] <= RAW      # damping: τ and q̈ differ, M does not
     assert kinds(res, "j1") == kinds(res, "j2") == {"damping"}
     assert res.explained and res.worst_neutral <= NEUTRAL     # measured 2.0e-15
@@ -190,7 +193,7 @@ def test_armature_drake_reflected_rotor_inertia():
     assert res.explained and res.worst_neutral <= NEUTRAL     # measured 4.7e-16
     with _nowarn():                                 # the same armature ours (model.armature): agreement as it is
         model = load_urdf(path, joint_dynamics={"j1": dict(armature=0.2)})
-    res = E.referee(model, path, ["drake"], n_states=N, seed=3).engines[0]
+    res = R.referee(model, path, ["drake"], n_states=N, seed=3).engines[0]
     assert res.causes == [] and res.worst <= RAW               # measured ≤ 1e-15
 
 
@@ -204,7 +207,7 @@ def test_armature_tags_of_drake_ignored_by_the_others(engine):
 def test_pybullet_precision_named_on_products_of_inertia():
     need("pybullet")
     _, ad = adapter(QUIRKS / "products_of_inertia.urdf", "pybullet")
-    f = E.urdf_inertials(QUIRKS / "products_of_inertia.urdf")["link1"]
+    f = urdf_inertials(QUIRKS / "products_of_inertia.urdf")["link1"]
     rel = np.max(np.abs(ad.links["link1"][2] - f.inertia)) / np.max(np.abs(f.inertia))
     assert 1e-10 < rel < 1e-7                     # measured 3.3e-9: its diagonalisation's tolerance
     _, res = run(QUIRKS / "products_of_inertia.urdf", "pybullet")
@@ -218,7 +221,7 @@ def test_neutralising_is_not_a_tautology():
     need("pybullet")
     model, pb = adapter(QUIRKS / "no_inertial.urdf", "pybullet")
     i = model.body_names.index("link1")
-    assert model.mass[i] == 0.0 and E.neutralised(model, pb).mass[i] == 1.0
+    assert model.mass[i] == 0.0 and neutralised(model, pb).mass[i] == 1.0
 
 
 # ---- real robots ----------------------------------------------------------------------------------------------
@@ -228,7 +231,7 @@ def zoo(rel):
     return robots_dir() / rel
 
 
-@pytest.mark.parametrize("engine", E.ENGINES)
+@pytest.mark.parametrize("engine", A.ENGINES)
 def test_aau_arm(engine):
     need(engine)
     _, res = run(AAU, engine)
@@ -239,7 +242,7 @@ def test_aau_arm(engine):
         assert res.causes == [] and res.worst <= RAW          # measured ≤ 2.3e-15
 
 
-@pytest.mark.parametrize("engine", E.ENGINES)
+@pytest.mark.parametrize("engine", A.ENGINES)
 def test_ur5_every_engine_agrees(engine):
     need(engine)
     _, res = run(zoo("ur_description/urdf/ur5_robot.urdf"), engine)
@@ -289,8 +292,8 @@ def test_cli_unknown_engine_is_one_line_exit_2(capsys):
 
 def test_cli_missing_engine_is_skipped_with_a_note(monkeypatch, capsys):
     from manipdyn.cli import main
-    real = E.available
-    monkeypatch.setattr(E, "available", lambda name: False if name == "drake" else real(name))
+    real = A.available
+    monkeypatch.setattr(A, "available", lambda name: False if name == "drake" else real(name))
     assert main(["validate", str(AAU), "--against", "pinocchio,drake", "--states", "3"]) == 0
     out = capsys.readouterr().out
     assert "drake      missing  drake is not installed (pip install drake" in out
@@ -300,7 +303,7 @@ def test_engines_are_not_imported_by_the_referee_module():
     # importing the referee loads no engine; the adapters import them on use
     import subprocess
     import sys
-    code = ("import sys, manipdyn.validation.engines, manipdyn.validation.referee_zoo; "
+    code = ("import sys, manipdyn.validation.referee, manipdyn.validation.referee_zoo; "
             "print(sorted(m for m in ('mujoco', 'pybullet', 'pydrake') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, timeout=120)

@@ -1,4 +1,4 @@
-"""The engines referee on free-flyer robots (validation/engines.py, FloatingBase): each engine's floating base mapped
+"""The engines referee on free-flyer robots (validation/adapters.py, FloatingBase): each engine's floating base mapped
 to ours at the adapter, τ, M and q̈ compared as on fixed-base files (tests/crosscheck/test_engines.py).
 
 Ours: q = [x y z qx qy qz qw], v = [linear; angular] in the body frame (docs/design.md §3). MuJoCo: a free joint added
@@ -26,7 +26,8 @@ import pytest
 from conftest import ROOT
 
 from manipdyn.io.urdf import load_urdf
-from manipdyn.validation import engines as E
+from manipdyn.validation import adapters as A
+from manipdyn.validation.referee import referee
 from manipdyn.validation.zoo import floating_paths
 
 RAW = 1e-13              # measured ≤ 1.2e-15 (τ, M, q̈/κ; Pinocchio, MuJoCo, Drake; no quirk)
@@ -47,12 +48,12 @@ def _path(stem):
 
 
 def _run(stem, engine):
-    pytest.importorskip(E.MODULES[engine])
+    pytest.importorskip(A.MODULES[engine])
     path = _path(stem)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = load_urdf(path, root_joint="free_flyer")
-    rep = E.referee(model, path, [engine], n_states=10, seed=3)
+    rep = referee(model, path, [engine], n_states=10, seed=3)
     return model, rep
 
 
@@ -99,11 +100,11 @@ def test_report_rows_for_a_floating_robot(capsys):
     print(out)
     assert code == 0
     rows = {line.split()[0]: line.split() for line in out.splitlines() if line.startswith("  ") and
-            line.split()[0] in E.ENGINES}
+            line.split()[0] in A.ENGINES}
     for e in ("pinocchio", "mujoco", "drake"):
-        if E.available(e):
+        if A.available(e):
             assert rows[e][1] == "ok" and all(float(x) <= RAW for x in rows[e][2:5]), rows[e]
-    if E.available("pybullet"):
+    if A.available("pybullet"):
         assert rows["pybullet"][1:5] == ["ok", "-", rows["pybullet"][3], "-"] and float(rows["pybullet"][3]) <= RAW_PB
     assert "every disagreement above" in out
 
@@ -115,9 +116,9 @@ def test_floating_base_map_is_the_engines_convention():
     u = rng.normal(size=4)
     q = np.concatenate([rng.normal(size=3), u / np.linalg.norm(u)])
     v = rng.normal(size=6)
-    R = E._rotation_xyzw(q[3:7])
-    fm = E.FloatingBase("mujoco", 0, [], 6)
-    fd = E.FloatingBase("drake", 0, [], 6)
+    R = A._rotation_xyzw(q[3:7])
+    fm = A.FloatingBase("mujoco", 0, [], 6)
+    fd = A.FloatingBase("drake", 0, [], 6)
     assert np.allclose(fm.P(q) @ v, np.concatenate([R @ v[:3], v[3:]]), rtol=0, atol=1e-15)
     assert np.allclose(fd.P(q) @ v, np.concatenate([R @ v[3:], R @ v[:3]]), rtol=0, atol=1e-15)
     for f in (fm, fd):                                   # orthogonal: the FD map f = P τ is Pᵀ's inverse

@@ -1,4 +1,4 @@
-"""The engines referee (manipdyn.validation.engines) on MJCF files with ball joints: MuJoCo compiles the file itself
+"""The engines referee (manipdyn.validation.referee) on MJCF files with ball joints: MuJoCo compiles the file itself
 and its joints are mapped to ours by name (a ball's qpos [qw qx qy qz] against our [qx qy qz qw], its qvel the same
 body-frame ω); Pinocchio reads it with buildModelFromMJCF (refused by name when it makes one body's joints a
 composite joint); PyBullet and Drake, whose adapters load URDF, refuse naming the ball joints.
@@ -20,7 +20,8 @@ from conftest import ROOT
 from test_mjcf_import import BALLS, FREE_BALL
 
 import manipdyn as md
-from manipdyn.validation import engines as E
+from manipdyn.validation.adapters import MODULES
+from manipdyn.validation.referee import referee
 
 RAW = 1e-13              # measured ≤ 2.2e-15 (τ, M, q̈/cond(M); MuJoCo and Pinocchio)
 N = 20
@@ -39,7 +40,7 @@ def _referee(path, engines, model=None):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = model or md.load_mjcf(path)
-        return model, E.referee(model, path, engines, n_states=N, seed=3)
+        return model, referee(model, path, engines, n_states=N, seed=3)
 
 
 @pytest.mark.parametrize("name", ["balls", "free_ball", "humanoid"])
@@ -81,7 +82,7 @@ def test_pinocchio_on_mjcf_and_its_composite_joints(tmp_path):
 
 @pytest.mark.parametrize("engine", ["pybullet", "drake"])
 def test_urdf_engines_refuse_ball_joints_by_name(engine, tmp_path):
-    pytest.importorskip(E.MODULES[engine])
+    pytest.importorskip(MODULES[engine])
     _, rep = _referee(_file(tmp_path, "balls"), [engine])
     res = rep.engines[0]
     assert res.status == "refused" and res.reason.startswith(f"{engine}: ball joints ('shoulder', 'wrist')")

@@ -189,7 +189,7 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
 @pytest.mark.parametrize("name", ["floating", "ball"])
 @pytest.mark.parametrize("N", [1, 7])
 def test_gpu_takes_free_flyers_and_ball_joints(probe, name, N):
-    """The multi-dof lane steps (core.quat_placement_lane, rnea.motion_lane_multi and torque_multi_lane, crba's
+    """The multi-dof lane steps (lanes.quat_placement_lane, rnea.motion_lane_multi and torque_multi_lane, crba's
     columns of a multi-dof joint, aba.articulated_multi, handed_multi, acceleration_multi) driven one
     thread per state give the CPU's numbers (whose lanes are held to Pinocchio: tests/batch/test_lanes_multi_dof.py)."""
     model = floating_model() if name == "floating" else ball_model()

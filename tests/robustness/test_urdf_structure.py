@@ -9,7 +9,7 @@ import pytest
 from conftest import assert_close
 
 from manipdyn import InputError, ManipdynError, ModelError, URDFError, load_urdf, load_urdf_string, rnea
-from manipdyn.io.urdf import MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS
+from manipdyn.io.safe_xml import MAX_BYTES, MAX_INERTIA, MAX_LENGTH, MAX_MASS
 from manipdyn.validation import robots_dir
 
 LIMIT = '<limit lower="-1" upper="1" effort="10" velocity="2"/>'

@@ -1,5 +1,5 @@
 """numba's on-disk cache must never hide an edit: changing any kernel source recompiles every compiled
-function that depends on it, across modules (kinematics.py and closures.py inline core.fk_pass, which
+function that depends on it, across modules (kinematics.py and closures.py inline forward_kinematics.fk_pass, which
 inlines joints.joint_placement).
 
 The end-to-end case copies the package to a temporary folder, runs it in a fresh interpreter to fill the
@@ -21,7 +21,7 @@ from conftest import ROOT, assert_close
 from manipdyn import _jit
 
 # frame_kernel (dynamics/kinematics.py), closure_kernel (constraints/closures.py) and rnea_kernel
-# (dynamics/rnea.py), all inlining joints.joint_placement through core.fk_pass, on one fixed state of the
+# (dynamics/rnea.py), all inlining joints.joint_placement through forward_kinematics.fk_pass, on one fixed state of the
 # spherical parallel manipulator.
 PROBE = f"""
 import json, numpy as np, manipdyn as md

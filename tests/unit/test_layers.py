@@ -2,9 +2,9 @@
 imports inside functions too, which an import-only test never sees — points to the same layer or one below,
 and no chain of imports between manipdyn's modules comes back to where it started.
 
-Layers, bottom up: errors/_jit/paths/extras → spatial → model (model, joints, reduce) → io → dynamics →
-constraints → simulation → the package's public API (manipdyn/__init__.py) → examples → validation →
-bench → viz → cli. Closed chains (constraints/) sit on top of tree dynamics (dynamics/); simulation uses
+Layers, bottom up: errors/_jit/paths/extras → spatial → model (model, joints, reduce, quirks, kernel_form) →
+io → dynamics → constraints → simulation → the package's public API (manipdyn/__init__.py) → examples →
+validation → bench → viz → cli. Closed chains (constraints/) sit on top of tree dynamics (dynamics/); simulation uses
 both. A module that is in no layer fails the test until it is placed.
 """
 from __future__ import annotations
@@ -17,7 +17,8 @@ from conftest import ROOT
 PKG = ROOT / "manipdyn"
 LAYERS = (("base", ("manipdyn.errors", "manipdyn._jit", "manipdyn.paths", "manipdyn.extras")),
           ("spatial", ("manipdyn.spatial",)),
-          ("model", ("manipdyn.model", "manipdyn.joints", "manipdyn.reduce")),
+          ("model", ("manipdyn.model", "manipdyn.joints", "manipdyn.reduce", "manipdyn.quirks",
+                     "manipdyn.kernel_form")),
           ("io", ("manipdyn.io",)),
           ("dynamics", ("manipdyn.dynamics", "manipdyn.configuration")),
           ("constraints", ("manipdyn.constraints",)),
@@ -165,7 +166,7 @@ def test_the_checks_catch_an_upward_import_and_a_cycle(tmp_path):
 
 
 ENGINE_MODULES = ("mujoco", "pybullet", "pybullet_data", "pydrake")
-ENGINE_HOSTS = ("manipdyn.validation.engines", "manipdyn.validation.referee_zoo")
+ENGINE_HOSTS = ("manipdyn.validation.adapters", "manipdyn.validation.referee_zoo")
 
 
 def engine_imports(path):
@@ -181,7 +182,7 @@ def engine_imports(path):
 
 
 def test_other_engines_are_imported_only_by_the_referee_and_lazily():
-    # MuJoCo, PyBullet and Drake are optional (manipdyn[engines]): only validation/engines.py and
+    # MuJoCo, PyBullet and Drake are optional (manipdyn[engines]): only validation/adapters.py and
     # validation/referee_zoo.py import them, inside functions (importlib.import_module counts as lazy)
     _, known = graph()
     found = {m: engine_imports(p) for m, p in known.items()}

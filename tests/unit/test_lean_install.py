@@ -121,7 +121,7 @@ out["finite"] = bool(np.all(np.isfinite(tau)) and np.all(np.isfinite(manipdyn.ab
                      and np.all(np.isfinite(manipdyn.mass_matrix(model, q))))
 out["aba_inverts_rnea"] = float(np.max(np.abs(manipdyn.aba(model, q, v, tau) - a)))
 
-import manipdyn.cli, manipdyn.validation, manipdyn.validation.engines, manipdyn.validation.fig7
+import manipdyn.cli, manipdyn.validation, manipdyn.validation.referee, manipdyn.validation.fig7
 import manipdyn.validation.referee_zoo, manipdyn.bench, manipdyn.bench.hard, manipdyn.viz, manipdyn.examples.aau_arm
 out["after_feature_modules"] = sorted(m for m in OPTIONAL if m in sys.modules)
 
@@ -130,7 +130,7 @@ tmp = Path(tempfile.mkdtemp())
 t = np.linspace(0.0, 1.0, 3)
 Q = np.tile(q, (3, 1))
 from manipdyn.validation.reference import Reference
-from manipdyn.validation.engines import _import, load_engine
+from manipdyn.validation.adapters import _import, load_engine
 class FakeDask:                   # what a Dask array looks like to the route (dask itself is not installed)
     __module__ = "dask.array.core"
     def map_blocks(self):

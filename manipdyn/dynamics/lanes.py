@@ -1,182 +1,20 @@
-"""The compiled core every algorithm shares: the model in kernel form, 3-vector helpers, and forward
-kinematics — the one pass that places the bodies in the world (and gives their velocities), which
-placements, Jacobians, J̇, energies, playback and the loop closures all read.
+"""Lane blocks: a batch as blocks of LANES states, the state index last (the lane kernels, docs/design.md §4c).
 
-Kernel form (``kernel_arrays``, built once per model): two arrays instead of many (each array argument
-of a compiled call costs ~30 ns of dispatch, each reshape inside a kernel as much again):
-  I (5, nb) int64        = rows parent, kind, idx_q, idx_v, nv_j (one column per joint: rows are contiguous
-                           views, ~40 ns cheaper per call to unpack than strided columns)
-  F (4 nb + 1 + m, 3, 3) = blocks of 3×3 numbers:  F[0:nb] R0,  F[nb:2nb] inertia (about the CoM, body axes),
-                           F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[3nb:4nb, 0, 1] pitch,  F[4nb, 0] −g,
-                           F[4nb+1:4nb+1+m] S (nv, 6), padded to m = max(2, 2⌈nv/3⌉) blocks,
-                           F[4nb+1+m:] the armature (nv,), padded to whole blocks,
-viewed again by ``unpack`` inside the kernels (slices, one reshape).
-S holds one row per joint velocity, [linear; angular] in the body frame (``joints.motion_subspace``).
-
-Placement convention (owned here): R maps body coordinates into the parent's (or the world's), x_parent
-= R x_body + p; so the chapter's R^i_{i−1} x is Rᵀ x.
+A block's numbers live in records, rows of L numbers each (L = LANES on the CPU, the batch size on a GPU): a
+state's q, q̇, q̈ (``gather_lanes``, ``gather_lane`` for a GPU thread), a body's placement and motion (``placement_lane``,
+``quat_placement_lane``), read and written a 3- or 6-tuple at a time (``get3``, ``set3``…). What a body's step takes
+from the model is read once per block (``placement_model``, ``motion_model``, ``inertial_model``); ``on_lanes`` says
+which models the lane steps take.
 """
 from __future__ import annotations
-
-from collections import namedtuple
 
 import numpy as np
 
 from .._jit import njit
-from ..joints import PRISMATIC, REVOLUTE, joint_placement, joint_velocity, multi_dof, quat_layout, quat_rotation
-from ..spatial import SINCOS_MAX, first_nonfinite, sincos
+from ..joints import PRISMATIC, REVOLUTE, multi_dof, quat_layout, quat_rotation
+from ..spatial import SINCOS_MAX, sincos
 
 
-def kernel_arrays(model):
-    """(I, F): the model in the kernels' two-array form (``model.Model.kernel``, built with the model)."""
-    return model.kernel.arrays
-
-
-ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature pitch")
-ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
-    parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
-    kind (nb,) int     the joint's code in the registry (joints.KINDS, joints.IN_MODEL)
-    iq, iv (nb,) int   joint i's first entry in q and in v
-    nvj (nb,) int      joint i's number of velocities
-    S (nv, 6)          motion subspace rows [linear; angular] in the body frame (joints.motion_subspace)
-    axis (nb, 3)       joint axis in the body frame
-    R0 (nb, 3, 3)      joint frame in the parent body at q = 0;   p0 (nb, 3) its origin
-    mass (nb,)         body mass;   com (nb, 3) centre of mass (body frame);   inertia (nb, 3, 3) about the CoM
-    mg (3,)            −g, the base acceleration that stands for gravity
-    armature (nv,)     rotor inertia per velocity (Model.armature): M + diag(armature), τ += armature ⊙ q̈
-    pitch (nb,)        a helical joint's pitch, m/rad (0 for every other kind)"""
-
-
-@njit(cache=True, inline="always")
-def unpack(I, F):
-    """The named views (``ModelArrays``) of the two kernel arrays (the layout is Model.kernel's: KernelForm)."""
-    nb = I.shape[1]
-    nv = I[3, nb - 1] + I[4, nb - 1] if nb else 0        # velocities in body order: the last body's end
-    m = max(2, 2 * ((nv + 2) // 3))                      # S's blocks (KernelForm.of)
-    B = F[2 * nb:3 * nb]
-    return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:nv],
-                       B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0],
-                       F[4 * nb + 1 + m:].reshape(-1)[:nv], F[3 * nb:4 * nb, 0, 1])
-
-
-# -- forward kinematics: the one pass -----------------------------------------------------------------
-
-@njit(cache=True, inline="always")
-def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
-    """Forward kinematics of one state (mdl = ``unpack(I, F)``, unpacked once per kernel call). Every body i:
-      (Rl, pl)[i]  its placement in its parent (joints.joint_placement),
-      (Rw, pw)[i]  in the world: Rw_i = Rw_λ Rl_i, pw_i = pw_λ + Rw_λ pl_i,
-    and, when v has entries (len(v) = nv; pass an empty v to skip), its world angular velocity ww_i and
-    the world velocity of its origin vw_i:  ω_i = ω_λ + Rw_i S_ang q̇_i,
-    v_i = v_λ + ω_λ × (pw_i − pw_λ) + Rw_i S_lin q̇_i  (Eqs. 3–4, 9–11 in world axes)."""
-    nb = mdl.parent.shape[0]
-    for i in range(nb):
-        fk_place(mdl, i, q, Rl, pl, Rw, pw)
-    # velocities in a loop of their own: the velocity branch inside the placement loop tripled its cost
-    for i in range(nb if v.shape[0] > 0 else 0):
-        fk_velocity(mdl, i, v, Rw, pw, ww, vw)
-
-
-@njit(cache=True, inline="always")
-def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
-    """``fk_pass`` for the bodies from the root to body ``tip`` only (its support: what a frame on ``tip``
-    depends on; path (nb,) int scratch). Other bodies' entries are left as they were."""
-    parent = mdl.parent
-    n, j = 0, tip
-    while j >= 0:                                    # tip, its parent, …, the root
-        path[n] = j
-        n += 1
-        j = parent[j]
-    for k in range(n - 1, -1, -1):
-        fk_place(mdl, path[k], q, Rl, pl, Rw, pw)
-    for k in range(n - 1 if v.shape[0] > 0 else -1, -1, -1):
-        fk_velocity(mdl, path[k], v, Rw, pw, ww, vw)
-
-
-@njit(cache=True, inline="always")
-def fk_place(mdl, i, q, Rl, pl, Rw, pw):
-    """Body i's placement in its parent (Rl, pl)[i] and in the world (Rw, pw)[i] (its parent's done first)."""
-    parent, kind, iq, axis, pitch, R0, p0 = mdl.parent, mdl.kind, mdl.iq, mdl.axis, mdl.pitch, mdl.R0, mdl.p0
-    joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)
-    j = parent[i]
-    if j < 0:
-        for a in range(3):
-            for b in range(3):
-                Rw[i, a, b] = Rl[i, a, b]
-            pw[i, a] = pl[i, a]
-    else:
-        for a in range(3):
-            for b in range(3):
-                Rw[i, a, b] = Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
-            pw[i, a] = pw[j, a] + Rw[j, a, 0] * pl[i, 0] + Rw[j, a, 1] * pl[i, 1] + Rw[j, a, 2] * pl[i, 2]
-
-
-@njit(cache=True, inline="always")
-def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
-    """Body i's world angular velocity ww[i] and origin velocity vw[i] (its parent's done first), without
-    scratch arrays: (l, a) = S q̇ of the joint as scalars (joints.joint_velocity)."""
-    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
-    (l0, l1, l2), (a0, a1, a2) = joint_velocity(S, iv[i], nvj[i], v)
-    j = parent[i]
-    for a in range(3):
-        wa = Rw[i, a, 0] * a0 + Rw[i, a, 1] * a1 + Rw[i, a, 2] * a2
-        la = Rw[i, a, 0] * l0 + Rw[i, a, 1] * l1 + Rw[i, a, 2] * l2
-        ww[i, a] = wa if j < 0 else ww[j, a] + wa
-        vw[i, a] = la if j < 0 else vw[j, a] + la
-    if j >= 0:                                   # ω_λ × (pw_i − pw_λ)
-        dx, dy, dz = pw[i, 0] - pw[j, 0], pw[i, 1] - pw[j, 1], pw[i, 2] - pw[j, 2]
-        vw[i, 0] += ww[j, 1] * dz - ww[j, 2] * dy
-        vw[i, 1] += ww[j, 2] * dx - ww[j, 0] * dz
-        vw[i, 2] += ww[j, 0] * dy - ww[j, 1] * dx
-
-
-@njit(cache=True, inline="always")
-def nonfinite_input(Q, V, s):
-    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V
-    (``spatial.first_nonfinite`` on each row)."""
-    k = first_nonfinite(Q, s)
-    if k >= 0:
-        return s * Q.shape[1] + k
-    k = first_nonfinite(V, s)
-    if k >= 0:
-        return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
-    return -1
-
-
-@njit(cache=True, inline="always")
-def wrench_rows_of(f, m, P):
-    """One state's single external wrench as the kernels read it (state.fast_wrenches): X (1, K, 6) =
-    [R f; R m], body (K,) and point (K, 3), from the force f (3,), the moment m (3,) and the frame's row P (13,)
-    = [R row by row (R turns the frame's axes into the body's), its origin in the body, body]. K = 0 for a
-    wrench on the fixed base (it changes no joint torque)."""
-    K = 1 if P[12] >= 0 else 0
-    X, body, point = np.empty((1, K, 6)), np.empty(K, np.int64), np.empty((K, 3))
-    for k in range(K):
-        body[k] = int(P[12])
-        for r in range(3):
-            X[0, k, r] = P[3 * r] * f[0] + P[3 * r + 1] * f[1] + P[3 * r + 2] * f[2]
-            X[0, k, 3 + r] = P[3 * r] * m[0] + P[3 * r + 1] * m[1] + P[3 * r + 2] * m[2]
-            point[k, r] = P[9 + r]
-    return X[:, :, :], body[::1], point[:, :]          # views of the kernels' layout (_jit: "A")
-
-
-@njit(cache=True, inline="always")
-def no_wrenches(I, F):
-    """X (1, 0, 3), body (0,), point (0, 3), world = False: no external wrench, in the layout of ``wrench_rows_of``
-    — views with no rows of the model's arrays (I, F), so that a one-state call allocates nothing for them (X's
-    entries are never read without a wrench); world a run-time bool, not the constant False, for which numba
-    would compile anew."""
-    return F[:1, :0, :], I[0, :0][::1], F[0, :0, :], np.bool_(False)
-
-
-@njit(cache=True, inline="always")
-def finite_state(Q, V, A, s):
-    """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry
-    (``spatial.first_nonfinite`` on each row)."""
-    return max(first_nonfinite(Q, s), first_nonfinite(V, s), first_nonfinite(A, s)) < 0   # no early exit
-
-
-# -- lane blocks: a batch as blocks of LANES states, the state index last (the lane kernels, docs/design.md §4c)
 FINITE = 1.7976931348623157e308   # the largest float64: Σ|x| ≤ FINITE means every x is finite (gather_lanes)
 LANES = 64     # states per block: the lane kernels' innermost loops run over them (measured on ur5: 32 → 64 → 128
 #                lanes 118 → 116 → 115 ns per state; 8 lanes 385: too short a loop to vectorise)
@@ -315,7 +153,7 @@ def lane_record(even, odd, depth, i, rows):
 @njit(cache=True, inline="always")
 def on_lanes(mdl, nq, multi=False):
     """True when the lane steps apply to the model (nq: a state's q entries): every joint is revolute or prismatic
-    about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, model.z_aligned) — or, for a
+    about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, kernel_form.z_aligned) — or, for a
     kernel whose steps take them (``multi``), a free flyer or a ball joint (``joints.multi_dof``). Any other kind
     (helical, planar) sends the batch to the lane kernel's scalar kernel, which takes every joint of the registry."""
     nb = mdl.parent.shape[0]
@@ -452,52 +290,3 @@ def quat_placement_lanes(i, mdl, B, Z):
     pm = quat_model(i, mdl)
     for l in range(LANES):
         quat_placement_lane(pm, B, Z, l, LANES)
-
-
-@njit(cache=True)
-def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
-    """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).
-    Returns -1, or the flat index (state·nq + entry) of the first non-finite entry of Q (V: + N·nq)."""
-    N, nb, mdl = Q.shape[0], I.shape[1], unpack(I, F)
-    Rl, pl = np.empty((nb, 3, 3)), np.empty((nb, 3))
-    for s in range(N):
-        bad = nonfinite_input(Q, V, s)
-        if bad >= 0:
-            return bad
-        fk_pass(mdl, Q[s], V[s], Rl, pl, Rw[s], pw[s], ww[s], vw[s])
-    return -1
-
-
-@njit(cache=True)
-def joint_placements_kernel(I, F, Q, R, p):
-    """Placement of every body in its parent for every state: R (N, nb, 3, 3), p (N, nb, 3)."""
-    mdl = unpack(I, F)
-    kind, iq, axis, pitch, R0, p0 = mdl.kind, mdl.iq, mdl.axis, mdl.pitch, mdl.R0, mdl.p0
-    for s in range(Q.shape[0]):
-        q, Rs, ps = Q[s], R[s], p[s]
-        for i in range(I.shape[1]):
-            joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rs, ps)
-
-
-# -- Python entry points --------------------------------------------------------------------------------
-
-def joint_placements(model, Q):
-    """Placement of every body in its parent for a checked batch Q (N, nq): R (nb, N, 3, 3), p (nb, N, 3)."""
-    N, nb = Q.shape[0], model.njoints
-    R, p = np.empty((N, nb, 3, 3)), np.empty((N, nb, 3))
-    if nb:
-        joint_placements_kernel(*kernel_arrays(model), np.ascontiguousarray(Q), R, p)
-    return np.moveaxis(R, 1, 0), np.moveaxis(p, 1, 0)
-
-
-def forward_kinematics(model, Q, V=None):
-    """World placements of every body for a checked batch Q (N, nq) [and twists for V (N, nv)]:
-    R (nb, N, 3, 3), p (nb, N, 3) [, ω (nb, N, 3), v (nb, N, 3) world velocity of each origin]."""
-    N, nb = Q.shape[0], model.njoints
-    Rw, pw = np.empty((N, nb, 3, 3)), np.empty((N, nb, 3))
-    ww, vw = np.empty((N, nb, 3)), np.empty((N, nb, 3))
-    Vk = np.empty((N, 0)) if V is None else np.ascontiguousarray(V, float)
-    if nb:
-        fk_kernel(*kernel_arrays(model), np.ascontiguousarray(Q, float), Vk, Rw, pw, ww, vw)
-    out = (np.moveaxis(Rw, 1, 0), np.moveaxis(pw, 1, 0))
-    return out if V is None else out + (np.moveaxis(ww, 1, 0), np.moveaxis(vw, 1, 0))

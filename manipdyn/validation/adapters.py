@@ -1,4 +1,5 @@
-"""Other engines as referees: Pinocchio, MuJoCo, PyBullet and Drake on the same URDF and the same states.
+"""Engine adapters: Pinocchio, MuJoCo, PyBullet and Drake each loading one URDF (or MJCF) file and answering τ, M
+and q̈ in our joint order, plus the engine names, their packages and ``load_engine``.
 
 Each engine loads the file its own way; an adapter maps its joint order to ours by joint name (1-dof joints: q
 and v share the order; a continuous joint is one angle everywhere but in Pinocchio, whose (cos, sin) the
@@ -23,58 +24,43 @@ fuses static bodies by default, which would hide link names; ``balanceinertia`` 
 break the triangle inequality; ``inertiafromgeom`` would recompute them from geoms). PyBullet recomputes
 inertias from collision shapes unless ``URDF_USE_INERTIA_FROM_FILE`` is given: it is. Its gravity defaults
 to zero: we set ours. Drake welds the root link to the world (fixed base). <visual> and <collision> are
-removed before any engine reads the file: no engine then needs meshes, and none can derive inertia from them.
+removed before any engine reads the file (``referee_urdf.stripped_urdf``): no engine then needs meshes, and none
+can derive inertia from them.
 
 After import each adapter reads back every link's mass, CoM and inertia about the CoM in the link frame
-(Pinocchio: per body, fixed links already merged) and the armature/damping it adds per dof. The comparison
-includes our own joint dynamics (docs/design.md §3): the model's armature (in ``rnea`` and ``mass_matrix``) and
-its damping (URDF ``<dynamics damping>``) wherever the engine applies damping (``applied_damping``); friction is
-left out on both sides (MuJoCo's frictionloss is a constraint, off in these queries). ``explain`` diffs the
-engine's parameters against the file's own numbers, link by link, and against our armature and damping, and names
-the quirk; ``referee`` then rebuilds our model with the engine's parameters (``dataclasses.replace`` on
-mass/com/inertia, the engine's armature and damping added analytically) and compares again: what remains is the
-engine's precision.
+(``links``; Pinocchio: per body, fixed links already merged) and the armature/damping it adds per dof
+(``armature``, ``damping``): what causes.py compares with the file and our model.
 
-An MJCF file (``robot_format``: root element ``<mujoco>``) is refereed as written: MuJoCo compiles the file (its
+An MJCF file (``robot_format``: root element ``<mujoco>``) is taken as written: MuJoCo compiles the file (its
 free joint, ball joints, armature and damping; joint springs, which the model holds as quirks, turned off), each
 joint mapped by name — a ball's qpos (w, x, y, z) against our (x, y, z, w), its qvel the body-frame ω as ours;
 Pinocchio reads it with ``buildModelFromMJCF`` (refused by name where it makes one body's joints a composite
-joint); the PyBullet and Drake adapters load URDF and refuse, naming the ball joints (or the MJCF file). The
-causes then compare the engine's bodies with the model's (``explain``; no per-link URDF ``<inertial>``).
+joint); the PyBullet and Drake adapters load URDF and refuse, naming the ball joints (or the MJCF file).
 
-Engines are imported here only, lazily, inside the adapters: ``import manipdyn`` loads none of them.
+Engines are imported here only (and in referee_zoo.py), lazily, inside the adapters: ``import manipdyn`` loads
+none of them.
 """
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import importlib.util
 import logging
-import math
 import re
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-from ..dynamics.aba import aba
-from ..dynamics.crba import mass_matrix
-from ..dynamics.rnea import rnea
 from ..errors import InputError, ManipdynError, MissingExtraError
 from ..extras import install_command, require
 from ..io.load import robot_format
-from ..model import BALL, FREEFLYER, PRISMATIC, REVOLUTE
-from ..joints import TYPE_NAMES
-from ..spatial import combine_inertias, rpy_matrix
-from .compare import random_states
-from .measure import error
+from ..joints import BALL, FREEFLYER, PRISMATIC, REVOLUTE
+from .referee_urdf import stripped_urdf
 
 ENGINES = ("pinocchio", "mujoco", "pybullet", "drake")
 MODULES = {"pinocchio": "pinocchio", "mujoco": "mujoco", "pybullet": "pybullet", "drake": "pydrake"}
 PIP = {"pinocchio": "pin", "mujoco": "mujoco", "pybullet": "pybullet", "drake": "drake"}
 EXTRA = {"pinocchio": "validate", "mujoco": "engines", "pybullet": "engines", "drake": "engines"}   # manipdyn[...]
-TOL = 1e-9                    # a disagreement above this must carry a named cause
 MUJOCO_COMPILER = ('<mujoco><compiler angle="radian" discardvisual="true" fusestatic="false" '
                    'balanceinertia="false" inertiafromgeom="false"/></mujoco>')
 
@@ -101,52 +87,6 @@ def available(name) -> bool:
     """True when the engine's Python package can be imported (checked without importing it)."""
     return importlib.util.find_spec(MODULES[name]) is not None
 
-
-# ---- the file's own numbers ---------------------------------------------------------------------------------
-
-@dataclasses.dataclass
-class LinkInertial:
-    """A URDF link's <inertial> as written: mass, CoM and inertia about the CoM in the link frame."""
-    present: bool              # False: the link has no <inertial>
-    mass: float
-    com: np.ndarray            # (3,)
-    inertia: np.ndarray        # (3, 3) in the link frame (the inertial origin's rotation applied)
-    rotated: bool              # the inertial origin has a non-zero rpy
-    raw: np.ndarray            # (3, 3) as written, in the inertial frame
-
-
-def urdf_inertials(path) -> dict:
-    """{link name: LinkInertial} read from the file (lxml without entities or network, as the loader)."""
-    from lxml import etree
-    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, remove_comments=True)
-    root = etree.fromstring(Path(path).read_bytes(), parser)
-    out = {}
-    for link in root.findall("link"):
-        e = link.find("inertial")
-        if e is None:
-            out[link.get("name")] = LinkInertial(False, 0.0, np.zeros(3), np.zeros((3, 3)), False, np.zeros((3, 3)))
-            continue
-        o, m, i = e.find("origin"), e.find("mass"), e.find("inertia")
-        xyz = np.array((o.get("xyz", "0 0 0") if o is not None else "0 0 0").split(), float)
-        rpy = np.array((o.get("rpy", "0 0 0") if o is not None else "0 0 0").split(), float)
-        k = {a: float(i.get(a, 0.0)) for a in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")} if i is not None else {}
-        raw = np.array([[k.get("ixx", 0), k.get("ixy", 0), k.get("ixz", 0)],
-                        [k.get("ixy", 0), k.get("iyy", 0), k.get("iyz", 0)],
-                        [k.get("ixz", 0), k.get("iyz", 0), k.get("izz", 0)]], float)
-        R = rpy_matrix(rpy)
-        out[link.get("name")] = LinkInertial(True, float(m.get("value")) if m is not None else 0.0, xyz,
-                                             R @ raw @ R.T, bool(np.any(rpy != 0)), raw)
-    return out
-
-
-def stripped_urdf(path) -> str:
-    """The file's text without <visual> and <collision> elements (no engine needs meshes for dynamics)."""
-    text = Path(path).read_text(encoding="utf-8")
-    text = re.sub(r"<(visual|collision)\b[^>]*/>", "", text)
-    return re.sub(r"<(visual|collision)\b.*?</\1\s*>", "", text, flags=re.S)
-
-
-# ---- adapters -----------------------------------------------------------------------------------------------
 
 class Adapter:
     """One engine's model of the file, queried in our q order. Subclasses fill ``links``, ``armature``,
@@ -644,415 +584,3 @@ def _quat_matrix(qwxyz):
 
 def _one_line(exc, limit=300) -> str:
     return " | ".join(s.strip() for s in str(exc).splitlines() if s.strip())[:limit] or type(exc).__name__
-
-
-
-# ---- explaining a disagreement -------------------------------------------------------------------------------
-
-def _differs(x, y, floor=1e-12) -> bool:
-    """x and y differ beyond round-off: relative 1e-9 of the larger, plus an absolute floor."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    return bool(np.max(np.abs(x - y)) > 1e-9 * max(np.max(np.abs(x)), np.max(np.abs(y))) + floor)
-
-
-def _same_moments(I, J) -> bool:
-    """Same principal moments to 1e-9 (relative to the largest) and close axes (matrices within 1e-5)."""
-    scale = max(np.max(np.abs(J)), 1e-300)
-    return bool(np.max(np.abs(np.linalg.eigvalsh(I) - np.linalg.eigvalsh(J))) <= 1e-9 * scale
-                and np.max(np.abs(I - J)) <= 1e-5 * scale)
-
-
-def _triangle_broken(I) -> bool:
-    lam = np.linalg.eigvalsh(I)
-    return bool(lam[0] + lam[1] < lam[2] - 1e-9 * max(np.sum(np.abs(lam)), 1e-300))
-
-
-def body_params(model, links) -> tuple:
-    """(mass (nb,), com (nb, 3), inertia (nb, 3, 3)) of our bodies built from per-link (m, c, I_c) in link
-    frames: each link present in ``links`` placed by model.frames and merged into its body."""
-    parts = [[] for _ in range(model.njoints)]
-    for name, fr in model.frames.items():
-        if fr.body >= 0 and name in links:
-            m, c, I = links[name]
-            parts[fr.body].append((m, fr.p + fr.R @ c, fr.R @ I @ fr.R.T))
-    out = [combine_inertias(p) if p else (0.0, np.zeros(3), np.zeros((3, 3))) for p in parts]
-    return (np.array([o[0] for o in out], float), np.array([o[1] for o in out], float).reshape(-1, 3),
-            np.array([o[2] for o in out], float).reshape(-1, 3, 3))
-
-
-def explain(model, adapter, inertials) -> list:
-    """Named causes [{"link", "kind", "text"}] of every difference between the engine's read-back
-    parameters and ours: per link against the file's own numbers, per body against our model, per dof
-    for armature and damping. Empty when the engine holds the same parameters."""
-    causes, e = [], adapter.name
-    em, ec, eI = body_params(model, adapter.links)
-    if not adapter.merged:
-        for name, fr in model.frames.items():
-            if fr.body < 0:
-                continue
-            f = inertials.get(name)
-            if f is None:
-                continue
-            if name not in adapter.links:
-                if f.mass > 0:
-                    causes.append(dict(link=name, kind="missing link", text=f"{e} has no link {name!r} "
-                                       f"({f.mass:g} kg in the file)"))
-                continue
-            m, c, I = adapter.links[name]
-            causes += _link_causes(e, name, f, m, c, I)
-    for i, body in enumerate(model.body_names):       # what the link view cannot see (and merged engines)
-        if not (_differs(em[i], model.mass[i]) or _differs(eI[i], model.inertia[i], 1e-15)
-                or (model.mass[i] > 0 and _differs(ec[i], model.com[i]))):
-            continue
-        links = (body,) + tuple(model.merged.get(body, ()))
-        if any(c["link"] in links for c in causes):
-            continue
-        quirks = [q for ln in links if ln in inertials for q in _file_quirks(inertials[ln], ln)]
-        causes.append(dict(link=body, kind="body parameters", text=(
-            f"{e}: body {body!r} (links {', '.join(links)}) has mass {em[i]:.6g} kg, inertia trace "
-            f"{np.trace(eI[i]):.6g}; ours {model.mass[i]:.6g} kg, {np.trace(model.inertia[i]):.6g}"
-            + (f" — the file's {'; '.join(quirks)}" if quirks else ""))))
-    for j, name in enumerate(model.joint_names):    # ours: model.armature, model.damping (per dof, docs/design.md §3)
-        if model.kind[j] == FREEFLYER:                 # a free-flyer root: no armature or damping of its own
-            continue
-        k = slice(model.idx_v[j], model.idx_v[j] + model.nvs[j])     # a ball: its three dofs
-        a, d = adapter.armature[k], adapter.damping[k]
-        if _differs(a, model.armature[k]):
-            causes.append(dict(link=name, kind="armature", text=f"{e} adds armature {_g(a)} kg m² to joint {name!r} "
-                               f"(M's diagonal); ours {_g(model.armature[k])}"))
-        if np.any(d) and _differs(d, model.damping[k]):
-            causes.append(dict(link=name, kind="damping", text=f"{e} applies joint damping {_g(d)} N m s/rad to "
-                               f"joint {name!r} (from <dynamics>); ours {_g(model.damping[k])}"))
-    return causes
-
-
-def _g(x) -> str:
-    """A joint's per-dof values: one number when they are one (a 1-dof joint, a ball's three equal entries)."""
-    x = np.asarray(x, float)
-    return f"{x[0]:g}" if np.all(x == x[0]) else "[" + ", ".join(f"{t:g}" for t in x) + "]"
-
-
-def applied_damping(model, adapter):
-    """Our damping (nv,) where the engine applies damping in its queries (its read-back damping is nonzero), else 0:
-    what our side of a comparison adds, as the engine does (τ += d q̇ in ID if ``damping_in_id``, and in FD)."""
-    return np.where(adapter.damping != 0, model.damping, 0.0)
-
-
-def precision_causes(model, adapter, inertials, floor=1e-13, k=3) -> list:
-    """The links whose read-back parameters differ from the file's by more than ``floor`` (relative) but
-    below the quirk threshold: the engine re-expressed them (e.g. principal axes by an iterative
-    diagonalisation) with less than double precision. The k worst, named."""
-    worst = []
-    for name, fr in model.frames.items():
-        f = inertials.get(name)
-        if fr.body < 0 or f is None or name not in adapter.links or adapter.merged:
-            continue
-        m, c, I = adapter.links[name]
-        rel = max(abs(m - f.mass) / max(abs(f.mass), 1e-300) if f.mass else abs(m),
-                  np.max(np.abs(c - f.com)) / max(np.max(np.abs(f.com)), 1e-3) if f.mass else 0.0,
-                  np.max(np.abs(I - f.inertia)) / max(np.max(np.abs(f.inertia)), 1e-300) if np.any(f.inertia)
-                  else float(np.max(np.abs(I))))
-        if rel > floor:
-            worst.append((rel, name))
-    return [dict(link=n, kind="precision", text=f"link {n!r}: {adapter.name} holds its mass/CoM/inertia to "
-                 f"{rel:.1e} (relative) of the file's: round-off of its own re-expression of the inertia "
-                 f"(principal axes), not a modelling difference") for rel, n in sorted(worst, reverse=True)[:k]]
-
-
-def refusal_causes(reason, inertials) -> list:
-    """The links an engine's refusal names (quoted in its message), with what is unusual in their <inertial>."""
-    out = []
-    for name in dict.fromkeys(re.findall(r"'([^']+)'", reason)):
-        f = inertials.get(name)
-        if f is None:
-            continue
-        quirks = _file_quirks(f, name)
-        lam = np.linalg.eigvalsh(f.inertia)
-        if f.present and lam[0] <= 0:
-            quirks.append(f"link {name!r}'s inertia has a principal moment ≤ 0 (eigenvalues {lam.tolist()})")
-        if f.present and f.mass == 0 and not np.any(f.inertia):
-            quirks.append(f"link {name!r} has zero mass and zero inertia")
-        out += [dict(link=name, kind="refused", text=q) for q in quirks]
-    return out
-
-
-def _file_quirks(f, name) -> list:
-    """What is unusual in a link's <inertial> (short phrases)."""
-    out = []
-    if not f.present:
-        out.append(f"link {name!r} has no <inertial>")
-    elif f.mass == 0 and np.any(f.inertia):
-        out.append(f"link {name!r} has zero mass but a non-zero inertia")
-    elif f.present and np.any(f.inertia) and _triangle_broken(f.inertia):
-        out.append(f"link {name!r}'s inertia violates the triangle inequality")
-    if f.rotated:
-        out.append(f"link {name!r}'s inertial frame is rotated (rpy ≠ 0)")
-    return out
-
-
-def _link_causes(e, name, f, m, c, I) -> list:
-    """The engine's (m, c, I) of one link against the file's LinkInertial f: named quirks."""
-    out = []
-    dm, dc, dI = _differs(m, f.mass), f.mass > 0 and _differs(c, f.com), _differs(I, f.inertia, 1e-15)
-    if not (dm or dc or dI):
-        return out
-    said = f"{e} holds {m:.6g} kg, inertia diag {np.round(np.diag(I), 9).tolist()}"
-    if not f.present:
-        out.append(dict(link=name, kind="no <inertial>", text=f"link {name!r} has no <inertial>: {said} "
-                        f"(ours and the file: 0 kg)"))
-    elif f.mass == 0 and np.any(f.inertia):
-        how = "drops the inertia" if not np.any(np.abs(I) > 1e-300) else "changes it"
-        out.append(dict(link=name, kind="zero mass with inertia", text=f"link {name!r} has zero mass and a "
-                        f"non-zero inertia: {e} {how} ({said}; ours keeps the file's inertia)"))
-    elif dI and _triangle_broken(f.inertia):
-        out.append(dict(link=name, kind="triangle inequality", text=f"link {name!r}'s inertia violates the "
-                        f"triangle inequality: {e} alters it ({said})"))
-    elif dI and f.rotated and not _differs(I, f.raw, 1e-15):
-        out.append(dict(link=name, kind="rotated inertial frame", text=f"link {name!r}'s inertial frame is "
-                        f"rotated: {e} ignores the rotation (holds the inertia as written, unrotated)"))
-    elif dI and not (dm or dc) and _same_moments(I, f.inertia):
-        rel = np.max(np.abs(I - f.inertia)) / np.max(np.abs(f.inertia))
-        out.append(dict(link=name, kind="precision", text=f"link {name!r}: {e} holds the inertia to {rel:.1e} "
-                        f"(relative) of the file's, its principal moments to round-off: the principal axes of "
-                        f"its re-expression (an iterative diagonalisation that stops at a tolerance) are off, "
-                        f"not a modelling difference"))
-    else:
-        what = [w for w, d in (("mass", dm), ("CoM", dc), ("inertia", dI)) if d]
-        out.append(dict(link=name, kind=" and ".join(what), text=f"link {name!r}: {e}'s {' and '.join(what)} "
-                        f"differ(s) from the file ({said}; file {f.mass:.6g} kg)"))
-    return out
-
-
-def neutralised(model, adapter):
-    """Our model rebuilt with the engine's masses, CoMs and inertias (dataclasses.replace)."""
-    m, c, I = body_params(model, adapter.links)
-    return dataclasses.replace(model, mass=m, com=c, inertia=I, notes=model.notes + (
-        f"parameters read back from {adapter.name}",))
-
-
-# ---- the referee run ------------------------------------------------------------------------------------------
-
-@dataclasses.dataclass
-class EngineResult:
-    """One engine against manipdyn: worst errors (docs/design.md §3; q̈ as err/cond(M)), raw and neutralised."""
-    engine: str
-    status: str                       # "ok", "missing", "refused"
-    reason: str = ""
-    err: dict = dataclasses.field(default_factory=dict)        # "tau", "M", "qdd" -> float or None
-    neutral: dict = dataclasses.field(default_factory=dict)    # the same with the quirks neutralised
-    causes: list = dataclasses.field(default_factory=list)
-    notes: list = dataclasses.field(default_factory=list)
-    precision: str = ""
-    seconds: float = 0.0
-
-    @property
-    def worst(self):
-        vals = [v for v in self.err.values() if v is not None]
-        return max(vals) if vals else None
-
-    @property
-    def worst_neutral(self):
-        vals = [v for v in self.neutral.values() if v is not None]
-        return max(vals) if vals else None
-
-    @property
-    def explained(self) -> bool:
-        """Agrees (≤ TOL), or every disagreement carries a cause and vanishes once neutralised."""
-        if self.status != "ok":
-            return True
-        if self.worst is None or self.worst <= TOL:
-            return True
-        return bool(self.causes) and self.worst_neutral is not None and self.worst_neutral <= TOL
-
-
-@dataclasses.dataclass
-class RefereeReport:
-    name: str
-    source: str
-    nv: int
-    n_states: int
-    seed: int
-    engines: list
-    notes: list = dataclasses.field(default_factory=list)
-
-    @property
-    def explained(self) -> bool:
-        return all(r.explained for r in self.engines)
-
-    def as_dict(self) -> dict:
-        d = dataclasses.asdict(self)
-        for r, rd in zip(self.engines, d["engines"]):
-            rd["explained"] = r.explained
-        d["explained"] = self.explained
-        return d
-
-
-def referee(model, path, engines=ENGINES, *, n_states=100, seed=0) -> RefereeReport:
-    """Every engine against manipdyn on the same seeded random states: τ, M, q̈, causes, neutralised."""
-    if np.any(model.kind[1:] == FREEFLYER) or (np.any(model.kind == FREEFLYER) and not model.floating):
-        raise InputError(f"{path}: the engines referee compares fixed-base models and a free-flyer root only")
-    other = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in _KIND_NAME]
-    if other:
-        raise InputError(f"{path}: the engines referee compares revolute, prismatic, ball and free-flyer joints "
-                         f"(what every engine has), not {', '.join(other[:5])}; validate --against pinocchio compares "
-                         f"every kind")
-    rng = np.random.default_rng(seed)
-    Q, V, A = random_states(model, n_states, rng)
-    T = rng.normal(0.0, 5.0, V.shape)
-    ours = None if model.nv == 0 else _our_terms(model, Q, V, A, T, np.zeros(model.nv), np.zeros(model.nv))
-    mjcf = robot_format(path) == "mjcf"
-    inertials = {} if mjcf else urdf_inertials(path)
-    rep = RefereeReport(model.name, str(path), model.nv, n_states, seed, [])
-    if mjcf:
-        rep.notes.append("an MJCF file: each engine's bodies are compared with the model's (no per-link URDF "
-                         "<inertial> to diff against)")
-    if model.nv == 0:
-        rep.notes.append("no moving joint: nothing to compare")
-        return rep
-    if model.constraints:
-        rep.notes.append(f"{len(model.constraints)} loop closure(s) (<constraint>) not compared: the engines "
-                         "load the open tree, and so do the terms here")
-    if ours["qdd"] is None:
-        rep.notes.append(f"manipdyn forward dynamics: {ours['why']} (q̈ not compared)")
-    for name in engines:
-        t0 = time.perf_counter()
-        try:
-            with _quiet():
-                ad = load_engine(name, model, path)
-        except EngineMissing as exc:
-            rep.engines.append(EngineResult(name, "missing", str(exc)))
-            continue
-        except EngineRefused as exc:
-            rep.engines.append(EngineResult(name, "refused", str(exc), causes=refusal_causes(str(exc), inertials)))
-            continue
-        res = EngineResult(name, "ok", precision=ad.precision)
-        with _quiet():
-            theirs = _engine_terms(ad, Q, V, A, T)
-        res.notes = list(ad.notes)
-        res.err = _errors(theirs, _our_terms(model, Q, V, A, T, np.zeros(model.nv), applied_damping(model, ad),
-                                             ad.damping_in_id))      # our armature (in M) and damping
-        res.causes = explain(model, ad, inertials)
-        if (res.worst or 0) > TOL and not res.causes:
-            res.causes = precision_causes(model, ad, inertials)
-        if theirs.get("why"):
-            res.notes.append(f"{name} forward dynamics: {theirs['why']}")
-        nm = neutralised(model, ad)
-        res.neutral = _errors(theirs, _our_terms(nm, Q, V, A, T, ad.armature - model.armature, ad.damping,
-                                                 ad.damping_in_id))
-        res.seconds = time.perf_counter() - t0
-        rep.engines.append(res)
-        del ad
-    return rep
-
-
-def _our_terms(model, Q, V, A, T, arm, damp, damp_in_id=True):
-    """Our τ, M, q̈ on the states (the model's armature in τ and M, as ``rnea`` and ``mass_matrix`` hold it), with
-    arm added to M's diagonal and damp as the engine applies damping (zeros: rnea, mass_matrix, aba alone)."""
-    tau = rnea(model, Q, V, A) + arm * A + (damp * V if damp_in_id else 0.0)
-    M = mass_matrix(model, Q) + np.diag(arm)
-    out = dict(tau=tau, M=M, qdd=None, why="", cond=np.linalg.cond(M))
-    try:
-        if np.any(arm) or np.any(damp):
-            h = rnea(model, Q, V, np.zeros_like(V)) + damp * V
-            out["qdd"] = np.linalg.solve(M, (T - h)[..., None])[..., 0]
-        else:
-            out["qdd"] = aba(model, Q, V, T)
-        if not np.all(np.isfinite(out["qdd"])):
-            out["qdd"], out["why"] = None, "non-finite q̈"
-    except (ManipdynError, np.linalg.LinAlgError) as exc:
-        out["qdd"], out["why"] = None, _one_line(exc)
-    return out
-
-
-def _engine_terms(ad, Q, V, A, T):
-    with ad.session():
-        return _engine_queries(ad, Q, V, A, T)
-
-
-def _engine_queries(ad, Q, V, A, T):
-    out = dict(tau=np.array([ad.tau(q, v, a) for q, v, a in zip(Q, V, A)]) if "tau" in ad.terms else None,
-               M=np.array([ad.mass(q) for q in Q]), qdd=None, why="")
-    if "qdd" not in ad.terms:
-        out["why"] = "not asked of this engine for this model (see its notes)"
-        return out
-    try:
-        out["qdd"] = np.array([ad.qdd(q, v, t) for q, v, t in zip(Q, V, T)])
-        if not np.all(np.isfinite(out["qdd"])):
-            out["qdd"], out["why"] = None, "non-finite q̈ (singular mass matrix)"
-    except Exception as exc:                     # an engine's refusal, kept as its message
-        out["qdd"], out["why"] = None, _one_line(exc)
-    return out
-
-
-def _errors(theirs, ours) -> dict:
-    """Worst error measure over the states; q̈ as err/cond(M) (docs/design.md §3), None when either side has none."""
-    err = {}
-    for k in ("tau", "M"):
-        if theirs[k] is None:                    # the engine cannot give it for this model (its notes say why)
-            err[k] = None
-            continue
-        err[k] = max(error(x, y) for x, y in zip(theirs[k], ours[k])) if np.all(np.isfinite(theirs[k])) \
-            else math.inf
-    if theirs["qdd"] is None or ours["qdd"] is None:
-        err["qdd"] = None
-    else:
-        err["qdd"] = max(error(x, y) / c for x, y, c in zip(theirs["qdd"], ours["qdd"], ours["cond"]))
-    return err
-
-
-class _quiet:
-    """Silence C-level stdout/stderr (PyBullet prints its build time and warnings there)."""
-
-    def __enter__(self):
-        import os
-        import sys
-        for s in (sys.stdout, sys.stderr):
-            try:
-                s.flush()
-            except Exception:
-                pass
-        self.os, self.saved = os, []
-        try:
-            null = os.open(os.devnull, os.O_WRONLY)
-            for fd in (1, 2):
-                self.saved.append((fd, os.dup(fd)))
-                os.dup2(null, fd)
-            os.close(null)
-        except OSError:
-            self.saved = []
-        return self
-
-    def __exit__(self, *exc):
-        for fd, old in self.saved:
-            self.os.dup2(old, fd)
-            self.os.close(old)
-        return False
-
-
-# ---- reporting ------------------------------------------------------------------------------------------------
-
-def _fmt(x):
-    return "-" if x is None else f"{x:.1e}"
-
-
-def format_referee(rep: RefereeReport) -> str:
-    """One table: engine, status, worst τ / M / q̈ errors, the same neutralised, and the named causes."""
-    lines = [f"{rep.name}  ({rep.source})  nv={rep.nv}  states={rep.n_states}  seed={rep.seed}",
-             f"  {'engine':<10} {'status':<8} {'tau':>8} {'M':>8} {'qdd/κ':>8}   "
-             f"{'neutralised: tau':>16} {'M':>8} {'qdd/κ':>8}  verdict"]
-    for r in rep.engines:
-        if r.status != "ok":
-            lines.append(f"  {r.engine:<10} {r.status:<8} {r.reason}")
-            continue
-        verdict = ("agrees" if (r.worst or 0) <= TOL else "explained" if r.explained else "UNEXPLAINED")
-        e, n = r.err, r.neutral
-        lines.append(f"  {r.engine:<10} {r.status:<8} {_fmt(e['tau']):>8} {_fmt(e['M']):>8} {_fmt(e['qdd']):>8}   "
-                     f"{_fmt(n['tau']):>16} {_fmt(n['M']):>8} {_fmt(n['qdd']):>8}  {verdict}")
-    for r in rep.engines:
-        for c in r.causes:
-            lines.append(f"  cause [{r.engine}] {c['kind']}: {c['text']}")
-        for note in r.notes:
-            lines.append(f"  note [{r.engine}] {note}")
-    lines += [f"  note: {n}" for n in rep.notes]
-    lines.append(f"  => {'every disagreement above %g has a named cause' % TOL if rep.explained else 'UNEXPLAINED'}")
-    return "\n".join(lines)

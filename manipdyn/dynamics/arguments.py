@@ -193,7 +193,7 @@ def wrench_rows(model, f_ext, f_ext_frame, N, lanes=False):
 def fast_wrenches(model, f_ext, f_ext_frame):
     """One state's f_ext in the kernels' compact form, when it is a dict of one wrench {frame name: (force (3,),
     moment (3,))} of float64 arrays: (force, moment, P) with P (13,) the frame's row for
-    ``core.wrench_rows_of`` — [R (9, row by row): frame axes → body axes for "local" (identity for "world"),
+    ``kernel_inputs.wrench_rows_of`` — [R (9, row by row): frame axes → body axes for "local" (identity for "world"),
     the frame's origin in body axes (3), the body (-1: the fixed base)], from ``model.kernel.wrench_rows``.
     None when anything is unusual (then ``wrench_rows`` checks and converts, and raises the error).
     Finiteness is left to the kernel: a non-finite wrench makes a non-finite result, and the caller then takes

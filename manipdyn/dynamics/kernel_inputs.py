@@ -1,0 +1,56 @@
+"""What every kernel checks and receives besides the model: finite states (the check each kernel makes on
+entry) and external wrenches as the rows the kernels read (X, body, point, world; ``arguments.wrench_rows`` lays
+them out for a batch).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from ..spatial import first_nonfinite
+
+
+@njit(cache=True, inline="always")
+def nonfinite_input(Q, V, s):
+    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V
+    (``spatial.first_nonfinite`` on each row)."""
+    k = first_nonfinite(Q, s)
+    if k >= 0:
+        return s * Q.shape[1] + k
+    k = first_nonfinite(V, s)
+    if k >= 0:
+        return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
+    return -1
+
+
+@njit(cache=True, inline="always")
+def wrench_rows_of(f, m, P):
+    """One state's single external wrench as the kernels read it (arguments.fast_wrenches): X (1, K, 6) =
+    [R f; R m], body (K,) and point (K, 3), from the force f (3,), the moment m (3,) and the frame's row P (13,)
+    = [R row by row (R turns the frame's axes into the body's), its origin in the body, body]. K = 0 for a
+    wrench on the fixed base (it changes no joint torque)."""
+    K = 1 if P[12] >= 0 else 0
+    X, body, point = np.empty((1, K, 6)), np.empty(K, np.int64), np.empty((K, 3))
+    for k in range(K):
+        body[k] = int(P[12])
+        for r in range(3):
+            X[0, k, r] = P[3 * r] * f[0] + P[3 * r + 1] * f[1] + P[3 * r + 2] * f[2]
+            X[0, k, 3 + r] = P[3 * r] * m[0] + P[3 * r + 1] * m[1] + P[3 * r + 2] * m[2]
+            point[k, r] = P[9 + r]
+    return X[:, :, :], body[::1], point[:, :]          # views of the kernels' layout (_jit: "A")
+
+
+@njit(cache=True, inline="always")
+def no_wrenches(I, F):
+    """X (1, 0, 3), body (0,), point (0, 3), world = False: no external wrench, in the layout of ``wrench_rows_of``
+    — views with no rows of the model's arrays (I, F), so that a one-state call allocates nothing for them (X's
+    entries are never read without a wrench); world a run-time bool, not the constant False, for which numba
+    would compile anew."""
+    return F[:1, :0, :], I[0, :0][::1], F[0, :0, :], np.bool_(False)
+
+
+@njit(cache=True, inline="always")
+def finite_state(Q, V, A, s):
+    """True when state s's q, v and a (or τ) are all finite: the check every dynamics kernel makes on entry
+    (``spatial.first_nonfinite`` on each row)."""
+    return max(first_nonfinite(Q, s), first_nonfinite(V, s), first_nonfinite(A, s)) < 0   # no early exit
