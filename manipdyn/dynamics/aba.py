@@ -30,6 +30,7 @@ it, [force; moment about that origin] in body axes, or in world axes which the k
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
@@ -57,18 +58,22 @@ from .route import route
 # array handed to an inlined function costs atomic reference counting (measured on ur5: the same passes
 # as module-level functions taking their ~20 arrays, 2.9 µs per state instead of 1.7 µs).
 
+Work = namedtuple("Work", "Rl pl Rw vel c pA acc IA I0 U L u Y t vJ a0")
+Work.__doc__ = """Scratch of one ABA kernel call (``workspace``), named as RBDA Table 7.1 names them: per body Rl (3, 3),
+pl (3,) its placement in its parent, Rw (3, 3) in the world, vel v_i, c c_i, pA p^A_i, acc a_i (6,), IA I^A_i, I0
+its rigid inertia I_i (6, 6); per joint velocity U (6,) (a row of U_iᵀ), L (6,) (a row of D_i's Cholesky factor),
+u (a number); temporaries Y (6, 6), t, vJ (6,) and a0 (6,), the base acceleration −a_g."""
+
+
 @njit(cache=True, inline="always")
 def workspace(nb, nv):
-    """Scratch of one kernel call (five allocations, cut into row blocks): per body Rl (3, 3), pl (3,)
-    (placement in the parent), Rw (3, 3) (in the world), v, c, p^A, a (6,), I^A, I0 (6, 6) (articulated
-    and rigid inertia); per joint velocity U (6,) (a row of U_iᵀ), L (6,) (a row of D_i's Cholesky
-    factor), u; temporaries Y (6, 6), t, vJ, a0 (6,) (a0: the base acceleration)."""
+    """The ``Work`` of a model with nb bodies and nv velocities, cut from five allocations into row blocks."""
     R33, pl, u = np.empty((2 * nb, 3, 3)), np.empty((nb, 3)), np.empty(nv)
     B6, B66 = np.empty((4 * nb + 2 * nv + 3, 6)), np.empty((2 * nb + 1, 6, 6))
     e = 4 * nb + 2 * nv                                   # B6 rows: vel, c, pA, acc, U, L, then t, vJ, a0
-    return (R33[:nb], pl, R33[nb:], B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb], B6[3 * nb:4 * nb],
-            B66[:nb], B66[nb:2 * nb], B6[4 * nb:4 * nb + nv], B6[4 * nb + nv:e], u, B66[2 * nb],
-            B6[e], B6[e + 1], B6[e + 2])
+    return Work(R33[:nb], pl, R33[nb:], B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb], B6[3 * nb:4 * nb],
+                B66[:nb], B66[nb:2 * nb], B6[4 * nb:4 * nb + nv], B6[4 * nb + nv:e], u, B66[2 * nb],
+                B6[e], B6[e + 1], B6[e + 2])
 
 
 @njit(cache=True, inline="always")
@@ -94,7 +99,9 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
     mg, armature = mdl.mg, mdl.armature
     N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
-    Rl, pl, Rw, vel, c, pA, acc, IA, I0, U, L, u, Y, t, vJ, a0 = workspace(nb, nv)
+    w = workspace(nb, nv)
+    Rl, pl, Rw, vel, c, pA, acc, IA, I0 = w.Rl, w.pl, w.Rw, w.vel, w.c, w.pA, w.acc, w.IA, w.I0
+    U, L, u, Y, t, vJ, a0 = w.U, w.L, w.u, w.Y, w.t, w.vJ, w.a0
     for i in range(nb):
         rigid_inertia(mass[i], com[i], inertia[i], I0[i])     # I_i, constant
     for a in range(3):
