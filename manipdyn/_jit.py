@@ -30,7 +30,8 @@ import numba
 
 PACKAGE = Path(__file__).resolve().parent
 KERNEL_SOURCES = ("_jit.py", "spatial.py", "joints.py", "dynamics/model_arrays.py", "dynamics/forward_kinematics.py",
-                  "dynamics/kernel_inputs.py", "dynamics/lanes.py", "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
+                  "dynamics/kernel_inputs.py", "dynamics/lanes.py", "dynamics/status.py",
+                  "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
                   "dynamics/derivatives.py", "dynamics/regressor.py", "dynamics/coriolis.py", "dynamics/energy.py",
                   "dynamics/kinematics.py", "dynamics/lagrange.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")

@@ -252,8 +252,8 @@ FAULTS = (
           ("tests/robustness/test_api_outputs.py", "tests/robustness/test_api_inputs.py"),
           "the one-state path returns the result whatever the kernel's code: a non-finite input, a singular "
           "joint or an overflowed result comes back as numbers"),
-    Fault("route-chunk-result-index-not-shifted", "rnea", "manipdyn/dynamics/route.py",
-          "            return code - a * size\n", "            return code\n",
+    Fault("route-chunk-result-index-not-shifted", "rnea", "manipdyn/dynamics/status.py",
+          "        return status - s0 * size\n", "        return status\n",
           ("tests/batch/test_threads.py",), "a batch split over threads names an overflowed result by its row in "
           "the chunk, not in the batch"),
     Fault("route-dask-chunks-not-aligned", "rnea", "manipdyn/dynamics/route.py",
@@ -315,8 +315,8 @@ FAULTS = (
           "    for r in range(l, n):", "    for r in range(l, n - 1):",
           ("tests/batch/test_lanes.py",), "the last state of a lane block whose size is not a multiple of 4 is never written back"),
     Fault("rnea-lanes-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
-          "return shift_code(code, s0, nb, 1, nv)", "return code",
-          ("tests/batch/test_lanes.py",), "a bad state in a later lane block is named by its index within the block"),
+          "return shift(code, s0, nb, nv)", "return code",
+          ("tests/batch/test_lanes.py", "tests/unit/test_status.py"), "a bad state in a later lane block is named by its index within the block"),
     Fault("loader-point-mass-at-link-origin", "loader", "manipdyn/io/urdf.py",
           "        return m, p + R @ To[:3, 3], np.zeros((3, 3))", "        return m, p.copy(), np.zeros((3, 3))",
           ("tests/unit/test_quirks.py",), "a <mass> without <inertia> sits at the link's origin, not at the "
@@ -442,8 +442,8 @@ FAULTS = (
           "B[(_PA + k) * L + l] += fl[k] + U[k] * ud", "B[(_PA + k) * L + l] += fl[k] - U[k] * ud",
           ("tests/batch/test_lanes.py",), "the lane ABA's pᵃ = p^A + Iᵃ c − U u/D (linear part)"),
     Fault("aba-lanes-fallback-code-not-shifted", "aba", "manipdyn/dynamics/aba.py",
-          "return shift_code(code, s0, nb, nq, nv)", "return code",
-          ("tests/batch/test_lanes.py",), "an overflow in a later lane block of aba is named by its row within the "
+          "                return shift(code, s0, nb, nv)", "                return code",
+          ("tests/batch/test_lanes.py", "tests/unit/test_status.py"), "an overflow in a later lane block of aba is named by its row within the "
                                            "block"),
     Fault("gpu-rnea-gravity-sign", "rnea", "manipdyn/gpu.py",
           "base[k * N + s], base[(3 + k) * N + s], base[(6 + k) * N + s] = 0.0, 0.0, mdl.mg[k]",
@@ -982,8 +982,8 @@ FAULTS = (
           "p[i, a] = p0[i, a] + b0 * px + b1 * py + b2 * pz", "p[i, a] = p0[max(i - 1, 0), a] + b0 * px + b1 * py + b2 * pz",
           (_RNEA,), "joint_placement (indexed form) reads the previous joint's origin offset"),
     Fault("crba-nonfinite-first-entry-missed", "lagrange", "manipdyn/dynamics/crba.py",
-          "        if k >= 0:\n            return -2 - nb - (s * nv * nv + k)",
-          "        if k > 0:\n            return -2 - nb - (s * nv * nv + k)",
+          "        if k >= 0:\n            return bad_result(nb, s * nv * nv + k)",
+          "        if k > 0:\n            return bad_result(nb, s * nv * nv + k)",
           ("tests/robustness/test_api_outputs.py",), "CRBA's result check lets a non-finite M[0, 0] through"),
     Fault("first-nonfinite-entry-blind", "lagrange", "manipdyn/spatial.py",
           "bad += not (X[s, k] - X[s, k] == 0.0)", "bad += 0",
@@ -1057,6 +1057,15 @@ FAULTS = (
           "        out[:, b, b] += Sb @ G @ Sb.T",
           "        out[:, b, b] -= Sb @ G @ Sb.T",
           (_KINDS,), "the Christoffel route's bracket term of a multi-dof joint's own block has the wrong sign"),
+    # ---------------------------------------------------------------- the kernels' status (dynamics/status.py)
+    Fault("status-shift-state-not-moved", "rnea", "manipdyn/dynamics/status.py",
+          "        return status + s0\n", "        return status\n",
+          ("tests/unit/test_status.py",), "a chunk's bad state is named by its row within the chunk, not the batch"),
+    Fault("status-crba-input-flat-index", "rnea", "manipdyn/dynamics/crba.py",
+          "            return bad_input(s)\n", "            return bad_input(s * nv)\n",
+          ("tests/unit/test_status.py",), "the CRBA reports a bad input by a flat index where every other kernel "
+                                          "gives the state's row"),
+
 )
 
 

@@ -162,7 +162,7 @@ def _omega(b, ww, out):
 @njit(cache=True)
 def closure_kernel(I, F, CI, CF, Q, V, Phi, Jc, bias):
     """closure_rows for every state: Q (N, nq), V (N, nv) or (N, 0); Φ (N, m), Φ_q (N, m, nv), Φ̇_q q̇ (N, m).
-    Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
+    Returns its status (dynamics/status.py)."""
     N = Q.shape[0]
     W = closure_scratch(I.shape[1], Jc.shape[2])
     for s in range(N):

@@ -16,7 +16,7 @@ import numpy as np
 from ..dynamics.crba import mass_matrix
 from ..dynamics.rnea import rnea
 from ..dynamics.arguments import (as_batch, as_real, check_f_ext, check_finite, check_model, check_output, check_scalar,
-                                  fast, joint_indices, unbatch)
+                                  fast, joint_indices, raise_kernel_error, unbatch)
 from ..errors import ConstraintError, InputError, SingularError
 from ..joints import FREEFLYER
 from .closures import RANK_RTOL, closure_terms, independent_rows, row_labels
@@ -72,13 +72,8 @@ def constrained_forward_dynamics(model, q, v, tau, *, baumgarte=None, f_ext=None
         return constrained_forward_dynamics_reference(model, q, v, tau, baumgarte=baumgarte, f_ext=f_ext,
                                                       f_ext_frame=f_ext_frame)
     code, qdd, lam, _ = constrained_fd_fast(model, Q, V, T, baumgarte)
-    if code == -2:
-        raise SingularError(f"mass matrix of the spanning tree of {model.name!r} is not positive definite")
-    if code >= 0:                       # as_batch checked finiteness already: this cannot happen silently
-        nq, N = model.nq, Q.shape[0]           # the kernel's code: s nq + i in Q, then N nq + s nv + i in V, τ
-        s, name = (code // nq, model.q_names[code % nq]) if code < N * nq else \
-            ((code - N * nq) // model.nv, model.v_names[(code - N * nq) % model.nv])
-        raise InputError(f"non-finite input at state {s}, entry {name!r}")
+    if code != -1:                      # a non-finite input or a joint that moves no mass (q̈'s entries: below)
+        raise_kernel_error(model, code, ("q", "v", "tau"), (Q, V, T), "constrained_forward_dynamics")
     _check_results("constrained_forward_dynamics", model, qdd, lam, dict(q=Q, v=V, tau=T))
     return unbatch(qdd, single), unbatch(lam, single)
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from .._jit import A2, I1, MODEL, entry, njit
 from ..dynamics.kernel_inputs import no_wrenches, nonfinite_input
+from ..dynamics.status import bad_input, bad_result, reading, singular_row
 from ..dynamics.model_arrays import kernel_arrays
 from ..spatial import cholesky, cholesky_solve, first_nonfinite
 from ..dynamics.crba import crba_kernel
@@ -21,20 +22,18 @@ from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, clo
 def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
     (I, F): model_arrays.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
-    Returns -1 or the flat index of the first non-finite input; -2 if M is not positive definite, -3 if
-    G M⁻¹ Gᵀ is not (the kept rows G are dependent to working precision)."""
-    N, nq, nv = Q.shape[0], Q.shape[1], V.shape[1]
+    Returns its status (dynamics/status.py): a joint whose row of M has no positive pivot (M is not positive
+    definite); λ's row s (after q̈'s N·nv entries) where G M⁻¹ Gᵀ is not (the kept rows G are dependent to
+    working precision)."""
+    N, nv = Q.shape[0], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
     W = closure_scratch(I.shape[1], nv)
     M, h, Z = np.empty((1, nv, nv))[:, :, :], np.empty((1, nv))[:, :], np.zeros((1, nv))[:, :]   # the kernels'
     X, xb, xp, world = no_wrenches(I, F)                                                   # layout (_jit: "A")
     T0 = F[:0, :, :]                                      # no per-link terms
     for s in range(N):
-        k = nonfinite_input(Q, V, s)
-        if k < 0 and first_nonfinite(T, s) >= 0:
-            k = N * nq + s * nv + first_nonfinite(T, s)
-        if k >= 0:
-            return k
+        if nonfinite_input(Q, V, s) >= 0 or first_nonfinite(T, s) >= 0:
+            return bad_input(s)
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[::1], Jc[:, :], bias[::1])   # (views: closure_kernel's layout)
         crba_kernel(I, F, Q[s:s + 1, :], M)
         rnea_kernel(I, F, Q[s:s + 1, :], V[s:s + 1, :], Z, X, xb, xp, world, h, T0)   # h = C q̇ + g
@@ -61,8 +60,9 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
         for l in range(r):
             G[l], cr[l] = Jc[keep[l]], c[keep[l]]
         L = M[0]                                              # M = L Lᵀ in place (spatial.cholesky)
-        if cholesky(L, nv, 0.0) >= 0:
-            return -2
+        k = cholesky(L, nv, 0.0)
+        if k >= 0:                                            # M is not positive definite
+            return singular_row(I, k)
         Minv_r = T[s] - h[0]                                  # M⁻¹ (τ − h)
         cholesky_solve(L, nv, Minv_r)
         LAM[s] = 0.0
@@ -75,8 +75,9 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
             cholesky_solve(L, nv, Minv_Gt[l])
         S = G @ Minv_Gt.T                                     # G M⁻¹ Gᵀ (r, r): positive definite, G of full rank
         lam = G @ Minv_r - cr
-        if cholesky(S, r, 0.0) >= 0:
-            return -3
+        if cholesky(S, r, 0.0) >= 0:                          # no λ: reported as λ's row s (``constrained_fd_fast``)
+            LAM[s] = np.nan
+            return bad_result(I.shape[1], N * nv + s * m)
         cholesky_solve(S, r, lam)
         QDD[s] = Minv_r - Minv_Gt.T @ lam
         for l in range(r):
@@ -96,7 +97,8 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(V.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
     code = CONSTRAINED_FD.call(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
-    if code == -3:
+    what, k = reading(code, model.njoints)
+    if what == "result" and k >= QDD.size:                   # λ: G M⁻¹ Gᵀ is singular
         _overflowed(model, Q, V)
         raise SingularError(f"closed-chain dynamics of {model.name!r}: the constraint system is singular "
                             f"(a singular configuration, or closures that cannot hold together)") from None

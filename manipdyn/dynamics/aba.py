@@ -42,14 +42,15 @@ from . import mimic
 from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite,
                        force_cross, force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up,
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
-from .kernel_inputs import no_wrenches, wrench_rows_of
+from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
                     motion_model, multi_rates, on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3,
-                    set6, shift_code, tree_depth)
+                    set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_kernel, crba_lanes
 from .rnea import rnea, rnea_kernel, rnea_lanes
 from .route import route
+from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
 
 
 # -- the articulated-body algorithm -----------------------------------------------------------------------
@@ -91,14 +92,14 @@ def singular_threshold(inertia, mass):
 @njit(cache=True, fastmath=False)              # as derivatives.py (its note)
 def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
-    on body (K,) about point (K, 3), in world axes if ``world`` (``arguments.wrench_rows``), by RBDA Table 7.1. Returns -1; ≥ 0 a non-finite input;
+    on body (K,) about point (K, 3), in world axes if ``world`` (``arguments.wrench_rows``), by RBDA Table 7.1. Returns its status (dynamics/status.py):
     -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
     (arguments.raise_kernel_error)."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
     mg, armature = mdl.mg, mdl.armature
-    N, nq, nv, nb = Q.shape[0], Q.shape[1], V.shape[1], I.shape[1]
+    N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     w = workspace(nb, nv)
     Rl, pl, Rw, vel, c, pA, acc, IA, I0 = w.Rl, w.pl, w.Rw, w.vel, w.c, w.pA, w.acc, w.IA, w.I0
     U, L, u, Y, t, vJ, a0 = w.U, w.L, w.u, w.Y, w.t, w.vJ, w.a0
@@ -186,8 +187,8 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
             if k >= 0:
                 if np.isnan(L[a + k, k]):                       # an intermediate overflowed
                     qdd[a + k] = L[a + k, k]
-                    return -2 - nb - (a + k)
-                return -2 - i
+                    return bad_result(nb, a + k)
+                return singular_joint(i)
             j = parent[i]
             if j < 0:
                 continue
@@ -256,27 +257,18 @@ def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
                     acc[i, k] += S[r, k] * qdd[r]
 
     for s in range(N):
-        k = first_nonfinite(Q, s)
-        if k >= 0:
-            return s * nq + k
-        k = first_nonfinite(V, s)
-        if k >= 0:
-            return N * nq + s * nv + k
-        k = first_nonfinite(Tau, s)
-        if k >= 0:
-            return N * (nq + nv) + s * nv + k
+        if not finite_state(Q, V, Tau, s):
+            return bad_input(s)
         velocities_and_biases(Q[s], V[s])                          # pass 1
         subtract_applied_wrenches(X[s])
         code = articulated_inertias(Tau[s], out[s])                # pass 2
-        if code <= -2 - nb:
-            return code - s * nv
-        if code != -1:
-            return code
+        if code != OK:
+            return shift(code, s, nb, nv)
         accelerations(out[s])                                       # pass 3
         k = first_nonfinite(out, s)
         if k >= 0:                                                  # an intermediate overflowed
-            return -2 - nb - (s * nv + k)
-    return -1
+            return bad_result(nb, s * nv + k)
+    return OK
 
 
 # -- the lane kernel: the three passes across a block of states ------------------------------------------------
@@ -354,8 +346,8 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
             code = aba_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], Tau[s0:s0 + n], X, body, point, world,
                               out[s0:s0 + n])
             if code != -1:
-                return shift_code(code, s0, nb, nq, nv)
-    return -1
+                return shift(code, s0, nb, nv)
+    return OK
 
 
 @njit(cache=True, inline="always")
@@ -748,15 +740,14 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     whose rows of X may broadcast) into out, then out ← L⁻ᵀ L⁻¹ (τ − h). A chunk of LANES states at a time (with
     ``lanes``, the lane kernels' block: M and h across states; N = 1000, one thread: chain32 13.0 → 7.7 µs a state,
     AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state: a block of lanes costs
-    LANES states) the scalar kernels. Wrenches as ``aba_kernel``'s. Returns -1; ≥ 0 a non-finite input; -2 - i a
+    LANES states) the scalar kernels. Wrenches as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
     pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
     M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), F[:0, :, :]   # T0: no per-link terms
-    iv, nvj = I[3], I[4]
     for s in range(N):
         if first_nonfinite(Tau, s) >= 0:
-            return s
+            return bad_input(s)
     for s0 in range(0, N, C):
         s1 = min(N, s0 + C)
         n = s1 - s0
@@ -764,14 +755,14 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
         if code <= -2 - nb:                                   # a non-finite M: reported in its state's q̈
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
-            return -2 - nb - s * nv
+            return bad_result(nb, s * nv)
         if code == -1 and (body.shape[0] > 0 or not lanes):   # h into out
             code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
                                world, out[s0:s1], T0)
         elif code == -1:
             code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, out[s0:s1], T0)
         if code != -1:                                        # a non-finite input, or h (in out)
-            return code - s0 * nv if code <= -2 - nb else code
+            return shift(code, s0, nb, nv)
         for s in range(s0, s1):
             L = M[s - s0]
             for r in range(nv):                               # τ − h
@@ -779,15 +770,13 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             k = cholesky(L, nv, 0.0)
             if k >= 0:
                 if not np.isfinite(L[k, k]):
-                    return -2 - nb - (s * nv + k)
-                for i in range(nb):                           # the joint whose row lost its pivot
-                    if iv[i] <= k < iv[i] + nvj[i]:
-                        return -2 - i
+                    return bad_result(nb, s * nv + k)
+                return singular_row(I, k)                     # the joint whose row lost its pivot
             cholesky_solve(L, nv, out[s])
             k = first_nonfinite(out, s)
             if k >= 0:
-                return -2 - nb - (s * nv + k)
-    return -1
+                return bad_result(nb, s * nv + k)
+    return OK
 
 
 @njit(cache=True)

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import InputError, NumericalError, SingularError
 from ..model import MimicModel, Model
 from .mimic import TAKES_MIMIC
+from .status import reading
 
 _REAL_KINDS = "fiub"       # float, signed/unsigned integer, bool: read as float64
 
@@ -260,24 +261,24 @@ def fast(model, q, v=NotImplemented, a=NotImplemented):
 
 
 def raise_kernel_error(model, code, names, batches, call="", out_name="", out=None):
-    """Turn a kernel's return code into the error the checks of ``as_batch`` and ``check_output`` would
-    raise: ≥ 0 a non-finite input (InputError naming it); −2 − i a vanishing articulated inertia at joint
-    i (SingularError); ≤ −2 − nb a non-finite result at flat index −2 − nb − code of ``out`` in batch form
-    (NumericalError)."""
+    """Turn a kernel's status (dynamics/status.py) into the error the checks of ``as_batch`` and ``check_output``
+    would raise: a non-finite input (InputError naming it), a joint that moves no mass (SingularError naming it),
+    a non-finite result at a flat index of ``out`` in batch form (NumericalError naming its row and joint)."""
     nb = model.njoints
     for name, x in zip(names, batches):          # a bad input is the cause to report first
         check_finite(name, x, model.q_names if is_config(name) else model.v_names)
-    if code <= -2 - nb:
+    what, k = reading(code, nb)
+    if what == "result":
         res = out[None] if batches[0].ndim == 1 else out
-        idx = np.unravel_index(-2 - nb - code, res.shape)
+        idx = np.unravel_index(k, res.shape)
         raise_output_error(call, out_name, res, idx, model, dict(zip(names, batches)))
-    if code <= -2:
-        i = -2 - code
+    if what == "joint":
+        i = k
         multi = getattr(model, "nvs", (1,) * nb)[i] > 1
         along = "in some direction of its motion" if multi else "about or along its axis"
         raise SingularError(f"mass matrix is singular: joint {model.joint_names[i]!r} moves a subtree "
                             f"without mass or inertia {along}")
-    raise InputError(f"{call}: a non-finite input (kernel code {code})")
+    raise InputError(f"{call}: a non-finite input (kernel status {code})")
 
 
 def raise_output_error(call, name, x, idx, model=None, inputs=None, what="joint", axis=1, labels=None):

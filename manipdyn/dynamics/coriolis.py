@@ -32,12 +32,13 @@ from .forward_kinematics import fk_pass
 from .kernel_inputs import nonfinite_input
 from .model_arrays import unpack
 from .route import route
+from .status import OK, bad_result
 
 
 @njit(cache=True)
 def coriolis_kernel(I, F, Q, V, C):
-    """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns −1, the flat index
-    of the first non-finite input (V: after N·nq), or −2 − nb − k for a non-finite C at flat index k."""
+    """C (N, nv, nv) for every state of Q (N, nq), V (N, nv) (module docstring). Returns its status
+    (dynamics/status.py; a non-finite C: its flat index)."""
     mdl = unpack(I, F)
     parent, iv, nvj, S, mass, com, inertia = mdl.parent, mdl.iv, mdl.nvj, mdl.S, mdl.mass, mdl.com, mdl.inertia
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
@@ -134,8 +135,8 @@ def coriolis_kernel(I, F, Q, V, C):
         blocks(C[s])
         k = first_nonfinite_entry(C[s])
         if k >= 0:
-            return -2 - nb - (s * nv * nv + k)
-    return -1
+            return bad_result(nb, s * nv * nv + k)
+    return OK
 
 
 @njit(cache=True)

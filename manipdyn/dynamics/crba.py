@@ -14,8 +14,8 @@ M[rows of i, r] = S_iᵀ F; carried to each ancestor (f ← R f, n ← R n + p �
 Eqs. 15–16), M[rows of k, r] = S_kᵀ F; M is symmetric and bodies on different branches do not couple.
 A free-flyer root has S = 1₆: its six columns are the composite's momenta of a unit body twist.
 
-Kernel convention (dynamics/arguments.py): Q (N, nq), M (N, nv, nv); return −1, the flat index of the first
-non-finite q, or −2 − nb − k for the first non-finite entry k (flat) of M (an intermediate overflowed).
+Kernel convention: Q (N, nq), M (N, nv, nv); the return value is the kernel's status (dynamics/status.py): a
+non-finite q, or the first non-finite entry k (flat) of M (an intermediate overflowed).
 """
 from __future__ import annotations
 
@@ -29,10 +29,11 @@ from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, fi
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
-                    quat_placement_lanes, shift_code, tree_depth)
+                    quat_placement_lanes, tree_depth)
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
+from .status import OK, bad_input, bad_result, shift
 
 
 @njit(cache=True, inline="always")
@@ -109,22 +110,21 @@ def column_pass(arrays, R, p, mC, cC, IC, M):
 @njit(cache=True)
 def crba_kernel(I, F, Q, M):
     """M(q) (N, nv, nv) for every state of Q (N, nq) by the composite-rigid-body algorithm (RBDA §6.2).
-    Returns −1, the flat index of the first non-finite q, or −2 − nb − (flat index) of a non-finite M."""
+    Returns its status (dynamics/status.py; a non-finite M: its flat index)."""
     arrays = unpack(I, F)
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
+    N, nb, nv = Q.shape[0], I.shape[1], M.shape[2]
     R3, B3, mC = np.empty((2 * nb + 1, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty(nb)   # scratch, cut below
     R, IC, tmp, p, W, cC, d = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
     merge_weights(arrays.parent, arrays.mass, mC, W)
     for s in range(N):
-        k = first_nonfinite(Q, s)
-        if k >= 0:
-            return s * nq + k
+        if first_nonfinite(Q, s) >= 0:
+            return bad_input(s)
         composite_pass(arrays, Q[s], W, R, p, cC, IC, d, tmp)
         column_pass(arrays, R, p, mC, cC, IC, M[s])
         k = first_nonfinite_entry(M[s])        # the result is finite (else an intermediate overflowed)
         if k >= 0:
-            return -2 - nb - (s * nv * nv + k)
-    return -1
+            return bad_result(nb, s * nv * nv + k)
+    return OK
 
 
 @njit(cache=True)
@@ -185,8 +185,8 @@ def crba_lanes(I, F, Q, M):
         if not ok:                                  # the block's states one by one: the code names the culprit
             code = crba_kernel(I, F, Q[s0:s0 + n], M[s0:s0 + n])
             if code != -1:
-                return shift_code(code, s0, nb, nq, nv * nv)
-    return -1
+                return shift(code, s0, nb, nv * nv)
+    return OK
 
 
 @njit(cache=True, fastmath=CONTRACT)

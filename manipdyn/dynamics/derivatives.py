@@ -52,6 +52,7 @@ from .route import is_dask, lazy, run_chunks, thread_count
 from .kernel_inputs import finite_state, no_wrenches
 from .model_arrays import kernel_arrays, unpack
 from .arguments import as_batch, fast_shape, raise_kernel_error, raise_output_error, unbatch, wrench_rows
+from .status import OK, bad_input, bad_result, reading, singular_row
 
 _QVA, _QVT = ("q", "v", "a"), ("q", "v", "tau")
 OUT_RNEA, OUT_ABA = ("dtau_dq", "dtau_dv", "dtau_da"), ("dqdd_dq", "dqdd_dv", "dqdd_dtau")
@@ -75,7 +76,7 @@ def first_nonfinite3(D, s):
 def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
     """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ (N, nv, nv) into dq, dv, da for every state of Q (N, nq), V, A (N, nv), with the
     external wrenches X (N, K, 6) on bodies xb (K,) about points xp (K, 3) (``arguments.wrench_rows``; body axes,
-    or world axes with ``world``). Returns -1; ≥ 0 a non-finite input (its state); −2 − nb − k a non-finite
+    or world axes with ``world``). Returns its status (dynamics/status.py); −2 − nb − k a non-finite
     result, k = ((s·3 + w)·nv + r)·nv + c for entry (r, c) of output w (0 dq, 1 dv, 2 da) of state s."""
     mdl = unpack(I, F)
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
@@ -266,14 +267,14 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
 
     for s in range(N):
         if not finite_state(Q, V, A, s):
-            return s
+            return bad_input(s)
         motion(Q[s], V[s], A[s])
         external(X[s if X.shape[0] > 1 else 0])
         derivatives(dq[s], dv[s], da[s])
         k = first_nonfinite3((dq, dv, da), s)
         if k >= 0:
-            return -2 - nb - (s * 3 * nv * nv + k)
-    return -1
+            return bad_result(nb, s * 3 * nv * nv + k)
+    return OK
 
 
 @njit(cache=True, fastmath=False)
@@ -296,10 +297,7 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
         M[:, :] = Minv[s]
         k = spd_inverse(M, L, Minv[s])
         if k >= 0:
-            i = 0
-            while I[3, i] + I[4, i] <= k:                 # the joint of velocity row k
-                i += 1
-            return -2 - i
+            return singular_row(I, k)
         for r in range(nv):
             for c in range(nv):
                 Mn[r, c] = -Minv[s, r, c]
@@ -308,8 +306,8 @@ def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv)
             np.dot(Mn, T, D)
         k = first_nonfinite3((dq, dv, Minv), s)
         if k >= 0:
-            return -2 - nb - N * nv - (s * 3 * nv * nv + k)
-    return -1
+            return bad_result(nb, N * nv + s * 3 * nv * nv + k)
+    return OK
 
 
 @njit(cache=True, inline="always")
@@ -420,8 +418,8 @@ def _raise(model, code, names, batches, call, outs, D, qdd):
     non-finite q̈ (aba_kernel's codes, first N·nv of the flat codes when qdd is given) or a non-finite
     derivative entry (NumericalError naming the matrix, its row's joint and the state)."""
     nb, nv, N = model.njoints, model.nv, batches[0].shape[0]
-    k = -2 - nb - code
-    if k < 0:                                                     # a bad input or a singular M
+    what, k = reading(code, nb)
+    if what != "result":                                          # a bad input or a singular M
         raise_kernel_error(model, code, names, batches, call)
     if qdd is not None:
         if k < N * nv:

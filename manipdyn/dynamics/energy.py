@@ -13,6 +13,7 @@ from .forward_kinematics import fk_pass
 from .kernel_inputs import nonfinite_input
 from .model_arrays import kernel_arrays, unpack
 from .arguments import as_batch, fast, fast_shape, raise_kernel_error
+from .status import bad_result
 
 
 @njit(cache=True, inline="always")
@@ -49,7 +50,7 @@ def energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
 @njit(cache=True)
 def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
-    −1, the flat index of the first non-finite input (V: after N·nq), or −2 − nb − s for a non-finite out[s]."""
+    its status (dynamics/status.py; a non-finite out[s]: index s)."""
     nb, mdl = I.shape[1], unpack(I, F)
     R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
     Rl, pl, Rw, pw, ww, vw = R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:]
@@ -59,7 +60,7 @@ def energy_kernel(I, F, Q, V, out):
             return bad
         out[s] = energy_of(mdl, Q[s], V[s], Rl, pl, Rw, pw, ww, vw)
         if not np.isfinite(out[s]):
-            return -2 - nb - s
+            return bad_result(nb, s)
     return -1
 
 

@@ -83,7 +83,7 @@ def fk_velocity(mdl, i, v, Rw, pw, ww, vw):
 @njit(cache=True)
 def fk_kernel(I, F, Q, V, Rw, pw, ww, vw):
     """fk_pass for every state: Q (N, nq), V (N, nv) or (N, 0); Rw (N, nb, 3, 3), pw, ww, vw (N, nb, 3).
-    Returns -1, or the flat index (state·nq + entry) of the first non-finite entry of Q (V: + N·nq)."""
+    Returns its status (dynamics/status.py)."""
     N, nb, mdl = Q.shape[0], I.shape[1], unpack(I, F)
     Rl, pl = np.empty((nb, 3, 3)), np.empty((nb, 3))
     for s in range(N):

@@ -8,19 +8,14 @@ import numpy as np
 
 from .._jit import njit
 from ..spatial import first_nonfinite
+from .status import OK, bad_input
 
 
 @njit(cache=True, inline="always")
 def nonfinite_input(Q, V, s):
-    """-1, or the flat index of state s's first non-finite input: s·nq + k in Q, N·nq + s·nv + k in V
+    """−1 when state s's q and v (Q (N, nq), V (N, nv) or (N, 0)) are finite, else its status ``status.bad_input(s)``
     (``spatial.first_nonfinite`` on each row)."""
-    k = first_nonfinite(Q, s)
-    if k >= 0:
-        return s * Q.shape[1] + k
-    k = first_nonfinite(V, s)
-    if k >= 0:
-        return Q.shape[0] * Q.shape[1] + s * V.shape[1] + k
-    return -1
+    return bad_input(s) if max(first_nonfinite(Q, s), first_nonfinite(V, s)) >= 0 else OK
 
 
 @njit(cache=True, inline="always")

@@ -28,10 +28,11 @@ from ..spatial import (SINCOS_MAX, add, compose, cross, first_nonfinite, first_n
                        sandwich3, sub)
 from .forward_kinematics import fk_pass, fk_path
 from .kernel_inputs import nonfinite_input
-from .lanes import (LANES, gather_lanes, get3, get_rotation, lane_record, on_lanes, placement_lanes, set3, shift_code,
+from .lanes import (LANES, gather_lanes, get3, get_rotation, lane_record, on_lanes, placement_lanes, set3,
                     tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .arguments import as_batch, check_output, fast, frame_of, quiet, raise_kernel_error, unbatch
+from .status import OK, bad_input, bad_result, shift
 
 REFERENCES = ("local_world_aligned", "local")
 
@@ -122,7 +123,7 @@ def _to_local(Rf, w, J, dJ, with_dot):
 def frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     """For every state of Q (N, nq) [and V (N, nv)]: the world placement Rf (N, 3, 3), pf (N, 3) of the frame
     (Rl, pl) on body b; want ≥ 1: its Jacobian J (N, 6, nv); want = 2: J̇ (N, 6, nv); local: in the frame's
-    axes. Returns -1, or the flat index of the first non-finite input (V: after N·nq)."""
+    axes. Returns its status (dynamics/status.py)."""
     mdl = unpack(I, F)
     parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
     N, nb = Q.shape[0], I.shape[1]
@@ -205,8 +206,8 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
             code = frame_kernel(I, F, Q[s0:s0 + m], V, b, Rl, pl, want, local, Rf[s0:s0 + m], pf[s0:s0 + m],
                                 J[s0:s0 + m], dJ)
             if code != -1:
-                return shift_code(code, s0, nb, nq, 0)
-    return -1
+                return shift(code, s0, nb, 0)
+    return OK
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -315,14 +316,14 @@ def scatter_frame(Fb, Jb, m, Rf, pf, J, s0, jac):
 def frame_one(I, F, q, v, X, want, out):
     """One state q (nq,) [v (nv,)]: for the frame row X (5, 3) = [R; p; (b, want, local)] (``one_state_row``:
     the frame's placement [R; p] in body b) — want = 1: its Jacobian into out (6, nv); want = 2: J̇ into out
-    (6, nv); local: in the frame's axes. Returns -1, 0 for a non-finite input, or -2 - nb - k for a
-    non-finite out (flat k). Compiled once, for jacobian_one and jacobian_dot_one."""
+    (6, nv); local: in the frame's axes. Returns its status (dynamics/status.py; a non-finite out: its flat
+    index). Compiled once, for jacobian_one and jacobian_dot_one."""
     b, local = int(X[4, 0]), X[4, 2] > 0.0
     mdl = unpack(I, F)
     parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
     nb, nv = I.shape[1], S.shape[0]
     if max(first_nonfinite(q[np.newaxis], 0), first_nonfinite(v[np.newaxis], 0)) >= 0:
-        return 0
+        return bad_input(0)
     B3, R3, path = np.zeros((4 * nb + 3, 3)), np.empty((2 * nb + 1, 3, 3)), np.empty(nb, np.int64)   # cut below
     Rp, Rw, Rf = R3[:nb], R3[nb:2 * nb], R3[2 * nb]
     pp, pw, ww, vw = B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:4 * nb]
@@ -337,7 +338,7 @@ def frame_one(I, F, q, v, X, want, out):
     if local:
         _to_local(Rf, ww[b] if b >= 0 else w0, J, out, want == 2)
     k = first_nonfinite_entry(out)
-    return -1 if k < 0 else -2 - nb - k
+    return OK if k < 0 else bad_result(nb, k)
 
 
 @njit(cache=True)
@@ -355,12 +356,13 @@ def jacobian_dot_one(I, F, q, v, X, out):
 @njit(cache=True)
 def placement_one(I, F, q, X, R, p):
     """One state q (nq,): the world placement R (3, 3), p (3,) of the frame row X (5, 3) = [R; p; (b, ·, ·)]
-    (``one_state_row``). Returns -1, or -2 for a non-finite result (a non-finite input gives one)."""
+    (``one_state_row``). Returns its status (dynamics/status.py: a non-finite input gives a non-finite result,
+    reported as R's first entry)."""
     nb, b = I.shape[1], int(X[4, 0])
     R3, B3, path = np.empty((2 * nb, 3, 3)), np.empty((2 * nb, 3)), np.empty(nb, np.int64)
     fk_path(unpack(I, F), q, q[:0], b, path, R3[:nb], B3[:nb], R3[nb:], B3[nb:], B3[:0], B3[:0])
     body_point(b, R3[nb:], B3[nb:], X[:3], X[3], R, p)
-    return -1 if max(first_nonfinite(p[np.newaxis], 0), first_nonfinite_entry(R)) < 0 else -2
+    return OK if max(first_nonfinite(p[np.newaxis], 0), first_nonfinite_entry(R)) < 0 else bad_result(nb, 0)
 
 
 # The compiled code every call reaches (``_jit.entry``; arrays of any strides): batches, and one state with

@@ -26,6 +26,7 @@ from .forward_kinematics import fk_pass
 from .model_arrays import kernel_arrays, unpack
 from .kinematics import body_point, com_jacobians, point_jacobian, supports
 from .arguments import as_batch, check_output, fast_shape, quiet, raise_kernel_error, unbatch
+from .status import OK, bad_input, bad_result
 
 __all__ = ["lagrange_mass_matrix", "christoffel_coriolis", "mass_matrix_derivatives"]
 
@@ -51,11 +52,11 @@ def lagrange_mass_matrix(model, q):
 def lagrange_mass_kernel(I, F, Q, M):
     """M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ (R_b I_b R_bᵀ) J_ωb (chapter Eq. 23) for every state of Q (N, nq) into
     M (N, nv, nv): the CoM Jacobian J_b of every body (point_jacobian at its world CoM), summed over the
-    columns of the joints that support it. Returns −1, the flat index of the first non-finite q, or
-    −2 − nb − k for a non-finite M at flat index k."""
+    columns of the joints that support it. Returns its status (dynamics/status.py; a non-finite M: its flat
+    index)."""
     mdl = unpack(I, F)
     parent, iv, nvj, S, mass, com, inertia = mdl.parent, mdl.iv, mdl.nvj, mdl.S, mdl.mass, mdl.com, mdl.inertia
-    N, nq, nb, nv = Q.shape[0], Q.shape[1], I.shape[1], M.shape[2]
+    N, nb, nv = Q.shape[0], I.shape[1], M.shape[2]
     # scratch as slices of a few arrays (separate small arrays measured 2.3x slower per state: frame_kernel)
     R3, B3, J, cols, v0 = np.empty((2 * nb + 4, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty((6, nv)), \
         np.empty(nv, np.int64), np.empty(0)
@@ -64,9 +65,8 @@ def lagrange_mass_kernel(I, F, Q, M):
     eye[:, :] = 0.0
     eye[0, 0] = eye[1, 1] = eye[2, 2] = 1.0
     for s in range(N):
-        k = first_nonfinite(Q, s)
-        if k >= 0:
-            return s * nq + k
+        if first_nonfinite(Q, s) >= 0:
+            return bad_input(s)
         fk_pass(mdl, Q[s], v0, Rp, pp, Rw, pw, ww, ww)            # placements only (v0 empty)
         Ms = M[s]
         Ms[:, :] = 0.0
@@ -97,8 +97,8 @@ def lagrange_mass_kernel(I, F, Q, M):
             Ms[r, r] += mdl.armature[r]                # + diag(armature): the rotors' T (docs/design.md §3)
         k = first_nonfinite_entry(Ms)
         if k >= 0:
-            return -2 - nb - (s * nv * nv + k)
-    return -1
+            return bad_result(nb, s * nv * nv + k)
+    return OK
 
 
 def _links_mass_matrix(model, J, Iw):

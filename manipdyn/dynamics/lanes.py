@@ -69,18 +69,6 @@ def scatter_lanes(Z, n, Y, s0):
 
 
 @njit(cache=True, inline="always")
-def shift_code(code, s0, nb, step, size):
-    """A kernel's code for the rows s0 … of a batch, as the code of the whole batch: an input's index (≥ 0) +
-    s0 · step (1 where the code is a state index, nq where it is a flat index of q), a result's flat index (code
-    −2 − nb − k) + s0 · size (the entries per state of the result); −1 as it is."""
-    if code >= 0:
-        return code + s0 * step
-    if code <= -2 - nb:
-        return code - s0 * size
-    return code
-
-
-@njit(cache=True, inline="always")
 def get3(B, r, l, L):
     """Rows r … r + 2 of a lane record (rows of L numbers: L = LANES on the CPU, the batch size on a GPU) at lane l,
     a 3-tuple."""

@@ -49,6 +49,7 @@ from .model_arrays import unpack
 from .rnea import outward, rnea_workspace
 from .route import route
 from .arguments import as_real, check_finite, check_model
+from .status import bad_input, bad_result
 
 NP = 10                                          # dynamic parameters per body
 PARAMETER_NAMES = ("m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
@@ -117,7 +118,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     projected onto its own and its ancestors' motion subspaces (module docstring).
 
     I, F: the model in core form (``model_arrays.kernel_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb) result.
-    Returns -1, ≥ 0 for a non-finite input (state index), or −2 − nb − k for a non-finite entry at flat
+    Returns its status (dynamics/status.py): a non-finite input, or −2 − nb − k for a non-finite entry at flat
     index k of Y.
     """
     mdl = unpack(I, F)
@@ -126,7 +127,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
     for s in range(N):
         if not finite_state(Q, V, A, s):
-            return s
+            return bad_input(s)
         outward(mdl, work, Q[s], V[s], A[s], False, False)     # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass
         Y[s, :, :] = 0.0
         for i in range(nb):
@@ -134,7 +135,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
             to_ancestors(mdl, work, i, W, Sx, Y[s])
         k = first_nonfinite_entry(Y[s])                   # finite result (else an intermediate overflowed)
         if k >= 0:
-            return -2 - nb - (s * nv * NP * nb + k)
+            return bad_result(nb, s * nv * NP * nb + k)
     return -1
 
 

@@ -37,10 +37,11 @@ from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record, motion_model, multi_rates,
-                    on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3, shift_code, tree_depth)
+                    on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
+from .status import OK, bad_input, bad_result, shift
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -163,7 +164,7 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     wrenches [force; moment about xp[k]] on bodies xb (K,) int, in body axes (world=False) or world axes
     (world=True), K = 0 for none; tau (N, nv) result; T (N, nb, NT) per-link terms (TERMS, then R), or an
     array with no rows to skip them. The bodies' world orientations are accumulated only when world
-    wrenches or the terms need them. Returns -1, ≥ 0 for a non-finite input (state index), or −2 − nb − k
+    wrenches or the terms need them. Returns its status (dynamics/status.py): a non-finite input, or −2 − nb − k
     for a non-finite τ at flat index k of tau.
     """
     mdl = unpack(I, F)
@@ -172,7 +173,7 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     keep = T.shape[0] > 0
     for s in range(N):
         if not finite_state(Q, V, A, s):
-            return s
+            return bad_input(s)
         outward(mdl, work, Q[s], V[s], A[s], world or keep, keep)
         external(work, X, s, xb, xp, world)
         inward(mdl, work, tau[s])
@@ -181,8 +182,8 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
             store_terms(mdl, work, T[s])
         k = first_nonfinite(tau, s)            # the result is finite (else an intermediate overflowed)
         if k >= 0:
-            return -2 - nb - (s * nv + k)
-    return -1
+            return bad_result(nb, s * nv + k)
+    return OK
 
 
 # -- the lane kernel: the same recursion across a block of states ------------------------------------------------
@@ -250,8 +251,8 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
             code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
                                tau[s0:s0 + n], T)
             if code != -1:
-                return shift_code(code, s0, nb, 1, nv)
-    return -1
+                return shift(code, s0, nb, nv)
+    return OK
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -8,7 +8,7 @@ state's result, whether it takes external wrenches, and how a MimicModel maps on
 every such call (docs/design.md §2):
 
   1. one float64 state of a plain Model (``arguments.fast``): the one-state entry, no checks in Python — the
-     kernel checks finiteness itself and returns a code;
+     kernel checks finiteness itself and returns its status (dynamics/status.py);
   2. one state with one wrench {frame: (force (3,), moment (3,))} of float64 arrays: the one-state wrench entry;
   3. float64 batches of the model's shapes (``arguments.fast_shape``): the batch entry;
   4. a MimicModel: the route's map onto the full model (``dynamics/mimic.py``; the calls that have one are
@@ -18,17 +18,17 @@ every such call (docs/design.md §2):
      one-state entry, so that a state's numbers do not depend on its dtype) — except Dask arrays of states
      (N, n): a Dask array of the results comes back, each chunk of rows a batch of this call computed when
      asked, on the scheduler's workers (``Route.lazy``; the Dask extra);
-  6. a kernel code other than −1: ``arguments.raise_kernel_error``, the typed error naming the input, the joint or
+  6. a status other than OK: ``arguments.raise_kernel_error``, the typed error naming the input, the joint or
      the result entry at fault.
 
 A batch of N ≥ 2 · MIN_CHUNK states is cut into contiguous chunks, one per thread (``threads``, default: every
 core this process may run on, ``CORES``), each run by the same batch entry on its rows — the kernels release
 Python's lock (``_jit.njit``: nogil) — so every state gets the numbers a one-thread call gives, bit for bit.
-A chunk's kernel code is mapped back to the whole batch (a state index or a result's flat index shifted by the
-chunk's first row); the first failing chunk's code is the one reported, as one thread would stop at it.
+A chunk's status is read as the whole batch's (``status.shift``: a state index or a result's flat index moved by
+the chunk's first row); the first failing chunk's is the one reported, as one thread would stop at it.
 
 The kernels' convention: ``one(I, F, *state, out)`` and ``batch(I, F, *states, [X, body, point, world,] out,
-*tail)`` return −1, or a code; (I, F) = ``Model.kernel.arrays``; every array of any strides (``_jit.A1``…).
+*tail)`` return their status; (I, F) = ``Model.kernel.arrays``; every array of any strides (``_jit.A1``…).
 """
 from __future__ import annotations
 
@@ -42,6 +42,7 @@ import numpy as np
 from ..errors import InputError, ManipdynError
 from ..extras import require
 from ..model import MimicModel, Model
+from .status import OK, shift
 from .arguments import (as_batch, check_f_ext, fast, fast_shape, fast_wrenches, is_config, raise_kernel_error, unbatch,
                         wrench_rows)
 
@@ -110,9 +111,8 @@ def run_chunks(run, N, threads):
 
 def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
     """``batch.call(*arrays, *states, *ext, out, *tail)`` over the rows of the states in chunks, on up to
-    ``threads`` threads at once: −1, or the first failing chunk's code in terms of the whole batch (a state
-    index ≥ 0 or a result's flat index −2 − nb − k shifted to the chunk's rows; a joint's code −2 − i as it
-    is).
+    ``threads`` threads at once: ``status.OK``, or the first failing chunk's status read as the whole batch's
+    (``status.shift``).
     ext = (X, body, point, world): X has one row per state (or none), the rest is shared."""
     parts = chunks(out.shape[0], threads)
     if len(parts) == 1:
@@ -123,13 +123,9 @@ def run_batch(batch, arrays, states, ext, out, tail, threads, nb):
         x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:]) if ext else ()
         return batch.call(*arrays, *(y[a:b] for y in states), *x, out[a:b], *tail)
     for (a, _), code in zip(parts, _codes(part, parts)):
-        if code >= 0:
-            return code + a
-        if code <= -2 - nb:
-            return code - a * size
-        if code != -1:
-            return code
-    return -1
+        if code != OK:
+            return shift(code, a, nb, size)
+    return OK
 
 
 def lazy(call, names, public, model, x, f_ext, shape):
