@@ -1066,6 +1066,10 @@ FAULTS = (
           ("tests/unit/test_status.py",), "the CRBA reports a bad input by a flat index where every other kernel "
                                           "gives the state's row"),
 
+    Fault("rnea-one-state-rates-swapped", "rnea", "manipdyn/dynamics/rnea.py",
+          "            Z[nq + k], Z[nq + nv + k] = v[k], a[k]\n", "            Z[nq + k], Z[nq + nv + k] = a[k], v[k]\n",
+          (_RNEA, _FAST), "the one-state driver of the lane steps reads q̈ for q̇ and q̇ for q̈"),
+
 )
 
 

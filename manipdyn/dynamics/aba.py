@@ -730,7 +730,7 @@ def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
 def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
     """``cholesky_states`` for a batch: the lane kernels for M and h, whatever N (a state's q̈ does not depend on
     the batch around it: a Dask chunk or a thread's share gives the numbers of the whole batch)."""
-    return cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, True)
+    return cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, np.bool_(True))   # (run-time bools: one compiled cholesky_states)
 
 
 @njit(cache=True, fastmath=CONTRACT)
@@ -784,7 +784,7 @@ def cholesky_one(I, F, q, v, tau, out):
     """One state without external wrenches: cholesky_states with N = 1, by the scalar kernels."""
     X, xb, xp, world = no_wrenches(I, F)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
-                           out[np.newaxis, :], False)
+                           out[np.newaxis, :], np.bool_(False))
 
 
 @njit(cache=True)
@@ -792,7 +792,7 @@ def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
     """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1, scalar."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
-                           out[np.newaxis, :], False)
+                           out[np.newaxis, :], np.bool_(False))
 
 
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------

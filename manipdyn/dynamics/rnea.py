@@ -37,6 +37,7 @@ from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record, motion_model, multi_rates,
+                    placement_lane, placement_model, quat_model, quat_placement_lane,
                     on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
@@ -97,11 +98,9 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
 
 @njit(cache=True)
 def rnea_one(I, F, q, v, a, tau):
-    """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: ``rnea_kernel`` on row views
-    (F[:0]: no per-link terms, as an empty view)."""
-    X, xb, xp, world = no_wrenches(I, F)
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
-                       tau[np.newaxis, :], F[:0, :, :])
+    """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: the lane kernel's steps driven for one
+    state (``rnea_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
+    return rnea_steps_one(I, F, q, v, a, tau)
 
 
 @njit(cache=True)
@@ -129,12 +128,10 @@ def gravity_kernel(I, F, Q, tau):
 
 @njit(cache=True)
 def bias_one(I, F, q, v, tau):
-    """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_kernel`` on row views
-    with zero accelerations (the lane kernel would compute a block of 64 states for it)."""
-    Z = np.zeros((1, tau.shape[0]))[:, :]
-    X, xb, xp, world = no_wrenches(I, F)
-    return rnea_kernel(I, F, q[np.newaxis, :], Z if v.shape[0] == 0 else v[np.newaxis, :], Z, X, xb, xp, world,
-                       tau[np.newaxis, :], F[:0, :, :])
+    """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_steps_one`` with zero
+    accelerations ((I, F) in z-aligned frames)."""
+    Z = np.zeros((1, tau.shape[0]))[:, :][0]         # (a view of any layout, as the entry's arrays: one signature)
+    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, tau)
 
 
 @njit(cache=True)
@@ -186,6 +183,68 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     return OK
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def rnea_steps_one(I, F, q, v, a, tau):
+    """τ (nv,) of one state by the steps of the lane kernel (``rnea_lanes``), driven for one lane: records of one
+    number a row (L = 1), the same placement, motion, inertial, wrench and torque steps, the same z-aligned frames
+    ((I, F) = ``Model.kernel.lane_arrays``) — one source for a batch and for one state. Measured: AAU arm 411 against
+    905 ns a state for ``rnea_kernel`` in a compiled loop (docs/bench/measurements.md). A model the lane steps do not
+    take (``lanes.on_lanes``), a non-finite input, an angle beyond ``spatial.SINCOS_MAX`` or a non-finite τ runs
+    ``rnea_kernel``, whose status names the culprit."""
+    mdl = unpack(I, F)
+    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
+    ok = on_lanes(mdl, nq, True)
+    x = 0.0
+    for k in range(nq):
+        x += abs(q[k])
+    ok &= x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 and first_nonfinite(a[np.newaxis, :], 0) < 0
+    if ok:
+        W = np.empty(nb * RECORD + nq + 2 * nv + 9)      # the bodies' records, then q, q̇, q̈ (Z), then the base
+        Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
+        for k in range(nq):
+            Z[k] = q[k]
+        for k in range(nv):
+            Z[nq + k], Z[nq + nv + k] = v[k], a[k]
+        for k in range(6):
+            base[k] = 0.0
+        base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
+        mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
+        for i in range(nb):                                             # outward, Eqs. 3–14
+            j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
+            par = base if j < 0 else Rec[j * RECORD + _W:j * RECORD + _W + 9]
+            mm = motion_model(i, mdl, nq)
+            if mdl.nvj[i] > 1:                                          # a free flyer or a ball joint
+                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+                motion_lane_multi(mm, B, par, Z, 0, 1)
+            else:
+                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                if j < 0:
+                    root_motion_lane(mm, B, mg, Z, 0, 1)
+                else:
+                    motion_lane(mm, B, par, Z, 0, 1)
+            inertial_lane(inertial_model(i, mdl), B, 0, 1)
+        for i in range(nb - 1, -1, -1):                                 # inward, Eqs. 15–18
+            j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
+            to = Rec[:0] if j < 0 else Rec[j * RECORD + _F:j * RECORD + _F + 6]
+            mm = motion_model(i, mdl, nq)
+            r, n = mm[0], mm[5]
+            if n > 1:
+                for k in range(n):
+                    torque_multi_lane(mm, k, mdl.armature[r + k], B, tau, Z, 0, 1)
+                if j >= 0:
+                    wrench_up_lane(B, to, 0, 1)
+            elif j < 0:
+                torque_lane(mm, mdl.armature[r], B, tau, Z, 0, 1)
+            else:
+                inward_lane(mm, mdl.armature[r], B, to, tau, Z, 0, 1)
+        ok = first_nonfinite(tau[np.newaxis, :], 0) < 0
+    if ok:
+        return OK
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
+                       tau[np.newaxis, :], F[:0, :, :])
+
+
 # -- the lane kernel: the same recursion across a block of states ------------------------------------------------
 # A batch runs as blocks of LANES states (lanes.gather_lanes: the state index last). For each body, one loop over
 # the block's lanes does what ``outward`` does for one state, and the compiler turns it into vector instructions
@@ -204,14 +263,15 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
     External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
     itself for what the lanes do not cover — per-link terms, a joint other than a screw joint, a free flyer or a
-    ball (``lanes.on_lanes``) — and for a block with a non-finite input or result or a revolute angle beyond ``spatial.SINCOS_MAX`` (its code
-    then names the state or entry, as the one-state form's does).
-    Every lane is computed alone, so a state's τ does not depend on the batch around it; it agrees with the
-    one-state kernel's to rounding (measured ≤ 1e-15 relative on ur5, tests/batch/test_lanes.py).
+    ball (``lanes.on_lanes``). A block with a non-finite input or result or an angle beyond ``spatial.SINCOS_MAX``
+    runs its states one by one as a one-state call does (``rnea_steps_one``; with external wrenches, ``rnea_kernel``
+    on the block): its status names the state or entry. Every lane is computed alone, so a state's τ does not
+    depend on the batch around it; it agrees with the one-state call's to rounding (tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
     if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):      # the terms, a joint the lanes do not take
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
+    Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
     mdl = unpack(I, F)          # references, and threads sharing one array contend for its count (measured: two
     #                             threads on one model 0.68–0.83 of one thread's time, on copies 0.53–0.55)
@@ -247,11 +307,16 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 else:
                     inward_lanes(i, mdl, B, to, TB, Z, nq)
             ok = scatter_lanes(TB, n, tau, s0)
-        if not ok:                                  # the block's states one by one: the code names the culprit
+        if not ok and xb.shape[0] > 0:              # the block's states one by one: the status names the culprit
             code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
                                tau[s0:s0 + n], T)
-            if code != -1:
+            if code != OK:
                 return shift(code, s0, nb, nv)
+        elif not ok:                                # each state as a one-state call computes it
+            for s in range(s0, s0 + n):
+                code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], tau[s])
+                if code != OK:
+                    return shift(code, s, nb, nv)
     return OK
 
 
@@ -587,7 +652,7 @@ def store_terms(mdl, work, T):
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
 
 @route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,),
-       wrenches=True, lanes=True,
+       wrenches=True, lanes=True, one_lanes=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
 def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
@@ -607,14 +672,15 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
 
 
 @route("nonlinear_effects", ("q", "v"), "h", "v", entry(bias_one, *MODEL, A1, A1, A1),
-       entry(bias_kernel, *MODEL, A2, A2, A2), lanes=True, mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
+       entry(bias_kernel, *MODEL, A2, A2, A2), lanes=True, one_lanes=True,
+       mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
 def nonlinear_effects(model, q, v, *, threads=None):
     """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
     nonLinearEffects), τ = M q̈ + h. threads: a batch's threads (``rnea``'s)."""
 
 
 @route("gravity_torques", ("q",), "g", "v", entry(gravity_one, *MODEL, A1, A1), entry(gravity_kernel, *MODEL, A2, A2),
-       lanes=True, mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
+       lanes=True, one_lanes=True, mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
 def gravity_torques(model, q, *, threads=None):
     """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0.
     threads: a batch's threads (``rnea``'s)."""

@@ -169,7 +169,7 @@ def route(call, names, result, shape, one, batch, **options):
     wrench, 0.9 µs less than through ``Route.checked``)."""
     r = Route(call, names, result, shape, one, batch, **options)
     no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
-    wrench_one = r.wrench_one                 # (every route with one has three states: q, v, a or τ)
+    wrench_one, one_lanes = r.wrench_one, r.one_lanes    # (every route with wrench_one has three states)
 
     def bind(public):
         def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local",
@@ -183,6 +183,8 @@ def route(call, names, result, shape, one, batch, **options):
             if f_ext is None and f_ext_frame == "local" and (v is _MISSING) is no_v and (a is _MISSING) is no_a:
                 k = fast(model, q, v, a)
                 if k is not None:                               # 1. one float64 state: straight in
+                    if one_lanes:
+                        k = model.kernel.lane_arrays
                     out = np.empty(model.kernel.result_shapes[shape])
                     code = one.call(k[0], k[1], q, out) if no_v else one.call(k[0], k[1], q, v, out) if no_a \
                         else one.call(k[0], k[1], q, v, a, out)
@@ -212,6 +214,8 @@ class Route:
     result    the result's name in errors ("tau", "q̈", "M", ...)
     shape     one state's result shape, one of SHAPES: "v" (nv,), "vv" (nv, nv), "regressor" (nv, 10 nb)
     one       entry of the one-state kernel: one(I, F, *state, out)
+    one_lanes True: the one-state entry drives the lane steps too, and takes the model in z-aligned frames
+              (``Model.kernel.lane_arrays``); its wrench entry takes the model as it is
     batch     entry of the batch kernel: batch(I, F, *states, [X, body, point, world,] out, *tail)
     tail      constant arguments after out (rnea's empty per-link terms)
     wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``arguments.wrench_rows``
@@ -221,12 +225,12 @@ class Route:
               (``Model.kernel.lane_arrays``, and its wrenches in those frames)
     """
     __slots__ = ("call", "names", "result", "shape", "one", "batch", "tail", "wrenches", "wrench_one",
-                 "mimic", "public", "lanes")
+                 "mimic", "public", "lanes", "one_lanes")
 
     def __init__(self, call, names, result, shape, one, batch, *, tail=(), wrenches=False,
-                 wrench_one=None, mimic=None, lanes=False):
+                 wrench_one=None, mimic=None, lanes=False, one_lanes=False):
         self.call, self.names, self.result, self.shape = call, tuple(names), result, shape
-        self.one, self.batch, self.tail, self.lanes = one, batch, tuple(tail), lanes
+        self.one, self.batch, self.tail, self.lanes, self.one_lanes = one, batch, tuple(tail), lanes, one_lanes
         self.wrenches, self.wrench_one, self.mimic = wrenches, wrench_one, mimic
 
     def by_name(self, a, tau):
@@ -261,7 +265,8 @@ class Route:
             return unbatch(np.zeros((N,) + shape), single)
         if single and f_ext is None and f_ext_frame == "local":  # one state (converted): the one-state kernel, so
             out = np.empty(shape)                               # that its numbers do not depend on its dtype (the
-            code = self.one.call(*model.kernel.arrays, *(y[0] for y in states), out)   # batch kernels run lanes)
+            arrays = model.kernel.lane_arrays if self.one_lanes else model.kernel.arrays
+            code = self.one.call(*arrays, *(y[0] for y in states), out)   # batch kernels run lanes)
             if code != -1:
                 self.fail(model, code, states, out[np.newaxis])
             return out
