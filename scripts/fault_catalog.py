@@ -315,7 +315,7 @@ FAULTS = (
           "    for r in range(l, n):", "    for r in range(l, n - 1):",
           ("tests/batch/test_lanes.py",), "the last state of a lane block whose size is not a multiple of 4 is never written back"),
     Fault("rnea-lanes-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
-          "return shift(code, s0, nb, nv)", "return code",
+          "                    return shift(code, s, nb, nv)", "                    return code",
           ("tests/batch/test_lanes.py", "tests/unit/test_status.py"), "a bad state in a later lane block is named by its index within the block"),
     Fault("loader-point-mass-at-link-origin", "loader", "manipdyn/io/urdf.py",
           "        return m, p + R @ To[:3, 3], np.zeros((3, 3))", "        return m, p.copy(), np.zeros((3, 3))",
@@ -1069,6 +1069,11 @@ FAULTS = (
     Fault("rnea-one-state-rates-swapped", "rnea", "manipdyn/dynamics/rnea.py",
           "            Z[nq + k], Z[nq + nv + k] = v[k], a[k]\n", "            Z[nq + k], Z[nq + nv + k] = a[k], v[k]\n",
           (_RNEA, _FAST), "the one-state driver of the lane steps reads q̈ for q̇ and q̇ for q̈"),
+
+    Fault("rnea-lanes-wrench-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
+          "                return shift(code, s0, nb, nv)", "                return code",
+          ("tests/batch/test_lanes.py",), "with external wrenches, a bad state in a later lane block is named by its "
+                                          "index within the block"),
 
 )
 

@@ -140,6 +140,10 @@ def test_an_overflow_in_a_later_block_is_named_by_its_row(models):
     V[LANES + 5] = 1e200                                  # finite input, τ ~ v² overflows to inf
     with pytest.raises(NumericalError, match=rf"row {LANES + 5}\b"):
         md.rnea(model, Q, V, A)
+    frame = model.body_names[-1]                          # with a wrench: the block runs the scalar kernel
+    f_ext = {frame: (np.ones((len(Q), 3)), np.zeros((len(Q), 3)))}
+    with pytest.raises(NumericalError, match=rf"row {LANES + 5}\b"):
+        md.rnea(model, Q, V, A, f_ext=f_ext)
 
 
 def _pin_mass_matrix(pm, data, q):
