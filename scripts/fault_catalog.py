@@ -1075,6 +1075,10 @@ FAULTS = (
           ("tests/batch/test_lanes.py",), "with external wrenches, a bad state in a later lane block is named by its "
                                           "index within the block"),
 
+    Fault("crba-one-state-upper-triangle-dropped", "lagrange", "manipdyn/dynamics/crba.py",
+          "                M[b, a] = y\n", "                M[b, a] = 0.0\n",
+          (_CRBA, _FAST), "the one-state driver of the CRBA's lane steps writes M's lower triangle only"),
+
 )
 
 

@@ -28,7 +28,8 @@ from ..model import MimicModel
 from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
-from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lanes,
+from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lane,
+                    placement_lanes, placement_model, quat_model, quat_placement_lane,
                     quat_placement_lanes, tree_depth)
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
@@ -129,7 +130,66 @@ def crba_kernel(I, F, Q, M):
 
 @njit(cache=True)
 def crba_one(I, F, q, M):
-    """One state: q (nq,), M (nv, nv), through crba_kernel."""
+    """One state: q (nq,), M (nv, nv), through the lane kernel's steps for one lane (``crba_steps_one``; (I, F) in
+    z-aligned frames, ``Model.kernel.lane_arrays``)."""
+    return crba_steps_one(I, F, q, M)
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def crba_steps_one(I, F, q, M):
+    """M (nv, nv) of one state by the steps of the lane kernel (``crba_lanes``), driven for one lane (L = 1): the same
+    placement, own-inertia, merge and column steps as a batch (the GPU's driver too), in the same z-aligned frames.
+    A model the lane steps do not take (``lanes.on_lanes``), a non-finite q, an angle beyond ``spatial.SINCOS_MAX``
+    or a non-finite M runs ``crba_kernel``, whose status names the culprit."""
+    mdl = unpack(I, F)
+    nb, nq, nv = I.shape[1], q.shape[0], M.shape[0]
+    x = 0.0
+    for k in range(nq):
+        x += abs(q[k])
+    if on_lanes(mdl, nq, True) and x <= SINCOS_MAX:
+        parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
+        W, mC = np.empty((nb, 3)), np.empty(nb)
+        merge_weights(parent, mdl.mass, mC, W)
+        S = np.zeros(nb * COMPOSITE + nq + 6 + nv * nv)   # the bodies' records, q, the carried wrench, M's entries
+        Rec, Z = S[:nb * COMPOSITE], S[nb * COMPOSITE:nb * COMPOSITE + nq]
+        Fw, Mb = S[nb * COMPOSITE + nq:nb * COMPOSITE + nq + 6], S[nb * COMPOSITE + nq + 6:]
+        for k in range(nq):
+            Z[k] = q[k]
+        for i in range(nb):                                   # pass 1: placements, own inertias
+            B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
+            if nvj[i] > 1:
+                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+            else:
+                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+            own_inertia_lane(own_inertia_model(i, mdl), B, 0, 1)
+        for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
+            j = parent[i]
+            if j >= 0:
+                merge_lane((W[i, 0], W[i, 1], W[i, 2]), Rec[i * COMPOSITE:(i + 1) * COMPOSITE],
+                           Rec[j * COMPOSITE:(j + 1) * COMPOSITE], 0, 1)
+        for i in range(nb):                                   # pass 2: columns iv_i + r of M
+            B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
+            for r in range(nvj[i]):
+                column_lane(column_model(i, r, i, r, mdl), mC[i], B, Fw, Mb, 0, 1)
+                for c in range(r):
+                    block_lane(column_model(i, r, i, c, mdl), Fw, Mb, 0, 1)
+                k = i
+                while parent[k] >= 0:
+                    j, Bk = parent[k], Rec[k * COMPOSITE:(k + 1) * COMPOSITE]
+                    if nvj[j] == 1:
+                        column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, 0, 1)
+                    else:                                     # a free flyer or ball ancestor
+                        column_up_multi_lane((iv[i] + r) * nv + iv[j], nvj[j], Bk, Fw, Mb, 0, 1)
+                    k = j
+        bad = 0.0
+        for a in range(nv):                                   # the lower triangle, mirrored
+            for b in range(a + 1):
+                y = Mb[a * nv + b]
+                M[a, b] = y
+                M[b, a] = y
+                bad += y - y
+        if bad == 0.0:
+            return OK
     return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
 
 
@@ -150,6 +210,7 @@ def crba_lanes(I, F, Q, M):
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
     if not on_lanes(unpack(I, F), nq, True):
         return crba_kernel(I, F, Q, M)
+    Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
     parent, L = mdl.parent, LANES
@@ -182,10 +243,11 @@ def crba_lanes(I, F, Q, M):
                 else:
                     column_lanes(i, mdl, mC[i], even, odd, depth, Fw, Mb)
             ok = scatter_symmetric(Mb, n, M, s0)
-        if not ok:                                  # the block's states one by one: the code names the culprit
-            code = crba_kernel(I, F, Q[s0:s0 + n], M[s0:s0 + n])
-            if code != -1:
-                return shift(code, s0, nb, nv * nv)
+        if not ok:                                  # each state as a one-state call computes it: its status
+            for s in range(s0, s0 + n):             # names the culprit
+                code = crba_steps_one(Im, Fm, Q[s], M[s])
+                if code != OK:
+                    return shift(code, s, nb, nv * nv)
     return OK
 
 
@@ -382,7 +444,7 @@ def mass_matrix(model, q, method=_CRBA, *, threads=None):
 
 
 @route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_lanes, *MODEL, A2, A3),
-       lanes=True)
+       lanes=True, one_lanes=True)
 def crba(model, q, *, threads=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
     route: dynamics/route.py). threads: a batch's threads (``rnea``'s)."""

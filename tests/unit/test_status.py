@@ -39,10 +39,16 @@ def _batch(model, names, N, row, which):
 
 
 @pytest.mark.parametrize("call", sorted(ROUTES))
-@pytest.mark.parametrize("robot", ["aau_arm.urdf", "spm.urdf"])
+@pytest.mark.parametrize("robot", ["aau_arm.urdf", "spm.urdf", "planar_root"])
 def test_a_bad_input_is_its_row_in_every_batch_kernel(call, robot):
+    """On the bundled arms (the lane kernels, a bad block run state by state) and on a tree of every joint kind
+    (helical, planar, universal: the scalar kernels run the whole batch)."""
     import dataclasses
-    model = md.load_urdf(bundled_dir() / robot)
+    if robot == "planar_root":
+        from joint_kinds import kinds_robot
+        model = md.load_urdf_string(kinds_robot(robot)[0])
+    else:
+        model = md.load_urdf(bundled_dir() / robot)
     model = dataclasses.replace(model, constraints=()) if model.constraints else model
     r, N = ROUTES[call].route, 200                              # 4 lane blocks; the NaN in the third
     for which in range(len(r.names)):
