@@ -28,7 +28,8 @@ A chunk's status is read as the whole batch's (``status.shift``: a state index o
 the chunk's first row); the first failing chunk's is the one reported, as one thread would stop at it.
 
 The kernels' convention: ``one(I, F, *state, out)`` and ``batch(I, F, *states, [X, body, point, world,] out,
-*tail)`` return their status; (I, F) = ``Model.kernel.arrays``; every array of any strides (``_jit.A1``…).
+*tail)`` return their status; (I, F) = ``Model.kernel.arrays`` (``lane_arrays`` for a lane entry: ``Route.lanes``,
+``one_lanes``); every array of any strides (``_jit.A1``…).
 """
 from __future__ import annotations
 
