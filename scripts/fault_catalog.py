@@ -442,7 +442,7 @@ FAULTS = (
           "B[(_PA + k) * L + l] += fl[k] + U[k] * ud", "B[(_PA + k) * L + l] += fl[k] - U[k] * ud",
           ("tests/batch/test_lanes.py",), "the lane ABA's pᵃ = p^A + Iᵃ c − U u/D (linear part)"),
     Fault("aba-lanes-fallback-code-not-shifted", "aba", "manipdyn/dynamics/aba.py",
-          "                return shift(code, s0, nb, nv)", "                return code",
+          "                    return shift(code, s, nb, nv)", "                    return code",
           ("tests/batch/test_lanes.py", "tests/unit/test_status.py"), "an overflow in a later lane block of aba is named by its row within the "
                                            "block"),
     Fault("gpu-rnea-gravity-sign", "rnea", "manipdyn/gpu.py",
@@ -1079,6 +1079,12 @@ FAULTS = (
           "                M[b, a] = y\n", "                M[b, a] = 0.0\n",
           (_CRBA, _FAST), "the one-state driver of the CRBA's lane steps writes M's lower triangle only"),
 
+    Fault("aba-one-state-handed-dropped", "aba", "manipdyn/dynamics/aba.py",
+          "                if j >= 0:\n                    handed_lane(B, 0, 1)\n", "",
+          (_ABA, _FAST), "the one-state driver of the ABA's lane steps hands the parent I^A and p^A unreduced"),
+    Fault("aba-one-state-multi-slot-fixed", "aba", "manipdyn/dynamics/aba.py",
+          "                    g += 1\n", "                    g += 0\n",
+          (_BALL, _FLOATBASE), "the one-state ABA's pass 3 reads every free flyer's and ball's factors from the first one's"),
 )
 
 

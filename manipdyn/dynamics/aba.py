@@ -44,8 +44,8 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                    motion_model, multi_rates, on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3,
-                    set6, tree_depth)
+                    motion_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
+                    quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_kernel, crba_lanes
 from .rnea import rnea, rnea_kernel, rnea_lanes
@@ -288,12 +288,14 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
 
     Runs ``aba_kernel`` itself for external wrenches and for a model with a joint the lanes do not take
     (``lanes.on_lanes``), and
-    for a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` (its code
-    then names the joint or the entry; a bad input's code is ≥ 0, and ``arguments.raise_kernel_error`` names it from
-    the inputs). Agrees with the one-state kernel to rounding (tests/batch/test_lanes.py)."""
+    runs a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` state by
+    state as a one-state call does (``aba_steps_one``: its code then names the state, the joint or the entry).
+    Every lane is computed alone, so a state's q̈ does not depend on the batch around it; it agrees with the
+    one-state call's to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
     if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
+    Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
     parent, L = mdl.parent, LANES
@@ -342,11 +344,11 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
                 else:
                     acceleration_lanes(i, mdl, B, par, QDD, nq)
             ok = scatter_lanes(QDD, n, out, s0)
-        if not ok:                                  # the block's states one by one: the code names the culprit
-            code = aba_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], Tau[s0:s0 + n], X, body, point, world,
-                              out[s0:s0 + n])
-            if code != -1:
-                return shift(code, s0, nb, nv)
+        if not ok:                                  # each state as a one-state call computes it: its code
+            for s in range(s0, s0 + n):             # names the culprit
+                code = aba_steps_one(Im, Fm, Q[s], V[s], Tau[s], out[s])
+                if code != OK:
+                    return shift(code, s, nb, nv)
     return OK
 
 
@@ -710,7 +712,85 @@ def acceleration_lane(am, B, par, QDD, l, L):
 
 @njit(cache=True)
 def aba_one(I, F, q, v, tau, out):
-    """One state (nq,), (nv,) without external wrenches: aba_kernel on row views, no Python-side reshapes."""
+    """One state (nq,), (nv,) without external wrenches, through the lane kernel's steps for one lane
+    (``aba_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
+    return aba_steps_one(I, F, q, v, tau, out)
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
+def aba_steps_one(I, F, q, v, tau, out):
+    """q̈ (nv,) of one state by the steps of the lane kernel (``aba_lanes``), driven for one lane: records of one
+    number a row (L = 1), the same velocity, bias, articulated-inertia, hand-off and acceleration steps (a free
+    flyer's or a ball's multi-dof steps included), in the same z-aligned frames — one source for a batch and for
+    one state. A model the lane steps do not take (``lanes.on_lanes``), a non-finite input, an angle beyond
+    ``spatial.SINCOS_MAX``, a D_i not > dmin or a non-finite q̈ runs ``aba_kernel``, whose status names the
+    culprit."""
+    mdl = unpack(I, F)
+    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
+    parent, nvj = mdl.parent, mdl.nvj
+    x = 0.0
+    for k in range(nq):
+        x += abs(q[k])
+    ok = on_lanes(mdl, nq, True) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
+        and first_nonfinite(tau[np.newaxis, :], 0) < 0
+    if ok:
+        m = 0
+        for i in range(nb):
+            m += nvj[i] > 1
+        W = np.empty(nb * ARTICULATED + 12 + nq + 2 * nv + m * MULTI)   # records, the base, q q̇ τ, multi-dof
+        Rec, base = W[:nb * ARTICULATED], W[nb * ARTICULATED:nb * ARTICULATED + 12]
+        Z = W[nb * ARTICULATED + 12:nb * ARTICULATED + 12 + nq + 2 * nv]
+        G = W[nb * ARTICULATED + 12 + nq + 2 * nv:]
+        for k in range(nq):
+            Z[k] = q[k]
+        for k in range(nv):
+            Z[nq + k], Z[nq + nv + k] = v[k], tau[k]
+        for k in range(12):
+            base[k] = 0.0
+        base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]     # a_0 = [−g; 0]
+        dmin = singular_threshold(mdl.inertia, mdl.mass)
+        for i in range(nb):                                             # pass 1 (outward)
+            j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+            par = base[:6] if j < 0 else Rec[j * ARTICULATED + _V:j * ARTICULATED + _V + 6]
+            mm = motion_model(i, mdl, nq)
+            if nvj[i] > 1:                                              # a free flyer or a ball joint
+                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+                velocity_multi_lane(mm, B, par, Z, 0, 1)
+            else:
+                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                velocity_lane(mm, B, par, Z, 0, 1)
+            bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, 0, 1)
+        singular, g = 0, m
+        for i in range(nb - 1, -1, -1):                                 # pass 2 (inward)
+            j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+            n = nvj[i]
+            if n > 1:
+                g -= 1                                                  # (records in body order: the last first)
+                Gi, r = G[g * MULTI:(g + 1) * MULTI], mdl.iv[i]
+                singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, 0, 1, 1)
+                if j >= 0:
+                    handed_multi(n, B, Gi, 0, 1, 1)
+            else:
+                singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, 0, 1)
+                if j >= 0:
+                    handed_lane(B, 0, 1)
+            if j >= 0:
+                P = Rec[j * ARTICULATED:(j + 1) * ARTICULATED]
+                inertia_up_lane(B, P, 0, 1)
+                bias_up_lane(B, P, 0, 1)
+        ok = singular == 0
+        if ok:
+            for i in range(nb):                                         # pass 3 (outward)
+                j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+                par = base[6:] if j < 0 else Rec[j * ARTICULATED + _A:j * ARTICULATED + _A + 6]
+                if nvj[i] > 1:
+                    acceleration_multi(nvj[i], mdl.iv[i], B, G[g * MULTI:(g + 1) * MULTI], par, out, 0, 1, 1)
+                    g += 1
+                else:
+                    acceleration_lane(articulated_model(i, mdl, nq), B, par, out, 0, 1)
+            ok = first_nonfinite(out[np.newaxis, :], 0) < 0
+    if ok:
+        return OK
     X, xb, xp, world = no_wrenches(I, F)
     return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                       out[np.newaxis, :])
@@ -802,7 +882,7 @@ _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLA
 
 
 @route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_lanes, *_FD), wrenches=True,
-       lanes=True, wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
+       lanes=True, one_lanes=True, wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
 
