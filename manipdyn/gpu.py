@@ -34,8 +34,8 @@ import numpy as np
 from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi, articulated_lane,
                            articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
-from .dynamics.lanes import (gather_lane, get3, get_rotation, inertial_model, motion_model, on_lanes, placement_lane,
-                             placement_model, quat_model, quat_placement_lane, scatter_lane)
+from .dynamics.lanes import (body_placement_lane, gather_lane, get3, get_rotation, inertial_model, motion_model,
+                             on_lanes, scatter_lane)
 from .dynamics.model_arrays import unpack
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
                             merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
@@ -46,7 +46,7 @@ from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward
 from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
-from .joints import BALL, FREEFLYER, PRISMATIC, REVOLUTE, TYPE_NAMES
+from .joints import BALL, FREEFLYER, HELICAL, PRISMATIC, REVOLUTE, TYPE_NAMES
 from .model import Model
 from .spatial import SINCOS_MAX, mul3t
 
@@ -105,11 +105,10 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         par = base if j < 0 else rec[(j * RECORD + _W) * N:(j * RECORD + _W + 9) * N]
         mm = motion_model(i, mdl, nq)
+        body_placement_lane(i, mdl, B, Z, s, N)
         if mdl.nvj[i] > 1:                                # a free flyer or a ball joint
-            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
             motion_lane_multi(mm, B, par, Z, s, N)
         else:
-            placement_lane(placement_model(i, mdl), B, Z, s, N)
             motion_lane(mm, B, par, Z, s, N)
         inertial_lane(inertial_model(i, mdl), B, s, N)
     for k in range(xb.shape[0]):                          # external wrenches
@@ -148,10 +147,7 @@ def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, angle, flags):
         return
     for i in range(nb):                                   # pass 1: placements, own inertias
         B = rec[i * COMPOSITE * N:(i + 1) * COMPOSITE * N]
-        if mdl.nvj[i] > 1:
-            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
-        else:
-            placement_lane(placement_model(i, mdl), B, Z, s, N)
+        body_placement_lane(i, mdl, B, Z, s, N)
         own_inertia_lane(own_inertia_model(i, mdl), B, s, N)
     for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
         j = mdl.parent[i]
@@ -205,11 +201,10 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         par = base[:6 * N] if j < 0 else rec[(j * ARTICULATED + _V) * N:(j * ARTICULATED + _V + 6) * N]
         mm = motion_model(i, mdl, nq)
+        body_placement_lane(i, mdl, B, Z, s, N)
         if mdl.nvj[i] > 1:
-            quat_placement_lane(quat_model(i, mdl), B, Z, s, N)
             velocity_multi_lane(mm, B, par, Z, s, N)
         else:
-            placement_lane(placement_model(i, mdl), B, Z, s, N)
             velocity_lane(mm, B, par, Z, s, N)
         bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, s, N)
     singular = 0
@@ -264,7 +259,7 @@ def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J,
     for k in range(n - 1, -1, -1):                        # root → b: placements
         i, j = path[k], mdl.parent[path[k]]
         B = rec[i * WORLD * N:(i + 1) * WORLD * N]
-        placement_lane(placement_model(i, mdl), B, Z, s, N)
+        body_placement_lane(i, mdl, B, Z, s, N)
         world_lane(B, base if j < 0 else rec[j * WORLD * N:(j + 1) * WORLD * N], s, N)
     X = ((Rl[0, 0], Rl[0, 1], Rl[0, 2]), (Rl[1, 0], Rl[1, 1], Rl[1, 2]), (Rl[2, 0], Rl[2, 1], Rl[2, 2])), \
         (pl[0], pl[1], pl[2])
@@ -349,9 +344,9 @@ def _model(model, call, multi=True):
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays
     if not on_lanes(unpack(I, F), model.nq, multi):
-        taken = (REVOLUTE, PRISMATIC) + ((FREEFLYER, BALL) if multi else ())
+        taken = (REVOLUTE, PRISMATIC, HELICAL) + ((FREEFLYER, BALL) if multi else ())
         others = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in taken]
-        what = "revolute and prismatic joints" + (", free flyers and ball joints" if multi else
+        what = "revolute, prismatic and helical joints" + (", free flyers and ball joints" if multi else
                                                   "; free flyers and ball joints in rnea, aba and mass_matrix")
         raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take {what}; use "
                          f"the CPU call)")
@@ -359,10 +354,16 @@ def _model(model, call, multi=True):
 
 
 def _angles(model):
-    """angle (nq,) int64 on the device: 1 where q's entry is a revolute joint's angle (the sincos range check)."""
-    a = np.zeros(model.nq, np.int64)
-    a[model.idx_q[model.kind == REVOLUTE]] = 1
-    return _cuda().to_device(a)
+    """angle (nq,) int64 on the device: 1 where q's entry is an angle (``_angle_mask``: the sincos range check)."""
+    return _cuda().to_device(_angle_mask(model).astype(np.int64))
+
+
+def _angle_mask(model):
+    """(nq,) bool: True where q's entry is a revolute or helical joint's angle, which the lane steps turn by
+    ``spatial.sincos``."""
+    a = np.zeros(model.nq, bool)
+    a[model.idx_q[(model.kind == REVOLUTE) | (model.kind == HELICAL)]] = True
+    return a
 
 
 def _raise(model, call, flags, states, cpu):
@@ -371,8 +372,7 @@ def _raise(model, call, flags, states, cpu):
     first = min(int(x) for x in flags.copy_to_host())
     rows = [d[first:first + 1].copy_to_host()[0] for _, d in states]
     q = rows[0]
-    angle = np.zeros(model.nq, bool)
-    angle[model.idx_q[model.kind == REVOLUTE]] = True
+    angle = _angle_mask(model)
     for k, x in enumerate(q):
         if np.isfinite(x) and angle[k] and abs(x) > SINCOS_MAX:
             raise InputError(f"{call}: q[{first}, {k}] (joint {model.q_names[k]!r}) is {x:.6g}, beyond "

@@ -1085,6 +1085,12 @@ FAULTS = (
     Fault("aba-one-state-multi-slot-fixed", "aba", "manipdyn/dynamics/aba.py",
           "                    g += 1\n", "                    g += 0\n",
           (_BALL, _FLOATBASE), "the one-state ABA's pass 3 reads every free flyer's and ball's factors from the first one's"),
+    Fault("lanes-helical-slide-sign", "rnea", "manipdyn/dynamics/lanes.py",
+          "    d = h * Z[iq * L + l]\n", "    d = -h * Z[iq * L + l]\n",
+          (_KINDS,), "the lane steps slide a helical joint against its pitch (batches, one state, the GPU)"),
+    Fault("lanes-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
+          "        if mdl.kind[i] == HELICAL:\n            slide_lane(pm, mdl.pitch[i], B, Z, l, L)\n", "",
+          (_KINDS,), "one state's lane steps turn a helical joint without its slide (the block loops keep it)"),
 )
 
 

@@ -14,6 +14,10 @@ TREES = {
                     ("prismatic", 0), ("spherical", 5), ("screw", 6)],
     "floating_root": [("floating", -1), ("universal", 0), ("screw", 1), ("revolute", 0), ("planar", 3),
                       ("universal", 4)],
+    # without a planar joint: every kind here runs on the lane steps (batches, one state, the GPU)
+    "screw_chain": [("screw", -1), ("revolute", 0), ("screw", 1), ("prismatic", 2), ("universal", 3), ("screw", 4)],
+    "screw_floating": [("floating", -1), ("screw", 0), ("spherical", 1), ("screw", 2), ("universal", 0),
+                       ("prismatic", 4)],
 }
 
 

@@ -722,7 +722,8 @@ def aba_steps_one(I, F, q, v, tau, out):
     """q̈ (nv,) of one state by the steps of the lane kernel (``aba_lanes``), driven for one lane: records of one
     number a row (L = 1), the same velocity, bias, articulated-inertia, hand-off and acceleration steps (a free
     flyer's or a ball's multi-dof steps included), in the same z-aligned frames — one source for a batch and for
-    one state. A model the lane steps do not take (``lanes.on_lanes``), a non-finite input, an angle beyond
+    one state. A model the lane steps do not take (``lanes.on_lanes``; nor a helical joint, as
+    ``crba.crba_steps_one``: with its slide here the one-state q̈ measured 2.11 → 2.27 µs on the AAU arm), a non-finite input, an angle beyond
     ``spatial.SINCOS_MAX``, a D_i not > dmin or a non-finite q̈ runs ``aba_kernel``, whose status names the
     culprit."""
     mdl = unpack(I, F)
@@ -731,7 +732,7 @@ def aba_steps_one(I, F, q, v, tau, out):
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    ok = on_lanes(mdl, nq, True) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
+    ok = on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
         and first_nonfinite(tau[np.newaxis, :], 0) < 0
     if ok:
         m = 0

@@ -28,8 +28,8 @@ from ..model import MimicModel
 from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
-from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes, placement_lane,
-                    placement_lanes, placement_model, quat_model, quat_placement_lane,
+from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes,
+                    placement_lane, placement_lanes, placement_model, quat_model, quat_placement_lane,
                     quat_placement_lanes, tree_depth)
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
@@ -139,14 +139,15 @@ def crba_one(I, F, q, M):
 def crba_steps_one(I, F, q, M):
     """M (nv, nv) of one state by the steps of the lane kernel (``crba_lanes``), driven for one lane (L = 1): the same
     placement, own-inertia, merge and column steps as a batch (the GPU's driver too), in the same z-aligned frames.
-    A model the lane steps do not take (``lanes.on_lanes``), a non-finite q, an angle beyond ``spatial.SINCOS_MAX``
+    A model the lane steps do not take (``lanes.on_lanes``; nor a helical joint: with its slide here the one-state
+    M measured 1.65 → 1.83–1.97 µs on the AAU arm, which has none), a non-finite q, an angle beyond ``spatial.SINCOS_MAX``
     or a non-finite M runs ``crba_kernel``, whose status names the culprit."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], M.shape[0]
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    if on_lanes(mdl, nq, True) and x <= SINCOS_MAX:
+    if on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX:
         parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
         W, mC = np.empty((nb, 3)), np.empty(nb)
         merge_weights(parent, mdl.mass, mC, W)

@@ -32,13 +32,13 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import joint_force, joint_placement, joint_velocity
+from ..joints import HELICAL, joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
-from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record, motion_model, multi_rates,
-                    placement_lane, placement_model, quat_model, quat_placement_lane,
-                    on_lanes, placement_lanes, quat_placement_lanes, scatter_lanes, set3, tree_depth)
+from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record,
+                    motion_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
+                    quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, slide_lane, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -217,7 +217,9 @@ def rnea_steps_one(I, F, q, v, a, tau):
                 quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
                 motion_lane_multi(mm, B, par, Z, 0, 1)
             else:
-                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                pm = placement_model(i, mdl)
+                placement_lane(pm, B, Z, 0, 1)
+                slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)                # (0 unless helical: no branch)
                 if j < 0:
                     root_motion_lane(mm, B, mg, Z, 0, 1)
                 else:
@@ -292,7 +294,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 j = parent[i]
                 par = base if j < 0 else lane_record(even, odd, depth, j, RECORD)[_W * LANES:(_W + 9) * LANES]
                 B = lane_record(even, odd, depth, i, RECORD)
-                if mdl.nvj[i] > 1:                                       # a free flyer or a ball joint
+                if mdl.nvj[i] > 1 or mdl.kind[i] == HELICAL:            # a free flyer, a ball, a helical joint
                     outward_multi_lanes(i, mdl, B, par, Z, nq)
                 else:
                     outward_lanes(i, mdl, B, par, Z, nq)
@@ -326,8 +328,12 @@ def outward_lanes(i, mdl, B, par, Z, nq):
     its placement, then ω'_i, ω̇'_i, v̇'_i from the parent's (par: 9 rows ω', ω̇', v̇'; the base's for a root), then
     f'_i = m v̇'_C and n'_i = I ω̇' + ω' × I ω' + p_C × f'_C. Z: the block's q, q̇, q̈ (lanes.gather_lanes; nq rows of
     q). Three loops, not one: the model's numbers that each needs fit in the vector registers (one loop spilled
-    them: 13.7 → 11.5 ns per lane)."""
-    placement_lanes(i, mdl, B, Z)
+    them: 13.7 → 11.5 ns per lane). A revolute or prismatic joint's placement is written out here
+    (``lanes.placement_lane``); a helical joint's slide (``lanes.placement_lanes``) goes by ``outward_multi_lanes``:
+    with it in this function, or in the kernel's body loop, the arms' RNEA measured 6–7 % slower."""
+    pm = placement_model(i, mdl)
+    for l in range(LANES):
+        placement_lane(pm, B, Z, l, LANES)
     mm, im = motion_model(i, mdl, nq), inertial_model(i, mdl)
     if mdl.parent[i] < 0:
         mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
@@ -343,12 +349,23 @@ def outward_lanes(i, mdl, B, par, Z, nq):
 @njit(cache=True, fastmath=CONTRACT)
 def outward_multi_lanes(i, mdl, B, par, Z, nq):
     """``outward_lanes`` for a free flyer or a ball joint (joints.multi_dof): its quaternion placement, then
-    ``motion_lane_multi`` and ``inertial_lane``. (A function of its own: the screw joints' loops compile as they
-    would alone — with these in the same function the RNEA's lanes measured 4–6 % slower on ur5.)"""
-    quat_placement_lanes(i, mdl, B, Z)
+    ``motion_lane_multi`` and ``inertial_lane``; and for a helical joint, its turn and slide (``lanes.
+    placement_lanes``), then ``motion_lane``. (A function of its own: the revolute and prismatic joints' loops
+    compile as they would alone — with these in the same function the RNEA's lanes measured 4–7 % slower on ur5.)"""
     mm, im = motion_model(i, mdl, nq), inertial_model(i, mdl)
-    for l in range(LANES):
-        motion_lane_multi(mm, B, par, Z, l, LANES)
+    if mdl.nvj[i] > 1:
+        quat_placement_lanes(i, mdl, B, Z)
+        for l in range(LANES):
+            motion_lane_multi(mm, B, par, Z, l, LANES)
+    else:
+        placement_lanes(i, mdl, B, Z)
+        if mdl.parent[i] < 0:
+            mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
+            for l in range(LANES):
+                root_motion_lane(mm, B, mg, Z, l, LANES)
+        else:
+            for l in range(LANES):
+                motion_lane(mm, B, par, Z, l, LANES)
     for l in range(LANES):
         inertial_lane(im, B, l, LANES)
 

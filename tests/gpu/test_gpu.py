@@ -27,7 +27,7 @@ from numba import cuda
 from manipdyn.validation import random_states
 from test_lanes import _tree
 warnings.simplefilter("ignore")
-from test_gpu import ball_model, floating_model, multi_wrenches, tree_model, wrenches
+from test_gpu import ball_model, floating_model, multi_wrenches, screw_model, tree_model, wrenches
 out = dict(nojit=_jit.NOJIT, sim=cuda.simulator_enabled if hasattr(cuda, "simulator_enabled") else None)
 for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tree))):
     for N in (1, 7, 40):
@@ -49,7 +49,14 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tre
         for frame in ("local", "world"):
             out[f"{{name}}/{{N}}"]["rnea_f_ext_" + frame] = gpu.rnea(model, dq, V, A, f_ext=fx_gpu,
                                                                     f_ext_frame=frame).copy_to_host().tolist()
-for name, model in (("floating", floating_model()), ("ball", ball_model())):
+model = screw_model("screw_chain")
+Q = random_states(model, 7, np.random.default_rng(7))[0]
+tip = model.body_names[-1]
+R, p = gpu.frame_placement(model, Q, tip)
+out["screw_chain_frames"] = dict(frame_R=R.copy_to_host().tolist(), frame_p=p.copy_to_host().tolist(),
+                                   frame_J=gpu.frame_jacobian(model, Q, tip).copy_to_host().tolist())
+for name, model in (("floating", floating_model()), ("ball", ball_model()), ("screw_chain", screw_model("screw_chain")),
+                    ("screw_floating", screw_model("screw_floating"))):
     for N in (1, 7):
         Q, V, A = random_states(model, N, np.random.default_rng(N))
         dq = cuda.to_device(Q)
@@ -122,6 +129,16 @@ def ball_model():
     return dataclasses.replace(model, armature=np.linspace(0.05, 0.5, model.nv))
 
 
+def screw_model(name):
+    """A seeded tree of tests/joint_kinds.py with helical joints (and, "screw_floating", a free flyer and a ball)."""
+    import warnings
+
+    from joint_kinds import kinds_robot
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return md.load_urdf_string(kinds_robot(name, 0)[0])
+
+
 def multi_wrenches(model, N):
     """f_ext on the tip and a mid body of a floating or ball-jointed model, seeded rows."""
     rng = np.random.default_rng(200 + N)
@@ -186,14 +203,16 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
         assert err(got["rnea_f_ext_" + frame], got["rnea"]) > 1e-3                       # the wrenches count
 
 
-@pytest.mark.parametrize("name", ["floating", "ball"])
+@pytest.mark.parametrize("name", ["floating", "ball", "screw_chain", "screw_floating"])
 @pytest.mark.parametrize("N", [1, 7])
-def test_gpu_takes_free_flyers_and_ball_joints(probe, name, N):
+def test_gpu_takes_free_flyers_ball_and_helical_joints(probe, name, N):
     """The multi-dof lane steps (lanes.quat_placement_lane, rnea.motion_lane_multi and torque_multi_lane, crba's
-    columns of a multi-dof joint, aba.articulated_multi, handed_multi, acceleration_multi) driven one
-    thread per state give the CPU's numbers (whose lanes are held to Pinocchio: tests/batch/test_lanes_multi_dof.py)."""
-    model = floating_model() if name == "floating" else ball_model()
-    assert model.nq > model.nv and model.armature.all()
+    columns of a multi-dof joint, aba.articulated_multi, handed_multi, acceleration_multi) and a helical joint's
+    (lanes.slide_lane) driven one thread per state give the CPU's numbers (whose lanes are held to Pinocchio:
+    tests/batch/test_lanes_multi_dof.py, tests/crosscheck/test_joint_kinds.py)."""
+    model = {"floating": floating_model, "ball": ball_model}.get(name, lambda: screw_model(name))()
+    assert name.startswith("screw") and (model.kind == md.HELICAL).sum() >= 2 or \
+        model.nq > model.nv and model.armature.all()
     Q, V, A = random_states(model, N, np.random.default_rng(N))
     got = {k: np.array(x) for k, x in probe[f"{name}/{N}"].items()}
     assert_close(got["rnea"], md.rnea(model, Q, V, A), 1e-14, "rnea")                        # measured ≤ 4.4e-16
@@ -205,6 +224,18 @@ def test_gpu_takes_free_flyers_and_ball_joints(probe, name, N):
     assert_close(got["mass_matrix"], md.mass_matrix(model, Q), 1e-14, "M")
     cond = np.linalg.cond(md.mass_matrix(model, Q)).max()
     assert_close(got["aba"], md.aba(model, Q, V, A), 1e-14 * cond, "q̈")
+
+
+def test_gpu_frames_take_helical_joints(probe):
+    """The frame drivers (lanes.body_placement_lane: a helical joint's turn and slide) give the CPU's placement and
+    Jacobian."""
+    model = screw_model("screw_chain")
+    Q = random_states(model, 7, np.random.default_rng(7))[0]
+    got, tip = {k: np.array(x) for k, x in probe["screw_chain_frames"].items()}, model.body_names[-1]
+    R, p = md.frame_placement(model, Q, tip)
+    assert_close(got["frame_R"], R, 1e-14, "R")
+    assert_close(got["frame_p"], p, 1e-14, "p")
+    assert_close(got["frame_J"], md.frame_jacobian(model, Q, tip), 1e-14, "J")
 
 
 @pytest.mark.parametrize("key, kind, words", [
