@@ -1088,9 +1088,12 @@ FAULTS = (
     Fault("lanes-helical-slide-sign", "rnea", "manipdyn/dynamics/lanes.py",
           "    d = h * Z[iq * L + l]\n", "    d = -h * Z[iq * L + l]\n",
           (_KINDS,), "the lane steps slide a helical joint against its pitch (batches, one state, the GPU)"),
-    Fault("lanes-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
+    Fault("lanes-helical-slide-dropped", "rnea", "manipdyn/dynamics/rnea.py",
+          "                slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)                # (0 unless helical: no branch)\n", "",
+          (_KINDS,), "the one-state RNEA's lane steps turn a helical joint without its slide (the block loops keep it)"),
+    Fault("gpu-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
           "        if mdl.kind[i] == HELICAL:\n            slide_lane(pm, mdl.pitch[i], B, Z, l, L)\n", "",
-          (_KINDS,), "one state's lane steps turn a helical joint without its slide (the block loops keep it)"),
+          ("tests/gpu/test_gpu.py",), "the GPU drivers turn a helical joint without its slide"),
 )
 
 

@@ -305,8 +305,9 @@ def placement_lanes(i, mdl, B, Z):
 
 @njit(cache=True)
 def slide_lanes(i, mdl, B, Z):
-    """``slide_lane`` for every lane of the block: a helical joint's slide (not inlined: with its loop inside
-    ``placement_lanes`` the RNEA's lanes measured 6–7 % slower on the arms, which have no helical joint)."""
+    """``slide_lane`` for every lane of the block: a helical joint's slide (a function of its own, which the arms'
+    kernels never call; rnea.outward_lanes, whose loops it slowed even so, leaves helical bodies to
+    ``outward_multi_lanes``)."""
     pm, h = placement_model(i, mdl), mdl.pitch[i]
     for l in range(LANES):
         slide_lane(pm, h, B, Z, l, LANES)
