@@ -18,10 +18,10 @@ innermost loop's body on the CPU (L = LANES, a block) and one thread's work here
 a warp's 32 threads read and write 32 consecutive numbers (coalesced). What differs is only the driver below: which
 thread runs which state, and scratch in device memory (kept between calls of the same size).
 
-Checks as on the CPU, on the device: a non-finite input or result, or a revolute angle beyond
+Checks as on the CPU, on the device: a non-finite input or result, or a revolute or helical angle beyond
 ``spatial.SINCOS_MAX`` (where the GPU, unlike the CPU, has no one-state fallback: reduce the angle modulo 2π),
-raises the typed error naming the first such row. rnea, aba and mass_matrix take free flyers and ball joints; the
-frame calls take joints with one velocity each (a free flyer or ball is refused by name).
+raises the typed error naming the first such row. Every call takes revolute, prismatic, helical, free and ball
+joints; a planar joint is refused by name.
 Tested on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, tests/gpu/), compiled to PTX where NVVM is installed,
 and timed by ``scripts/gpu_bench.py`` on a GPU.
 """
@@ -279,7 +279,8 @@ def _frame_threads(I, F, Q, b, path, n, Rl, pl, rec, base, Z, Fb, Jb, Rf, pf, J,
             Jb[k * N + s] = 0.0
         for k in range(n):
             i = path[k]
-            jacobian_lane(jacobian_model(i, mdl), rec[i * WORLD * N:(i + 1) * WORLD * N], Fb, Jb, s, N)
+            for c in range(mdl.nvj[i]):
+                jacobian_lane(jacobian_model(i, c, mdl), rec[i * WORLD * N:(i + 1) * WORLD * N], Fb, Jb, s, N)
         for r in range(nv):
             if local:
                 local_lane(Fb, Jb, nv, r, s, N)
@@ -336,20 +337,17 @@ def to_device(x, name, n, call):
     return d
 
 
-def _model(model, call, multi=True):
-    """The lane steps' model (z-aligned frames, kernel_form.z_aligned) of a Model whose joints they take: screw
-    joints, and free flyers and ball joints for the dynamics calls (``multi``; the frames' drivers take one velocity
-    a joint)."""
+def _model(model, call):
+    """The lane steps' model (z-aligned frames, kernel_form.z_aligned) of a Model whose joints they take: revolute,
+    prismatic, helical, free and ball joints (``lanes.on_lanes``)."""
     if type(model) is not Model:
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays
-    if not on_lanes(unpack(I, F), model.nq, multi):
-        taken = (REVOLUTE, PRISMATIC, HELICAL) + ((FREEFLYER, BALL) if multi else ())
+    if not on_lanes(unpack(I, F), model.nq, True):
+        taken = (REVOLUTE, PRISMATIC, HELICAL, FREEFLYER, BALL)
         others = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in taken]
-        what = "revolute, prismatic and helical joints" + (", free flyers and ball joints" if multi else
-                                                  "; free flyers and ball joints in rnea, aba and mass_matrix")
-        raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take {what}; use "
-                         f"the CPU call)")
+        raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take revolute, "
+                         f"prismatic, helical, free and ball joints; use the CPU call)")
     return I, F
 
 
@@ -554,7 +552,7 @@ def aba(model, q, v, tau):
 
 def _run_frame(model, call, q, frame, jac, reference):
     import manipdyn as md
-    I, F = _model(model, call, multi=False)
+    I, F = _model(model, call)
     _check_reference(reference)
     b, X = frame_row(model, frame, lanes=True)
     states, N = _states(model, call, (("q", q),))
@@ -572,7 +570,7 @@ def _run_frame(model, call, q, frame, jac, reference):
     _launch("frame", _frame_threads, N, c.to_device(I), c.to_device(F), states[0][1], b,
             c.to_device(np.array(path, np.int64)), len(path), c.to_device(np.ascontiguousarray(X[:3])),
             c.to_device(np.ascontiguousarray(X[3])), _scratch("rec", (nb * WORLD * N,)), _scratch("base", (WORLD * N,)),
-            _scratch("Z", (nb * N,)), _scratch("F", (12 * N,)), _scratch("J", (max(6 * nv * N, 1) if jac else 1,)),
+            _scratch("Z", (model.nq * N,)), _scratch("F", (12 * N,)), _scratch("J", (max(6 * nv * N, 1) if jac else 1,)),
             Rf, pf, J, jac, reference == "local", _angles(model), flags)
     if N and (flags.copy_to_host() < _BIG).any():
         cpu = (lambda x: md.frame_jacobian(model, x, frame, reference=reference)) if jac else \

@@ -1094,6 +1094,13 @@ FAULTS = (
     Fault("gpu-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
           "        if mdl.kind[i] == HELICAL:\n            slide_lane(pm, mdl.pitch[i], B, Z, l, L)\n", "",
           ("tests/gpu/test_gpu.py",), "the GPU drivers turn a helical joint without its slide"),
+    Fault("frames-lanes-multi-one-column", "kinematics", "manipdyn/dynamics/kinematics.py",
+          "                    for c in range(mdl.nvj[path[k]]):                     # a column per velocity\n",
+          "                    for c in range(1):                     # a column per velocity\n",
+          (_KINDS,), "the frame lanes write a free flyer's or ball's first Jacobian column only"),
+    Fault("gpu-frames-multi-one-column", "kinematics", "manipdyn/gpu.py",
+          "            for c in range(mdl.nvj[i]):\n", "            for c in range(1):\n",
+          ("tests/gpu/test_gpu.py",), "the GPU frame driver writes a free flyer's or ball's first Jacobian column only"),
 )
 
 

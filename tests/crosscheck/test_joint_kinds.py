@@ -157,9 +157,19 @@ def test_derivatives_and_regressor_against_pinocchio(name, seed):
 
 @pytest.mark.parametrize("name,seed", CASES)
 def test_frames_and_energies_against_pinocchio(name, seed):
-    """Every link's frame (the body of each Pinocchio joint: a universal joint's child is our 'j.2''s body)."""
+    """Every link's frame (the body of each Pinocchio joint: a universal joint's child is our 'j.2''s body), one
+    state at a time and as a batch (the lane kernel where the model is on the lanes)."""
     model, pm, pd, Q, V, _ = case(name, seed)
-    worst = dict.fromkeys(("J:R", "J:p", "J", "E:T", "E:V"), 0.0)
+    worst = dict.fromkeys(("J:R", "J:p", "J", "J:batch", "E:T", "E:V"), 0.0)
+    for jid in range(1, pm.njoints):
+        link = f"l{jid - 1}"
+        R, p = md.frame_placement(model, Q, link)
+        J = {ref: md.frame_jacobian(model, Q, link, ref) for ref in ("local_world_aligned", "local")}
+        for s, q in enumerate(Q):
+            pin.computeJointJacobians(pm, pd, q)
+            worst["J:batch"] = max(worst["J:batch"], err(R[s], pd.oMi[jid].rotation), err(p[s], pd.oMi[jid].translation),
+                                   err(J["local_world_aligned"][s], pin.getJointJacobian(pm, pd, jid, pin.LOCAL_WORLD_ALIGNED)),
+                                   err(J["local"][s], pin.getJointJacobian(pm, pd, jid, pin.LOCAL)))
     for q, v in zip(Q, V):
         pin.computeJointJacobians(pm, pd, q)
         for jid in range(1, pm.njoints):
@@ -185,10 +195,14 @@ def test_batches_over_several_lane_blocks_equal_single_calls(name):
     Q, V, A = md.random_configuration(model, rng, 70), rng.normal(size=(70, model.nv)), rng.normal(size=(70, model.nv))
     tau, M = md.rnea(model, Q, V, A), md.mass_matrix(model, Q)
     qdd = md.aba(model, Q, V, tau)
+    tip = model.body_names[-1]
+    (R, p), J = md.frame_placement(model, Q, tip), md.frame_jacobian(model, Q, tip, "local")
     for s in (0, 33, 69):            # (the batch runs in the lanes' z-aligned frames: equal to rounding)
         assert err(tau[s], md.rnea(model, Q[s], V[s], A[s])) < 1e-14
         assert err(M[s], md.mass_matrix(model, Q[s])) < 1e-14
         assert err(qdd[s], A[s]) < 1e-12
+        R1, p1 = md.frame_placement(model, Q[s], tip)
+        assert max(err(R[s], R1), err(p[s], p1), err(J[s], md.frame_jacobian(model, Q[s], tip, "local"))) < 1e-14
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "adaptive"])

@@ -49,12 +49,14 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tre
         for frame in ("local", "world"):
             out[f"{{name}}/{{N}}"]["rnea_f_ext_" + frame] = gpu.rnea(model, dq, V, A, f_ext=fx_gpu,
                                                                     f_ext_frame=frame).copy_to_host().tolist()
-model = screw_model("screw_chain")
-Q = random_states(model, 7, np.random.default_rng(7))[0]
-tip = model.body_names[-1]
-R, p = gpu.frame_placement(model, Q, tip)
-out["screw_chain_frames"] = dict(frame_R=R.copy_to_host().tolist(), frame_p=p.copy_to_host().tolist(),
-                                   frame_J=gpu.frame_jacobian(model, Q, tip).copy_to_host().tolist())
+for name in ("screw_chain", "screw_floating"):
+    model = screw_model(name)
+    Q = random_states(model, 7, np.random.default_rng(7))[0]
+    tip = model.body_names[-1]
+    R, p = gpu.frame_placement(model, Q, tip)
+    out[name + "_frames"] = dict(frame_R=R.copy_to_host().tolist(), frame_p=p.copy_to_host().tolist(),
+                                 frame_J=gpu.frame_jacobian(model, Q, tip).copy_to_host().tolist(),
+                                 frame_J_local=gpu.frame_jacobian(model, Q, tip, reference="local").copy_to_host().tolist())
 for name, model in (("floating", floating_model()), ("ball", ball_model()), ("screw_chain", screw_model("screw_chain")),
                     ("screw_floating", screw_model("screw_floating"))):
     for N in (1, 7):
@@ -94,8 +96,8 @@ fails("f_ext_nan", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]
 fails("f_ext_name", lambda: gpu.rnea(model, Q, V, A, f_ext={{"no_such_frame": (np.zeros(3), np.zeros(3))}}))
 fails("f_ext_rows", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]: (cuda.to_device(f[:4]),
                                                                                     np.zeros(3))}}))
-fails("free_flyer", lambda: gpu.frame_placement(md.load_urdf({aau!r}, root_joint="free_flyer"), np.zeros((2, 12)),
-                                                "link5"))
+planar = screw_model("planar_root")
+fails("planar", lambda: gpu.frame_placement(planar, md.neutral(planar)[None], planar.body_names[-1]))
 out["errors"] = errors
 print(json.dumps(out))
 """
@@ -226,16 +228,18 @@ def test_gpu_takes_free_flyers_ball_and_helical_joints(probe, name, N):
     assert_close(got["aba"], md.aba(model, Q, V, A), 1e-14 * cond, "q̈")
 
 
-def test_gpu_frames_take_helical_joints(probe):
-    """The frame drivers (lanes.body_placement_lane: a helical joint's turn and slide) give the CPU's placement and
-    Jacobian."""
-    model = screw_model("screw_chain")
+@pytest.mark.parametrize("name", ["screw_chain", "screw_floating"])
+def test_gpu_frames_take_free_flyers_ball_and_helical_joints(probe, name):
+    """The frame drivers (lanes.body_placement_lane: a helical joint's turn and slide, a free flyer's or ball's
+    quaternion; a Jacobian column per velocity) give the CPU's placement and Jacobian."""
+    model = screw_model(name)
     Q = random_states(model, 7, np.random.default_rng(7))[0]
-    got, tip = {k: np.array(x) for k, x in probe["screw_chain_frames"].items()}, model.body_names[-1]
+    got, tip = {k: np.array(x) for k, x in probe[name + "_frames"].items()}, model.body_names[-1]
     R, p = md.frame_placement(model, Q, tip)
     assert_close(got["frame_R"], R, 1e-14, "R")
     assert_close(got["frame_p"], p, 1e-14, "p")
     assert_close(got["frame_J"], md.frame_jacobian(model, Q, tip), 1e-14, "J")
+    assert_close(got["frame_J_local"], md.frame_jacobian(model, Q, tip, reference="local"), 1e-14, "J local")
 
 
 @pytest.mark.parametrize("key, kind, words", [
@@ -250,7 +254,7 @@ def test_gpu_frames_take_helical_joints(probe):
     ("f_ext_nan", "InputError", ["rnea on the GPU, row 3", "f_ext", "force"]),
     ("f_ext_name", "InputError", ["no_such_frame"]),
     ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"]),
-    ("free_flyer", "InputError", ["do not take the joints", "root_joint", "free flyers and ball joints in rnea, aba and mass_matrix"])])
+    ("planar", "InputError", ["do not take the joints j0 (planar), j4 (planar)", "free and ball joints"])])
 def test_gpu_errors_name_the_row_and_the_entry(probe, key, kind, words):
     got = probe["errors"][key]
     assert got is not None and got[0] == kind, got

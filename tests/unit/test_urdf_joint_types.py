@@ -100,5 +100,7 @@ def test_the_gpu_and_mjcf_export_name_the_kinds_they_lack():
         from manipdyn.io.mjcf import to_mjcf
         to_mjcf(model)
     from manipdyn.gpu import _model
-    with pytest.raises(md.InputError, match=r"do not take the joints s \(helical\)"):
-        _model(model, "rnea")
+    _model(model, "rnea")                                    # a free flyer and a helical joint: on the lanes
+    planar = md.load_urdf_string(robot(joint("p", "planar", "world", "a", '<axis xyz="0 0 1"/>'), SCREW))
+    with pytest.raises(md.InputError, match=r"do not take the joints p \(planar\)"):
+        _model(planar, "frame_placement")

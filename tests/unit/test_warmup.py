@@ -18,7 +18,7 @@ CALLED_BY_KERNELS = {"closure_rows", "frame_one", "rnea_kernel", "crba_kernel", 
                      "articulated_multi_lanes", "acceleration_multi_lanes",
                      "outward_multi_lanes", "inward_multi_lanes", "velocity_multi_lanes",
                      "column_multi_lanes", "quat_composite_lanes",
-                     "frame_kernel", "world_lanes", "jacobian_lanes", "local_lanes",
+                     "frame_kernel", "world_lanes", "world_multi_lanes", "jacobian_lanes", "local_lanes",
                      "rnea_steps_one", "crba_steps_one"}   # the one-state drivers of the lane steps
 
 
