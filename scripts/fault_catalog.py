@@ -1101,6 +1101,10 @@ FAULTS = (
     Fault("gpu-frames-multi-one-column", "kinematics", "manipdyn/gpu.py",
           "            for c in range(mdl.nvj[i]):\n", "            for c in range(1):\n",
           ("tests/gpu/test_gpu.py",), "the GPU frame driver writes a free flyer's or ball's first Jacobian column only"),
+    Fault("cholesky-one-state-velocity-dropped", "aba", "manipdyn/dynamics/aba.py",
+          "            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], out[s0])",
+          "            code = rnea_steps_one(I, F, Q[s0], Z[0], Z[0], out[s0])",
+          (_JD, _FAST), "one state's M⁻¹ route takes h = g (its velocity dropped from the RNEA's steps)"),
 )
 
 

@@ -47,8 +47,8 @@ from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get
                     motion_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
                     quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, set6, tree_depth)
 from .model_arrays import unpack
-from .crba import crba, crba_kernel, crba_lanes
-from .rnea import rnea, rnea_kernel, rnea_lanes
+from .crba import crba, crba_lanes, crba_steps_one
+from .rnea import rnea, rnea_kernel, rnea_lanes, rnea_steps_one
 from .route import route
 from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
 
@@ -820,8 +820,10 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_lanes; with wrenches rnea.rnea_kernel,
     whose rows of X may broadcast) into out, then out ← L⁻ᵀ L⁻¹ (τ − h). A chunk of LANES states at a time (with
     ``lanes``, the lane kernels' block: M and h across states; N = 1000, one thread: chain32 13.0 → 7.7 µs a state,
-    AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state: a block of lanes costs
-    LANES states) the scalar kernels. Wrenches as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
+    AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state, N = 1: a block of lanes
+    costs LANES states) the one-lane drivers of the same steps (``crba.crba_steps_one``, ``rnea.rnea_steps_one``;
+    with wrenches h by ``rnea.rnea_kernel``). (I, F) in z-aligned frames where the steps run (``lanes.on_lanes``
+    turns anything else to the scalar kernels). Wrenches as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
     pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
@@ -832,14 +834,16 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     for s0 in range(0, N, C):
         s1 = min(N, s0 + C)
         n = s1 - s0
-        code = crba_lanes(I, F, Q[s0:s1], M[:n, :, :]) if lanes else crba_kernel(I, F, Q[s0:s1], M[:n, :, :])
+        code = crba_lanes(I, F, Q[s0:s1], M[:n, :, :]) if lanes else crba_steps_one(I, F, Q[s0], M[0])
         if code <= -2 - nb:                                   # a non-finite M: reported in its state's q̈
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
             return bad_result(nb, s * nv)
-        if code == -1 and (body.shape[0] > 0 or not lanes):   # h into out
+        if code == -1 and body.shape[0] > 0:                  # h into out
             code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
                                world, out[s0:s1], T0)
+        elif code == -1 and not lanes:
+            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], out[s0])
         elif code == -1:
             code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, out[s0:s1], T0)
         if code != -1:                                        # a non-finite input, or h (in out)
@@ -862,7 +866,8 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
 
 @njit(cache=True)
 def cholesky_one(I, F, q, v, tau, out):
-    """One state without external wrenches: cholesky_states with N = 1, by the scalar kernels."""
+    """One state without external wrenches: cholesky_states with N = 1, by the one-lane drivers ((I, F) in z-aligned
+    frames, ``Model.kernel.lane_arrays``)."""
     X, xb, xp, world = no_wrenches(I, F)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], np.bool_(False))
@@ -870,7 +875,9 @@ def cholesky_one(I, F, q, v, tau, out):
 
 @njit(cache=True)
 def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
-    """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1, scalar."""
+    """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1 (the model
+    as it is: M by ``crba.crba_steps_one``, which runs the scalar CRBA unless the model's axes are z; h by
+    ``rnea.rnea_kernel``)."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], np.bool_(False))
@@ -904,7 +911,7 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
 
 
 @route("forward_dynamics", _QVT, "q̈", "v", entry(cholesky_one, *_ONE), entry(cholesky_kernel, *_FD), wrenches=True,
-       lanes=True, wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
+       lanes=True, one_lanes=True, wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
        mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``.

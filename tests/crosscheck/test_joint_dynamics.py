@@ -57,7 +57,8 @@ def test_armature_rnea_crba_aba_match_pinocchio(name):
     qdd = md.aba(model, Q, V, tau)
     qdd_ch = md.forward_dynamics(model, Q, V, tau, method="cholesky")
     Ml = md.mass_matrix(model, Q, method="lagrange")
-    e = dict(M=0.0, M1=0.0, tau=0.0, tau1=0.0, qdd=0.0, qdd1=0.0, ch=0.0, ch1=0.0, lag=0.0)
+    e = dict(M=0.0, M1=0.0, tau=0.0, tau1=0.0, qdd=0.0, qdd1=0.0, ch=0.0, ch1=0.0, ch1w=0.0, lag=0.0)
+    zero = {model.body_names[-1]: (np.zeros(3), np.zeros(3))}       # a wrench of 0: the one-state wrench path
     for s in range(len(Q)):
         pq = to_pin(Q[s])
         Mp = pin.crba(pm, pd, pq)
@@ -73,13 +74,16 @@ def test_armature_rnea_crba_aba_match_pinocchio(name):
         e["qdd1"] = max(e["qdd1"], _err(md.aba(model, Q[s], V[s], tau[s]), ap) / c)
         e["ch"] = max(e["ch"], _err(qdd_ch[s], ap) / c)
         e["ch1"] = max(e["ch1"], _err(md.forward_dynamics(model, Q[s], V[s], tau[s], method="cholesky"), ap) / c)
+        e["ch1w"] = max(e["ch1w"], _err(md.forward_dynamics(model, Q[s], V[s], tau[s], method="cholesky", f_ext=zero),
+                                         ap) / c)
         e["lag"] = max(e["lag"], _err(Ml[s], Mp))
     print(name, {k: f"{v:.1e}" for k, v in e.items()})
     for k in ("M", "M1", "lag"):
         assert e[k] < 1e-13, (k, e[k])          # measured ≤ 3.2e-15 (tree5–7, aau arm; lanes and one state)
     for k in ("tau", "tau1"):
         assert e[k] < 1e-13, (k, e[k])          # measured ≤ 4.6e-15
-    for k in ("qdd", "qdd1", "ch", "ch1"):    # ch1: one state, the scalar CRBA
+    for k in ("qdd", "qdd1", "ch", "ch1", "ch1w"):    # ch1: one state, the CRBA's one-lane steps; ch1w: with a
+    #                                                     wrench, on the model as it is: the scalar CRBA
         assert e[k] < 1e-14, (k, e[k])          # scaled by cond(M); measured ≤ 4.3e-16 (tree6)
 
 
