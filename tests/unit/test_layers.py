@@ -195,10 +195,11 @@ def test_other_engines_are_imported_only_by_the_referee_and_lazily():
 
 ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "energy", "derivatives", "regressor")
 # What one algorithm module may take from another: an algorithm built on another one (the M⁻¹ route runs the
-# CRBA and the Newton–Euler kernel, the derivatives differentiate the ABA, the regressor reuses the outward
-# pass, the Lagrange M sums the frame Jacobians) — never a helper of the algebra, which lives in spatial.py.
-BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "outward", "rnea_workspace"},
-            "crba": {"crba", "crba_kernel", "crba_lanes", "mass_matrix"},
+# CRBA and the Newton–Euler kernel, one state through their one-lane drivers; the derivatives differentiate the
+# ABA, the regressor reuses the outward pass, the Lagrange M sums the frame Jacobians) — never a helper of the
+# algebra, which lives in spatial.py.
+BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "rnea_steps_one", "outward", "rnea_workspace"},
+            "crba": {"crba", "crba_kernel", "crba_lanes", "crba_steps_one", "mass_matrix"},
             "aba": {"aba_kernel"},
             "lagrange": {"lagrange_mass_matrix"},
             "kinematics": {"body_point", "point_jacobian", "point_jacobian_dot", "point_velocity", "com_jacobians",
