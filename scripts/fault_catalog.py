@@ -33,7 +33,7 @@ class Fault:
 
 
 AREAS = ("loader", "kinematics", "rnea", "lagrange", "aba", "constraints", "integrators", "spm", "dh",
-         "validation", "reduce", "viz", "regressor", "derivatives")
+         "validation", "reduce", "viz", "regressor", "derivatives", "route")
 
 _LOADER = "tests/unit/test_loader.py"
 _ZOO = "tests/crosscheck/test_rnea_terms.py"
@@ -60,6 +60,7 @@ _REGRESSOR = "tests/crosscheck/test_regressor.py"
 _DERIV = "tests/crosscheck/test_derivatives.py"
 _LANES_MULTI = "tests/batch/test_lanes_multi_dof.py"
 _KINDS = "tests/crosscheck/test_joint_kinds.py"
+_OUT = "tests/batch/test_out.py"
 _TERMS = "tests/crosscheck/test_compiled_terms.py"
 _JD = "tests/crosscheck/test_joint_dynamics.py"
 _MJCF = "tests/crosscheck/test_mjcf_import.py"
@@ -87,6 +88,7 @@ AREA_TESTS = {
     "integrators": ("tests/unit/test_symplectic_euler.py",),
     "validation": ("tests/crosscheck/test_single_joint.py",),
     "regressor": (_REGRESSOR,),
+    "route": ("tests/batch/test_out.py", _FAST, "tests/unit/test_inputs.py"),
     "derivatives": ("tests/crosscheck/test_derivatives.py",
                     "tests/properties/test_random_trees.py::test_random_tree_dynamics_derivatives_agree_with_pinocchio"),
 }
@@ -522,8 +524,8 @@ FAULTS = (
           "            T[:, :] = D.T\n",
           ("tests/crosscheck/test_derivatives.py",), "∂q̈/∂x = −M⁻¹ (∂τ/∂x)ᵀ"),
     Fault("cholesky-rhs-sign", "aba", "manipdyn/dynamics/aba.py",
-          "out[s, r] = Tau[s, r] - out[s, r]",
-          "out[s, r] = Tau[s, r] + out[s, r]",
+          "out[s, r] = Tau[s, r] - H[s - s0, r]",
+          "out[s, r] = Tau[s, r] + H[s - s0, r]",
           (_TERMS, _PROPS), "Cholesky route: right-hand side τ + h instead of τ − h"),
     # ---------------------------------------------------------------- ABA (dynamics/aba.py, fast.py)
     Fault("aba-bias-force-sign", "aba", "manipdyn/dynamics/aba.py",
@@ -1102,9 +1104,25 @@ FAULTS = (
           "            for c in range(mdl.nvj[i]):\n", "            for c in range(1):\n",
           ("tests/gpu/test_gpu.py",), "the GPU frame driver writes a free flyer's or ball's first Jacobian column only"),
     Fault("cholesky-one-state-velocity-dropped", "aba", "manipdyn/dynamics/aba.py",
-          "            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], out[s0])",
-          "            code = rnea_steps_one(I, F, Q[s0], Z[0], Z[0], out[s0])",
+          "            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], H[0])",
+          "            code = rnea_steps_one(I, F, Q[s0], Z[0], Z[0], H[0])",
           (_JD, _FAST), "one state's M⁻¹ route takes h = g (its velocity dropped from the RNEA's steps)"),
+    Fault("out-shape-unchecked", "route", "manipdyn/dynamics/arguments.py",
+          "    if type(out) is _ND and out.dtype is _F64 and out.shape == shape and out.flags.writeable:\n",
+          "    if type(out) is _ND and out.dtype is _F64 and out.flags.writeable:\n",
+          (_OUT,), "out= of the wrong shape reaches the kernels"),
+    Fault("out-dtype-unchecked", "route", "manipdyn/dynamics/arguments.py",
+          "    if type(out) is _ND and out.dtype is _F64 and out.shape == shape and out.flags.writeable:\n",
+          "    if type(out) is _ND and out.shape == shape and out.flags.writeable:\n",
+          (_OUT,), "out= of another dtype reaches the kernels"),
+    Fault("out-batch-overlap-unchecked", "route", "manipdyn/dynamics/arguments.py",
+          "            if type(x) is _ND and np.may_share_memory(out, x):\n",
+          "            if False:\n",
+          (_OUT,), "a batch's out= may share memory with its states"),
+    Fault("cholesky-h-into-out", "aba", "manipdyn/dynamics/aba.py",
+          "                out[s, r] = Tau[s, r] - H[s - s0, r]\n",
+          "                out[s, r] = H[s - s0, r]\n                out[s, r] = Tau[s, r] - out[s, r]\n",
+          (_OUT, _JD), "the M⁻¹ route reads τ after it has written q̈ (one state's out= may be its τ)"),
 )
 
 

@@ -161,14 +161,19 @@ def markdown(d) -> str:
                 dict(ours_us=us, pin_us=us, ratio=x, err=e)),
          "\n## b. Batched calls: every public call on (N, nv), µs per state\n\nPinocchio's C++ batch "
          "(`*InParallel`, 1 thread) where it exists, else its Python loop over the same states (pin_route); err "
-         "is the worst over 20 states spread through the batch.\n\n",
-         _table(d["batched"], ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"]
-                + (["refused"] if any("refused" in r for r in d["batched"]) else []),
-                dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
+         "is the worst over 20 states spread through the batch. Both sides write into memory they were given or "
+         "keep: Pinocchio's batch into its `out`, its loop into `data`; ours (ours_us) into an `out=` array "
+         "(the calls that take one; dynamics/route.py). fresh_us: ours into a new array each call, whose pages "
+         "the kernel zeroes at first touch (docs/bench/measurements.md).\n\n",
+         _table(d["batched"], ["robot", "call", "N", "ours_us", "fresh_us", "pin_us", "pin_route", "ratio", "err",
+                               "note"] + (["refused"] if any("refused" in r for r in d["batched"]) else []),
+                dict(ours_us="{:.3f}", fresh_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
          "\n### Floating bases and ball joints: the lane kernels, N = 10 000, µs per state\n\nFree-flyer roots and "
-         "ball joints on the lanes (one thread), against Pinocchio's InParallel(1) (rnea, aba) or its crba loop.\n\n",
-         _table(d.get("floating", []), ["robot", "call", "N", "ours_us", "pin_us", "pin_route", "ratio", "err", "note"],
-                dict(ours_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
+         "ball joints on the lanes (one thread), against Pinocchio's InParallel(1) (rnea, aba) or its crba loop; "
+         "ours_us and fresh_us as in the table above.\n\n",
+         _table(d.get("floating", []), ["robot", "call", "N", "ours_us", "fresh_us", "pin_us", "pin_route", "ratio",
+                                        "err", "note"],
+                dict(ours_us="{:.3f}", fresh_us="{:.3f}", pin_us="{:.3f}", ratio=x, err=e)),
          "\n### Work–precision of the lane kernels\n\nThe batched rows at N = 10 000 of the calls the lane kernels run: "
          "the median and 95th percentile of the error over states spread through the batch (wp_states), against "
          "Pinocchio (err_pin_…) and against the same call on one state, the scalar kernel (err_one_…); q̈ divided by "

@@ -136,19 +136,20 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         return P.getFrameJacobianTimeVariation(pm, pd, fid, LWA)
 
     out = {
-        "rnea": Case(lambda q, v, a: rnea_(model, q, v, a), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]), "rnea",
-                     "rnea"),
-        "aba": Case(lambda q, v, a: aba_(model, q, v, a), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", "aba"),
-        "mass_matrix (crba)": Case(lambda q, v, a: mass_matrix_(model, q), lambda s: P.crba(pm, pd, PQ[s]), "crba",
-                                   None, as_pin=_sym),
+        "rnea": Case(lambda q, v, a, **k: rnea_(model, q, v, a, **k), lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s]),
+                     "rnea", "rnea"),
+        "aba": Case(lambda q, v, a, **k: aba_(model, q, v, a, **k), lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba",
+                    "aba"),
+        "mass_matrix (crba)": Case(lambda q, v, a, **k: mass_matrix_(model, q, **k), lambda s: P.crba(pm, pd, PQ[s]),
+                                   "crba", None, as_pin=_sym),
         "mass_matrix (lagrange)": Case(lambda q, v, a: mass_matrix(model, q, method="lagrange"),
                                        lambda s: P.crba(pm, pd, PQ[s]), "crba", None, as_pin=_sym),
-        "coriolis_matrix": Case(lambda q, v, a: coriolis_matrix_(model, q, v),
+        "coriolis_matrix": Case(lambda q, v, a, **k: coriolis_matrix_(model, q, v, **k),
                                 lambda s: P.computeCoriolisMatrix(pm, pd, PQ[s], V[s]), "computeCoriolisMatrix", None),
-        "gravity_torques": Case(lambda q, v, a: gravity_torques_(model, q),
+        "gravity_torques": Case(lambda q, v, a, **k: gravity_torques_(model, q, **k),
                                 lambda s: P.computeGeneralizedGravity(pm, pd, PQ[s]), "computeGeneralizedGravity",
                                 None),
-        "nonlinear_effects": Case(lambda q, v, a: nonlinear_effects_(model, q, v),
+        "nonlinear_effects": Case(lambda q, v, a, **k: nonlinear_effects_(model, q, v, **k),
                                   lambda s: P.nonLinearEffects(pm, pd, PQ[s], V[s]), "nonLinearEffects", None),
         "frame_placement": Case(lambda q, v, a: frame_placement(model, q, frame), placement,
                                 "forwardKinematics + updateFramePlacement", None,
@@ -164,8 +165,8 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "potential_energy": Case(lambda q, v, a: potential_energy(model, q),
                                  lambda s: P.computePotentialEnergy(pm, pd, PQ[s]), "computePotentialEnergy", None,
                                  as_ours=np.atleast_1d, as_pin=np.atleast_1d),
-        "forward_dynamics (cholesky)": Case(lambda q, v, a: forward_dynamics_(model, q, v, a, method="cholesky",
-                                                                              joint_dynamics=False),   # as P.aba
+        "forward_dynamics (cholesky)": Case(lambda q, v, a, **k: forward_dynamics_(model, q, v, a, method="cholesky",
+                                                                                   joint_dynamics=False, **k),  # as P.aba
                                             lambda s: P.aba(pm, pd, PQ[s], V[s], A[s]), "aba", None, by_cond=True),
         "rnea_derivatives": Case(lambda q, v, a: rnea_derivatives_(model, q, v, a),
                                  lambda s: P.computeRNEADerivatives(pm, pd, PQ[s], V[s], A[s]),
@@ -173,7 +174,7 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
         "aba_derivatives": Case(lambda q, v, a: aba_derivatives_(model, q, v, a),
                                 lambda s: P.computeABADerivatives(pm, pd, PQ[s], V[s], A[s]),
                                 "computeABADerivatives", None),
-        "joint_torque_regressor": Case(lambda q, v, a: joint_torque_regressor_(model, q, v, a),
+        "joint_torque_regressor": Case(lambda q, v, a, **k: joint_torque_regressor_(model, q, v, a, **k),
                                        lambda s: P.computeJointTorqueRegressor(pm, pd, PQ[s], V[s], A[s]),
                                        "computeJointTorqueRegressor", None,
                                        as_pin=lambda Y: np.reshape(Y, (nv, 10 * nb))),   # eigenpy: 1 × n is (n,)
@@ -220,6 +221,10 @@ def latency(sts, quick=False):
 
 
 LANE_CALLS = ("rnea", "aba", "mass_matrix (crba)")      # the lane kernels' calls: timed at N = big too
+# the batched calls that take out= (dynamics/route.py): timed writing into one array, as Pinocchio's batch writes into
+# its out and its loop into data; into a new array each call too (fresh_us)
+OUT_CALLS = ("rnea", "aba", "mass_matrix (crba)", "coriolis_matrix", "gravity_torques", "nonlinear_effects",
+             "forward_dynamics (cholesky)", "joint_torque_regressor")
 
 
 WP_STATES = 200      # the lane kernels' work–precision rows: states spread through the batch
@@ -250,6 +255,7 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20, precision=Tr
     timed = (lambda f, g: per_call_pair(f, g, repeat=2, min_time=0)) if quick else \
         (lambda f, g: per_call_pair(f, g, repeat=11, min_time=0.02))   # short runs, many rounds: a burst of
     #                                            noise on this shared machine spoils a few rounds, not the best
+    alone = (lambda f: per_call(f, repeat=2, min_time=0)) if quick else (lambda f: per_call(f, repeat=11, min_time=0.02))
     for st in sts:
         model, pm = st.model, st.pm
         pool = P.ModelPool(pm, 1)
@@ -277,9 +283,16 @@ def batched(sts, quick=False, sizes=(1000,), big=10_000, sample=20, precision=Tr
                 else:
                     theirs, route, pin_s = (lambda: [c.theirs(s) for s in range(N)]), "loop", c.theirs
                 err = max(_err(c, _row(mine, s), pin_s(s), conds[s]) for s in picks)
-                t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A), theirs))
-                row = dict(robot=st.label, call=name, N=N, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
-                           pin_route=route, ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else "")
+                row = dict(robot=st.label, call=name, N=N)
+                if name in OUT_CALLS:
+                    buf = np.empty_like(mine)
+                    t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A, out=buf), theirs))
+                    err = max(err, max(_err(c, buf[s], pin_s(s), conds[s]) for s in picks))
+                    row["fresh_us"] = alone(lambda: c.ours(Q, V, A)) / N * 1e6
+                else:
+                    t_ours, t_pin = (t / N for t in timed(lambda: c.ours(Q, V, A), theirs))
+                row.update(ours_us=t_ours * 1e6, pin_us=t_pin * 1e6, pin_route=route, ratio=t_ours / t_pin, err=err,
+                           note=ERR_NOTE if c.by_cond else "")
                 if N == big and name in LANE_CALLS and precision:
                     row.update(_work_precision(c, mine, pin_s, cond, Q, V, A, 20 if quick else WP_STATES))
                 rows.append(row)

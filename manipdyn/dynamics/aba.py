@@ -818,7 +818,8 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     """q̈ = M⁻¹ (τ − h) for every state (the M⁻¹ route): M by the CRBA (crba.crba_lanes), factored in place,
     M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_lanes; with wrenches rnea.rnea_kernel,
-    whose rows of X may broadcast) into out, then out ← L⁻ᵀ L⁻¹ (τ − h). A chunk of LANES states at a time (with
+    whose rows of X may broadcast) into scratch H (not out: one state's out may be its τ, ``route``), then
+    out ← L⁻ᵀ L⁻¹ (τ − h). A chunk of LANES states at a time (with
     ``lanes``, the lane kernels' block: M and h across states; N = 1000, one thread: chain32 13.0 → 7.7 µs a state,
     AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state, N = 1: a block of lanes
     costs LANES states) the one-lane drivers of the same steps (``crba.crba_steps_one``, ``rnea.rnea_steps_one``;
@@ -828,6 +829,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
     M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), F[:0, :, :]   # T0: no per-link terms
+    H = np.empty((C, nv))                                     # h of the chunk's states
     for s in range(N):
         if first_nonfinite(Tau, s) >= 0:
             return bad_input(s)
@@ -839,19 +841,20 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
             return bad_result(nb, s * nv)
-        if code == -1 and body.shape[0] > 0:                  # h into out
+        if code == -1 and body.shape[0] > 0:                  # h
             code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
-                               world, out[s0:s1], T0)
+                               world, H[:n, :], T0)
         elif code == -1 and not lanes:
-            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], out[s0])
+            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], H[0])
         elif code == -1:
-            code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, out[s0:s1], T0)
-        if code != -1:                                        # a non-finite input, or h (in out)
+            code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, H[:n, :], T0)
+        if code != -1:                                        # a non-finite input, or h: in out, where the
+            out[s0:s1, :] = H[:n, :]                          # error reads the entry at fault
             return shift(code, s0, nb, nv)
         for s in range(s0, s1):
             L = M[s - s0]
             for r in range(nv):                               # τ − h
-                out[s, r] = Tau[s, r] - out[s, r]
+                out[s, r] = Tau[s, r] - H[s - s0, r]
             k = cholesky(L, nv, 0.0)
             if k >= 0:
                 if not np.isfinite(L[k, k]):
@@ -891,7 +894,7 @@ _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLA
 
 @route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_lanes, *_FD), wrenches=True,
        lanes=True, one_lanes=True, wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
-def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
+def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None, out=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).
 
     Parameters
@@ -901,9 +904,10 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
     f_ext : {link or frame name: (force (3,)|(N, 3), moment (3,)|(N, 3))}, the wrench the environment applies
         on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or the world's.
     threads : a batch's threads (``rnea``'s).
+    out : (nv,) or (N, nv) float64 array to write q̈ into (``rnea``'s).
     Returns
     -------
-    qdd : (nv,) or (N, nv).
+    qdd : (nv,) or (N, nv) (``out`` when given).
 
     Raises SingularError naming the joint whose articulated inertia D_i = S_iᵀ I^A_i S_i is singular (a
     moving subtree without mass or inertia: M is singular there).
@@ -913,9 +917,9 @@ def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
 @route("forward_dynamics", _QVT, "q̈", "v", entry(cholesky_one, *_ONE), entry(cholesky_kernel, *_FD), wrenches=True,
        lanes=True, one_lanes=True, wrench_one=entry(cholesky_fext_one, *_FEXT_ONE),
        mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
-def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None):
+def cholesky_route(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None, out=None):
     """q̈ (nv,) or (N, nv) by the M⁻¹ route (``cholesky_kernel``): ``forward_dynamics(..., method="cholesky")``.
-    threads: a batch's threads (``rnea``'s)."""
+    threads, out: ``rnea``'s."""
 
 
 def passive_torques(model, v):
@@ -941,10 +945,10 @@ def passive_torques(model, v):
 
 
 def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", method="aba", threads=None,
-                     joint_dynamics=True):
+                     joint_dynamics=True, out=None):
     """q̈ by ``method``: "aba" (articulated bodies) or "cholesky" (M⁻¹ route: Cholesky of the CRBA mass
-    matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext). threads: a batch's threads
-    (``rnea``'s).
+    matrix, right-hand side τ − rnea(q, q̇, 0, f_ext) = τ − C q̇ − g + Σ Jᵀ f_ext). threads: a batch's threads;
+    out: an array to write q̈ into (both ``rnea``'s).
 
     Joint dynamics (docs/design.md §3): M includes diag(model.armature) always (as ``aba`` and ``crba``); with
     joint_dynamics=True (default) the joints' damping and Coulomb friction act too, q̈ = aba(q, q̇, τ_joint) with
@@ -959,7 +963,7 @@ def forward_dynamics(model, q, v, tau, *, f_ext=None, f_ext_frame="local", metho
             except (TypeError, ValueError):
                 pass                                     # (the route names a bad τ)
     if isinstance(method, str) and method == "aba":
-        return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads)
+        return aba(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads, out=out)
     if not (isinstance(method, str) and method == "cholesky"):          # (an array compares elementwise)
         raise InputError(f"forward_dynamics method must be 'aba' or 'cholesky', not {method!r}")
-    return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads)
+    return cholesky_route(model, q, v, tau, f_ext=f_ext, f_ext_frame=f_ext_frame, threads=threads, out=out)

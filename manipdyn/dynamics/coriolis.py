@@ -147,7 +147,7 @@ def coriolis_one(I, F, q, v, C):
 
 @route("coriolis_matrix", ("q", "v"), "C", "vv", entry(coriolis_one, *MODEL, A1, A1, A2),
        entry(coriolis_kernel, *MODEL, A2, A2, A3))
-def coriolis_matrix(model, q, v, *, threads=None):
+def coriolis_matrix(model, q, v, *, threads=None, out=None):
     """C(q, q̇) (nv, nv) or (N, nv, nv): the Christoffel-consistent Coriolis matrix (module docstring;
     Pinocchio's computeCoriolisMatrix): C q̇ = Newton–Euler bias forces without gravity, Ṁ − 2C skew.
-    threads: a batch's threads (``rnea``'s)."""
+    threads, out: ``rnea``'s."""

@@ -28,6 +28,7 @@ from ..model import MimicModel
 from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
                        inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
 from . import mimic
+from .arguments import check_out
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes,
                     placement_lane, placement_lanes, placement_model, quat_model, quat_placement_lane,
                     quat_placement_lanes, tree_depth)
@@ -423,29 +424,34 @@ def scatter_symmetric(Mb, n, M, s0):
 _CRBA = "crba"
 
 
-def mass_matrix(model, q, method=_CRBA, *, threads=None):
+def mass_matrix(model, q, method=_CRBA, *, threads=None, out=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq), the joint-space inertia matrix of
     T = ½ q̇ᵀ M q̇ (Eq. 23).
 
     method="crba" (default, O(n²)): the composite-rigid-body algorithm (this module, compiled).
     method="lagrange": the closed form M = Σ_b m_b J_vbᵀ J_vb + J_ωbᵀ R_b I_b R_bᵀ J_ωb over links
     (O(n³), compiled: ``lagrange.lagrange_mass_matrix``; a batch of it runs on one thread).
-    threads: a batch's threads (``rnea``'s).
+    threads: a batch's threads; out: an (nv, nv) or (N, nv, nv) float64 array to write M into (both ``rnea``'s).
     """
     if method is _CRBA and threads is None and type(model) is not MimicModel:   # the default, one test (~80 ns
-        return crba(model, q)                                                     # less a call than below)
+        return crba(model, q) if out is None else crba(model, q, out=out)         # less a call than below)
+    if isinstance(method, str) and method == "crba" and type(model) is not MimicModel:
+        return crba(model, q, threads=threads, out=out)
     if type(model) is MimicModel:                   # M = Gᵀ M_full G (dynamics/mimic.py)
-        return mimic.mass_matrix(model, mass_matrix, q, method=method)
-    if isinstance(method, str) and method == "crba":
-        return crba(model, q) if threads is None else crba(model, q, threads=threads)
-    if not (isinstance(method, str) and method == "lagrange"):          # (an array compares elementwise)
+        M = mimic.mass_matrix(model, mass_matrix, q, method=method)
+    elif not (isinstance(method, str) and method == "lagrange"):        # (an array compares elementwise)
         raise InputError(f"mass_matrix method must be 'crba' or 'lagrange', not {method!r}")
-    thread_count(threads, "mass_matrix")
-    return lagrange_mass_matrix(model, q)
+    else:
+        thread_count(threads, "mass_matrix")
+        M = lagrange_mass_matrix(model, q)
+    if out is None:
+        return M
+    check_out("mass_matrix", "M", out, M.shape)[...] = M     # (M is computed: out may share q's memory)
+    return out
 
 
 @route("mass_matrix", ("q",), "M", "vv", entry(crba_one, *MODEL, A1, A2), entry(crba_lanes, *MODEL, A2, A3),
        lanes=True, one_lanes=True)
-def crba(model, q, *, threads=None):
+def crba(model, q, *, threads=None, out=None):
     """M(q) (nv, nv) or (N, nv, nv) for q (nq,) or (N, nq): the composite-rigid-body algorithm (above; its
-    route: dynamics/route.py). threads: a batch's threads (``rnea``'s)."""
+    route: dynamics/route.py). threads, out: ``rnea``'s."""

@@ -208,13 +208,13 @@ def project(s, W, Y, r, c0):
 
 @route("joint_torque_regressor", _QVA, "Y", "regressor", entry(regressor_one, *MODEL, A1, A1, A1, A2),
        entry(regressor_kernel, *MODEL, A2, A2, A2, A3))
-def joint_torque_regressor(model, q, v, a, *, threads=None):
+def joint_torque_regressor(model, q, v, a, *, threads=None, out=None):
     """Y (nv, 10 nb) with τ = Y π = rnea(q, q̇, q̈) (gravity included), π = dynamic_parameters(model).
 
     Parameters
     ----------
     q : (nq,) or (N, nq) configuration; v, a : (nv,) or (N, nv) rates and accelerations.
-    threads : a batch's threads (``rnea``'s).
+    threads, out : ``rnea``'s (out: (nv, 10 nb) or (N, nv, 10 nb)).
     Returns
     -------
     Y : (nv, 10 nb) or (N, nv, 10 nb); columns 10 i … 10 i + 9 belong to body i (PARAMETER_NAMES order).

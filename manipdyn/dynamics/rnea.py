@@ -672,7 +672,7 @@ def store_terms(mdl, work, T):
        wrenches=True, lanes=True, one_lanes=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))
-def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
+def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None, out=None):
     """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) − Σ J_kᵀ f_ext,k, by the chapter's Eqs. 3–18 (32a–i).
 
     Parameters
@@ -682,22 +682,26 @@ def rnea(model, q, v, a, *, f_ext=None, f_ext_frame="local", threads=None):
         on that body about the frame's origin, in the frame's axes (f_ext_frame="local") or world axes.
     threads : a batch is cut into chunks run on this many threads at once (default None: every core; batches
         of fewer than 256 states run on one; dynamics/route.py); the numbers are those of one thread.
+    out : a writeable float64 array of the result's shape ((nv,) or (N, nv)) to write tau into, and return:
+        no new array a call (a loop's buffer, reused); any memory layout, no memory shared with q, v, a. If the
+        call raises, its contents are undefined.
     Returns
     -------
-    tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer).
+    tau : (nv,) or (N, nv) joint torques (revolute), forces (prismatic), root wrench [f; n] (free flyer); ``out``
+        when given.
     """
 
 
 @route("nonlinear_effects", ("q", "v"), "h", "v", entry(bias_one, *MODEL, A1, A1, A1),
        entry(bias_kernel, *MODEL, A2, A2, A2), lanes=True, one_lanes=True,
        mimic=lambda mm, q, v: mimic.generalized_force(mm, rnea, q, v))
-def nonlinear_effects(model, q, v, *, threads=None):
+def nonlinear_effects(model, q, v, *, threads=None, out=None):
     """h = C(q, q̇) q̇ + g(q) (nv,) or (N, nv): the Newton–Euler recursion with q̈ = 0 (Pinocchio's
-    nonLinearEffects), τ = M q̈ + h. threads: a batch's threads (``rnea``'s)."""
+    nonLinearEffects), τ = M q̈ + h. threads, out: ``rnea``'s."""
 
 
 @route("gravity_torques", ("q",), "g", "v", entry(gravity_one, *MODEL, A1, A1), entry(gravity_kernel, *MODEL, A2, A2),
        lanes=True, one_lanes=True, mimic=lambda mm, q: mimic.generalized_force(mm, rnea, q))
-def gravity_torques(model, q, *, threads=None):
+def gravity_torques(model, q, *, threads=None, out=None):
     """g(q) = ∂V/∂q (nv,) or (N, nv), V = −Σ_b m_b gᵀ c_b: the Newton–Euler recursion with q̇ = q̈ = 0.
-    threads: a batch's threads (``rnea``'s)."""
+    threads, out: ``rnea``'s."""

@@ -24,6 +24,8 @@ every such call (docs/design.md §2):
 A batch of N ≥ 2 · MIN_CHUNK states is cut into contiguous chunks, one per thread (``threads``, default: every
 core this process may run on, ``CORES``), each run by the same batch entry on its rows — the kernels release
 Python's lock (``_jit.njit``: nogil) — so every state gets the numbers a one-thread call gives, bit for bit.
+``out=``: the array the result is written into and returned (``arguments.check_out``: the result's exact shape,
+float64, writeable; a batch's may not share memory with its states), instead of a new one.
 A chunk's status is read as the whole batch's (``status.shift``: a state index or a result's flat index moved by
 the chunk's first row); the first failing chunk's is the one reported, as one thread would stop at it.
 
@@ -44,8 +46,8 @@ from ..errors import InputError, ManipdynError
 from ..extras import require
 from ..model import MimicModel, Model
 from .status import OK, shift
-from .arguments import (as_batch, check_f_ext, fast, fast_shape, fast_wrenches, is_config, raise_kernel_error, unbatch,
-                        wrench_rows)
+from .arguments import (as_batch, check_f_ext, check_out, fast, fast_shape, fast_wrenches, is_config,
+                        raise_kernel_error, unbatch, wrench_rows)
 
 
 _MISSING = NotImplemented      # a state argument the call was not given (arguments.fast's sentinel too)
@@ -174,7 +176,7 @@ def route(call, names, result, shape, one, batch, **options):
 
     def bind(public):
         def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local",
-                 threads=None):
+                 threads=None, out=None):
             # (no keyword-only parameters: their defaults cost a dict lookup each per call; the public signature,
             # which inspect and the docs show, is the decorated function's)
             if tau is not _MISSING:                             # the third state by its name in aba's calls
@@ -186,7 +188,8 @@ def route(call, names, result, shape, one, batch, **options):
                 if k is not None:                               # 1. one float64 state: straight in
                     if one_lanes:
                         k = model.kernel.lane_arrays
-                    out = np.empty(model.kernel.result_shapes[shape])
+                    out = np.empty(model.kernel.result_shapes[shape]) if out is None else \
+                        check_out(r.call, r.result, out, model.kernel.result_shapes[shape])
                     code = one.call(k[0], k[1], q, out) if no_v else one.call(k[0], k[1], q, v, out) if no_a \
                         else one.call(k[0], k[1], q, v, a, out)
                     if code == -1:
@@ -196,10 +199,11 @@ def route(call, names, result, shape, one, batch, **options):
                 k = fast(model, q, v, a)
                 w = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
                 if w is not None:                               # 2. one state, one wrench: straight in
-                    out = np.empty(model.kernel.result_shapes[shape])
+                    out = np.empty(model.kernel.result_shapes[shape]) if out is None else \
+                        check_out(r.call, r.result, out, model.kernel.result_shapes[shape])
                     if wrench_one.call(k[0], k[1], q, v, a, w[0], w[1], w[2], f_ext_frame == "world", out) == -1:
                         return out                              # else the checked path says what is wrong
-            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame, threads)
+            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame, threads, out)
         path = functools.wraps(public)(path)
         path.route, r.public = r, path
         return path
@@ -244,8 +248,9 @@ class Route:
         """The state arguments a call was given, in order (those not given left out)."""
         return tuple(y for y in x if y is not _MISSING)
 
-    def checked(self, model, x, f_ext=None, f_ext_frame="local", threads=None):
-        """Steps 3–6 of the path: batches, a MimicModel, checked and converted input."""
+    def checked(self, model, x, f_ext=None, f_ext_frame="local", threads=None, out=None):
+        """Steps 3–6 of the path: batches, a MimicModel, checked and converted input; ``out``: the array to
+        write the result into (``arguments.check_out``), or None (a new one)."""
         if len(x) != len(self.names):
             n = len(self.names)
             raise TypeError(f"{self.call}() takes the model and {n} state array{'s' * (n > 1)} "
@@ -253,19 +258,33 @@ class Route:
         if not self.wrenches and (f_ext is not None or f_ext_frame != "local"):
             raise TypeError(f"{self.call}() takes no external wrenches (f_ext, f_ext_frame)")
         if any(is_dask(y) for y in x):
+            if out is not None:
+                raise InputError(f"{self.call}: out= with Dask arrays of states is not supported (the result is "
+                                 f"a Dask array, computed when asked)")
             return self.lazy(model, x, f_ext)
         if f_ext is None and f_ext_frame == "local" and fast_shape(model, *x) == 2:
             states, single = x, False                           # 3. float64 batches
         elif type(model) is MimicModel and self.mimic is not None:
             kw = dict(f_ext=f_ext, f_ext_frame=f_ext_frame) if self.wrenches else {}
-            return self.mimic(model, *x, **kw)                  # 4. a MimicModel (its inner calls: every core)
+            res = self.mimic(model, *x, **kw)                   # 4. a MimicModel (its inner calls: every core)
+            if out is None:
+                return res
+            check_out(self.call, self.result, out, res.shape)[...] = res   # (after the call: no overlap)
+            return out
         else:                                                   # 5. checked and converted
             states, single = as_batch(model, **dict(zip(self.names, x)))
         N, shape = states[0].shape[0], model.kernel.result_shapes[SHAPES.index(self.shape)]
+        if out is not None:
+            out = check_out(self.call, self.result, out, shape if single else (N,) + shape,
+                            () if single and f_ext is None and f_ext_frame == "local" else x)   # (one state: the
+        #                                                         one-state kernel, below, reads before it writes)
         if not model.nv:                                        # no moving joint: nothing to compute
-            return unbatch(np.zeros((N,) + shape), single)
+            if out is None:
+                return unbatch(np.zeros((N,) + shape), single)
+            out[...] = 0.0
+            return out
         if single and f_ext is None and f_ext_frame == "local":  # one state (converted): the one-state kernel, so
-            out = np.empty(shape)                               # that its numbers do not depend on its dtype (the
+            out = np.empty(shape) if out is None else out       # that its numbers do not depend on its dtype (the
             arrays = model.kernel.lane_arrays if self.one_lanes else model.kernel.arrays
             code = self.one.call(*arrays, *(y[0] for y in states), out)   # batch kernels run lanes)
             if code != -1:
@@ -276,13 +295,14 @@ class Route:
                 ext = (*wrench_rows(model, f_ext, f_ext_frame, N, self.lanes), f_ext_frame == "world")
         else:
             ext = ()
-        out = np.empty((N,) + shape)
+        given = out
+        out = np.empty((N,) + shape) if out is None else out[np.newaxis] if single else out
         arrays = model.kernel.lane_arrays if self.lanes else model.kernel.arrays
         code = run_batch(self.batch, arrays, states, ext, out, self.tail, thread_count(threads, self.call),
                          model.njoints)
         if code != -1:
             self.fail(model, code, states, out, f_ext, f_ext_frame)
-        return unbatch(out, single)
+        return unbatch(out, single) if given is None else given
 
     def lazy(self, model, x, f_ext):
         """Dask arrays of states: ``lazy`` with this call's public function and one state's result shape."""

@@ -15,8 +15,9 @@ Q, V, T = RNG.uniform(-1, 1, ARM.nq), RNG.normal(size=ARM.nv), RNG.normal(size=A
 
 
 def test_signatures_and_keywords_are_the_public_ones():
-    assert list(inspect.signature(md.aba).parameters) == ["model", "q", "v", "tau", "f_ext", "f_ext_frame", "threads"]
-    assert list(inspect.signature(md.gravity_torques).parameters) == ["model", "q", "threads"]
+    assert list(inspect.signature(md.aba).parameters) == ["model", "q", "v", "tau", "f_ext", "f_ext_frame", "threads",
+                                                        "out"]
+    assert list(inspect.signature(md.gravity_torques).parameters) == ["model", "q", "threads", "out"]
     by_name = md.aba(ARM, q=Q, v=V, tau=T)
     assert np.array_equal(by_name, md.aba(ARM, Q, V, T))                      # the same compiled code
     assert np.array_equal(md.rnea(ARM, Q, V, a=T), md.rnea(ARM, Q, V, T))
