@@ -35,14 +35,14 @@ from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, accele
                            articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
 from .dynamics.lanes import (body_placement_lane, gather_lane, get3, get_rotation, inertial_model, motion_model,
-                             on_lanes, scatter_lane)
+                             multi_model, on_lanes, scatter_lane)
 from .dynamics.model_arrays import unpack
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
                             merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
 from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
-                            torque_multi_lane, wrench_up_lane)
+                            selected_row, torque_multi_lane, wrench_up_lane)
 from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
@@ -104,12 +104,11 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         par = base if j < 0 else rec[(j * RECORD + _W) * N:(j * RECORD + _W + 9) * N]
-        mm = motion_model(i, mdl, nq)
         body_placement_lane(i, mdl, B, Z, s, N)
         if mdl.nvj[i] > 1:                                # a free flyer or a ball joint
-            motion_lane_multi(mm, B, par, Z, s, N)
+            motion_lane_multi(multi_model(i, mdl, nq), B, par, Z, s, N)
         else:
-            motion_lane(mm, B, par, Z, s, N)
+            motion_lane(motion_model(i, mdl, nq), B, par, Z, s, N)
         inertial_lane(inertial_model(i, mdl), B, s, N)
     for k in range(xb.shape[0]):                          # external wrenches
         fe, ne = get3(X, 6 * k, s, N), get3(X, 6 * k + 3, s, N)
@@ -123,14 +122,14 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]
         to = spare if j < 0 else rec[(j * RECORD + _F) * N:(j * RECORD + _F + 6) * N]
-        mm = motion_model(i, mdl, nq)
         if mdl.nvj[i] > 1:
+            mm = multi_model(i, mdl, nq)
             for k in range(mdl.nvj[i]):
-                torque_multi_lane(mm, k, mdl.armature[mdl.iv[i] + k], B, TB, Z, s, N)
+                torque_multi_lane(mm, k, selected_row(mm, k), mdl.armature[mdl.iv[i] + k], B, TB, Z, s, N)
             if j >= 0:
                 wrench_up_lane(B, to, s, N)
         else:
-            inward_lane(mm, mdl.armature[mdl.iv[i]], B, to, TB, Z, s, N)
+            inward_lane(motion_model(i, mdl, nq), mdl.armature[mdl.iv[i]], B, to, TB, Z, s, N)
     if not scatter_lane(TB, tau, s, N) == 0.0:
         cuda.atomic.min(flags, 1, s)
 
@@ -200,12 +199,11 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         j = mdl.parent[i]
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         par = base[:6 * N] if j < 0 else rec[(j * ARTICULATED + _V) * N:(j * ARTICULATED + _V + 6) * N]
-        mm = motion_model(i, mdl, nq)
         body_placement_lane(i, mdl, B, Z, s, N)
         if mdl.nvj[i] > 1:
-            velocity_multi_lane(mm, B, par, Z, s, N)
+            velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, s, N)
         else:
-            velocity_lane(mm, B, par, Z, s, N)
+            velocity_lane(motion_model(i, mdl, nq), B, par, Z, s, N)
         bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, s, N)
     singular = 0
     for i in range(nb - 1, -1, -1):                       # pass 2 (inward)

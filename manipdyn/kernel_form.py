@@ -14,7 +14,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .joints import motion_subspace
+from .joints import PLANAR, motion_subspace, plane_axes
 from .spatial import skew
 
 __all__ = ["KernelForm", "z_turn", "z_aligned", "orientation_pairs", "perpendicular_pair"]
@@ -126,20 +126,31 @@ def z_turn(k) -> np.ndarray:
     return c * np.eye(3) + s * skew(u) + (1.0 - c) * np.outer(u, u)
 
 
+def planar_turn(n) -> np.ndarray:
+    """C for a planar joint of normal n: the columns e₁, e₂, n (``joints.plane_axes``), so that C e_x = e₁, C e_y = e₂
+    and C e_z = n — in the turned frame the joint's x and y run along x and y, its turn is about z."""
+    py = getattr(plane_axes, "py_func", plane_axes)     # its Python body: no compile (a plain function without jit)
+    e1, e2 = py(float(n[0]), float(n[1]), float(n[2]))
+    return np.column_stack([e1, e2, np.asarray(n, float)])
+
+
 def z_aligned(model):
     """The model's joint frames, inertias, axes, origins and centres of mass with every 1-dof joint's body frame
-    turned so that its joint axis is z (the chapter's z'_i, docs/design.md §4c): body i's frame becomes C_i
-    (``z_turn`` of its axis; the identity for a ball or free joint), so R^{i−1}_i = R0'_i Rot(z, q),
-    R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i, c'_i = C_iᵀ c_i, I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world
-    placements are the same numbers: only what is written in a body's own axes changes.
+    turned so that its joint axis is z (the chapter's z'_i, docs/design.md §4c), and a planar joint's so that its
+    plane is x–y: body i's frame becomes C_i (``z_turn`` of its axis, ``planar_turn``; the identity for a ball or
+    free joint), so R^{i−1}_i = R0'_i Rot(z, q), R0'_i = C_λᵀ R0_i C_i, p0'_i = C_λᵀ p0_i, c'_i = C_iᵀ c_i,
+    I'_i = C_iᵀ I_i C_i, axis' = e_z. τ, M, q̈ and world placements are the same numbers: only what is written in a
+    body's own axes changes.
     Returns (R0', I', axis', p0', c', C), each (nb, 3, 3) or (nb, 3)."""
     nb = model.njoints
-    C = np.array([z_turn(model.axis[i]) if model.nvs[i] == 1 else np.eye(3) for i in range(nb)]).reshape(nb, 3, 3)
+    C = np.array([z_turn(model.axis[i]) if model.nvs[i] == 1 else planar_turn(model.axis[i])
+                  if model.kind[i] == PLANAR else np.eye(3) for i in range(nb)]).reshape(nb, 3, 3)
     Cp = np.array([C[j] if j >= 0 else np.eye(3) for j in model.parent]).reshape(nb, 3, 3)
     Ct = np.swapaxes(C, 1, 2)
     R0 = np.swapaxes(Cp, 1, 2) @ np.asarray(model.R0, float) @ C
     J = Ct @ np.asarray(model.inertia, float) @ C
-    axis = np.where(np.asarray(model.nvs)[:, None] == 1, [0.0, 0.0, 1.0], model.axis)   # C e_z = k: exactly z
+    turned = (np.asarray(model.nvs) == 1) | (np.asarray(model.kind) == PLANAR)
+    axis = np.where(turned[:, None], [0.0, 0.0, 1.0], model.axis)       # C e_z = k: exactly z
     p0 = np.einsum("nji,nj->ni", Cp, np.asarray(model.p0, float))
     com = np.einsum("nji,nj->ni", C, np.asarray(model.com, float))
     return R0, 0.5 * (J + np.swapaxes(J, 1, 2)), axis.reshape(nb, 3), p0, com, C

@@ -387,7 +387,7 @@ FAULTS = (
           "add(scale(2.0, cross(w_in, vl)), cross(va, vl))))   # Eq. 6", "scale(2.0, cross(w_in, vl))))   # Eq. 6",
           (_LANES_MULTI,), "the lane RNEA of a free flyer or ball drops v_a × v_l of Eq. 6 (batches only)"),
     Fault("lanes-multi-torque-rows-shifted", "rnea", "manipdyn/dynamics/rnea.py",
-          "TB[(r + k) * L + l] = B[(_F + 6 - n + k) * L + l]", "TB[(r + k) * L + l] = B[(_F + k) * L + l]",
+          "    return _F + k + (3 if m == 0.0 else 0)\n", "    return _F + k\n",
           (_LANES_MULTI,), "a ball's lane torque read from f' instead of n' (S = [0; 1₃] taken as its first rows)"),
     Fault("lanes-quat-placement-quaternion-offset", "rnea", "manipdyn/dynamics/lanes.py",
           "mdl.iq[i], mdl.iq[i] + kq, lin", "mdl.iq[i], mdl.iq[i], lin",
@@ -1123,6 +1123,17 @@ FAULTS = (
           "                out[s, r] = Tau[s, r] - H[s - s0, r]\n",
           "                out[s, r] = H[s - s0, r]\n                out[s, r] = Tau[s, r] - out[s, r]\n",
           (_OUT, _JD), "the M⁻¹ route reads τ after it has written q̈ (one state's out= may be its τ)"),
+    Fault("lanes-planar-xy-swapped", "rnea", "manipdyn/dynamics/lanes.py",
+          "    x, y, c, s = Z[iq * L + l], Z[(iq + 1) * L + l], Z[(iq + 2) * L + l], Z[(iq + 3) * L + l]\n",
+          "    y, x, c, s = Z[iq * L + l], Z[(iq + 1) * L + l], Z[(iq + 2) * L + l], Z[(iq + 3) * L + l]\n",
+          (_KINDS,), "the lane steps place a planar joint at (y, x)"),
+    Fault("lanes-multi-angular-mask-dropped", "rnea", "manipdyn/dynamics/lanes.py",
+          "(ma[0] * y[0], ma[1] * y[1], ma[2] * y[2])", "(y[0], y[1], y[2])",
+          (_KINDS,), "the lane steps turn a planar joint about every axis by its (vx, vy, ω)"),
+    Fault("kernel-form-planar-turn-quarter", "rnea", "manipdyn/kernel_form.py",
+          "    return np.column_stack([e1, e2, np.asarray(n, float)])",
+          "    return np.column_stack([e2, -np.asarray(e1), np.asarray(n, float)])",
+          (_KINDS,), "the z-aligned frames turn a planar joint's plane a quarter turn (its x runs along its y)"),
 )
 
 

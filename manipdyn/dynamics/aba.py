@@ -44,7 +44,7 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                    motion_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
+                    motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
                     quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
@@ -381,7 +381,7 @@ def velocity_multi_lanes(i, mdl, B, par, Z, nq):
     """``velocity_lanes`` for a free flyer or a ball joint: its quaternion placement, ``velocity_multi_lane``, then
     ``bias_lane`` (a function of its own, as rnea.outward_multi_lanes)."""
     quat_placement_lanes(i, mdl, B, Z)
-    mm, rm, im = motion_model(i, mdl, nq), rigid_model(i, mdl), inertial_model(i, mdl)
+    mm, rm, im = multi_model(i, mdl, nq), rigid_model(i, mdl), inertial_model(i, mdl)
     for l in range(LANES):
         velocity_multi_lane(mm, B, par, Z, l, LANES)
     for l in range(LANES):
@@ -404,7 +404,7 @@ def velocity_lane(mm, B, par, Z, l, L):
 
 @njit(cache=True, inline="always")
 def velocity_multi_lane(mm, B, par, Z, l, L):
-    """``velocity_lane`` for a free flyer or a ball joint: v_J = S q̇ (``lanes.multi_rates``)."""
+    """``velocity_lane`` for a free flyer or a ball joint: v_J = S q̇ (``lanes.multi_rates``; mm: ``lanes.multi_model``)."""
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
     vl, va = motion_down(R, p, get3(par, 0, l, L), w)                              # ⁱX_λ v_λ
     jl, ja = multi_rates(mm, Z, mm[3], l, L)
@@ -753,13 +753,12 @@ def aba_steps_one(I, F, q, v, tau, out):
         for i in range(nb):                                             # pass 1 (outward)
             j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
             par = base[:6] if j < 0 else Rec[j * ARTICULATED + _V:j * ARTICULATED + _V + 6]
-            mm = motion_model(i, mdl, nq)
             if nvj[i] > 1:                                              # a free flyer or a ball joint
                 quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
-                velocity_multi_lane(mm, B, par, Z, 0, 1)
+                velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, 0, 1)
             else:
                 placement_lane(placement_model(i, mdl), B, Z, 0, 1)
-                velocity_lane(mm, B, par, Z, 0, 1)
+                velocity_lane(motion_model(i, mdl, nq), B, par, Z, 0, 1)
             bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, 0, 1)
         singular, g = 0, m
         for i in range(nb - 1, -1, -1):                                 # pass 2 (inward)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..joints import HELICAL, PRISMATIC, REVOLUTE, multi_dof, quat_layout, quat_rotation
+from ..joints import HELICAL, PLANAR, PRISMATIC, REVOLUTE, multi_dof, quat_layout, quat_rotation
 from ..spatial import SINCOS_MAX, sincos
 
 
@@ -139,17 +139,18 @@ def lane_record(even, odd, depth, i, rows):
 
 
 @njit(cache=True, inline="always")
-def on_lanes(mdl, nq, multi=False, helical=True):
+def on_lanes(mdl, nq, multi=False, helical=True, planar=False):
     """True when the lane steps apply to the model (nq: a state's q entries): every joint is revolute, prismatic or
     helical about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, kernel_form.z_aligned) —
     or, for a kernel whose steps take them (``multi``), a free flyer or a ball joint (``joints.multi_dof``); without
-    ``helical``, no helical joint. A planar joint sends the batch to the lane kernel's scalar kernel, which takes
-    every joint of the registry."""
+    ``helical``, no helical joint; with ``planar`` (the RNEA's steps), a planar joint in the x–y plane too. A joint
+    the steps do not take sends the batch to the lane kernel's scalar kernel, which takes every joint of the
+    registry."""
     nb = mdl.parent.shape[0]
     ok = True
     for i in range(nb):
         k = mdl.kind[i]
-        if k == REVOLUTE or k == PRISMATIC or (helical and k == HELICAL):
+        if k == REVOLUTE or k == PRISMATIC or (helical and k == HELICAL) or (planar and k == PLANAR):
             ok &= mdl.axis[i, 0] == 0.0 and mdl.axis[i, 1] == 0.0 and mdl.axis[i, 2] == 1.0
         else:
             ok &= multi and multi_dof(k)
@@ -189,10 +190,29 @@ def placement_lane(pm, B, Z, l, L):
     qi = Z[iq * L + l]
     s, c = sincos(turn * qi)
     d = (1.0 - turn) * qi
+    turned_lane(a0, a1, a2, c, s, B, l, L)
+    B[9 * L + l], B[10 * L + l], B[11 * L + l] = o[0] + d * a0[2], o[1] + d * a1[2], o[2] + d * a2[2]
+
+
+@njit(cache=True, inline="always")
+def turned_lane(a0, a1, a2, c, s, B, l, L):
+    """Rows 0–8 of a body's lane record at lane l: R0 Rot(z, θ) from R0's rows a0, a1, a2 and c, s = cos θ, sin θ
+    (row a of R0 turned: (c a_x + s a_y, c a_y − s a_x, a_z))."""
     B[0 * L + l], B[1 * L + l], B[2 * L + l] = c * a0[0] + s * a0[1], c * a0[1] - s * a0[0], a0[2]
     B[3 * L + l], B[4 * L + l], B[5 * L + l] = c * a1[0] + s * a1[1], c * a1[1] - s * a1[0], a1[2]
     B[6 * L + l], B[7 * L + l], B[8 * L + l] = c * a2[0] + s * a2[1], c * a2[1] - s * a2[0], a2[2]
-    B[9 * L + l], B[10 * L + l], B[11 * L + l] = o[0] + d * a0[2], o[1] + d * a1[2], o[2] + d * a2[2]
+
+
+@njit(cache=True, inline="always")
+def planar_placement_lane(pm, B, Z, l, L):
+    """``placement_lane`` for a planar joint in z-aligned frames (its plane the body's x–y plane: kernel_form.
+    planar_turn): R^{i−1}_i = R0 Rot(z, θ) with cos θ, sin θ q's entries 2, 3 as they are, p^{i−1}_i = p0 + R0 (x, y,
+    0) (``joints.joint_placement``'s planar branch); pm: ``placement_model``."""
+    a0, a1, a2, o, _, iq = pm
+    x, y, c, s = Z[iq * L + l], Z[(iq + 1) * L + l], Z[(iq + 2) * L + l], Z[(iq + 3) * L + l]
+    turned_lane(a0, a1, a2, c, s, B, l, L)
+    B[9 * L + l], B[10 * L + l] = o[0] + x * a0[0] + y * a0[1], o[1] + x * a1[0] + y * a1[1]
+    B[11 * L + l] = o[2] + x * a2[0] + y * a2[1]
 
 
 @njit(cache=True, inline="always")
@@ -212,7 +232,9 @@ def body_placement_lane(i, mdl, B, Z, l, L):
     screw joint's turn, slide or both — for the GPU's drivers, one lane a thread (L = N). (The CPU's block loops run
     ``placement_lanes`` or ``quat_placement_lanes``, one kind a loop; its one-state drivers write these lines out:
     through this inlined function rnea's one-state steps measured 0.97 → 1.29 µs on the AAU arm.)"""
-    if mdl.nvj[i] > 1:
+    if mdl.kind[i] == PLANAR:
+        planar_placement_lane(placement_model(i, mdl), B, Z, l, L)
+    elif mdl.nvj[i] > 1:
         quat_placement_lane(quat_model(i, mdl), B, Z, l, L)
     else:
         pm = placement_model(i, mdl)
@@ -247,14 +269,26 @@ def motion_model(i, mdl, nq):
 
 
 @njit(cache=True, inline="always")
+def multi_model(i, mdl, nq):
+    """``motion_model`` for a joint of several velocities whose S selects entries of [linear; angular] — a free
+    flyer (S = 1₆), a ball (S = [0; 1₃]), a planar joint in z-aligned frames (S's rows e_x, e_y | e_z): (r, ml, ma:
+    the masks of x[0:3] for the linear part and of x[o:o + 3] for the angular part, rv, ra, n, o), read from S's
+    entries (``multi_rates``)."""
+    r, nv, n, S = mdl.iv[i], mdl.S.shape[0], mdl.nvj[i], mdl.S
+    o = 3 if n == 6 else 0
+    return r, (S[r, 0], S[r + 1, 1], S[r + 2, 2]), (S[r + o, 3], S[r + o + 1, 4], S[r + o + 2, 5]), nq + r, \
+        nq + nv + r, n, o
+
+
+@njit(cache=True, inline="always")
 def multi_rates(mm, Z, row, l, L):
-    """S x of a free flyer (S = 1₆) or a ball joint (S = [0; 1₃]) at lane l, x = q̇ or q̈ from its rows ``row`` … of Z
-    (``motion_model``'s rv or ra): the 3-tuples (linear, angular), (x[0:3], x[3:6]) or (0, x[0:3]) — a ball's
-    linear part is 0 × its own rates (finite: gather_lanes checked them), so that no branch sits in the lane loop."""
-    n = mm[5]
-    lin, o = 1.0 if n == 6 else 0.0, n - 3
-    x = get3(Z, row, l, L)
-    return (lin * x[0], lin * x[1], lin * x[2]), get3(Z, row + o, l, L)
+    """S x of a free flyer, a ball or a planar joint at lane l, x = q̇ or q̈ from its rows ``row`` … of Z
+    (``multi_model``'s rv or ra): the 3-tuples (linear, angular) = (ml ⊙ x[0:3], ma ⊙ x[o:o + 3]) — (x[0:3], x[3:6]),
+    (0, x[0:3]), ((x0, x1, 0), (0, 0, x2)) — masks, not branches, in the lane loop (x is finite: gather_lanes
+    checked it)."""
+    ml, ma, o = mm[1], mm[2], mm[6]
+    x, y = get3(Z, row, l, L), get3(Z, row + o, l, L)
+    return (ml[0] * x[0], ml[1] * x[1], ml[2] * x[2]), (ma[0] * y[0], ma[1] * y[1], ma[2] * y[2])
 
 
 @njit(cache=True, inline="always")
@@ -315,7 +349,12 @@ def slide_lanes(i, mdl, B, Z):
 
 @njit(cache=True, inline="always")
 def quat_placement_lanes(i, mdl, B, Z):
-    """``quat_placement_lane`` for every lane of the block."""
-    pm = quat_model(i, mdl)
-    for l in range(LANES):
-        quat_placement_lane(pm, B, Z, l, LANES)
+    """``quat_placement_lane`` for every lane of the block; a planar joint's, ``planar_placement_lane``."""
+    if mdl.kind[i] == PLANAR:
+        pm = placement_model(i, mdl)
+        for l in range(LANES):
+            planar_placement_lane(pm, B, Z, l, LANES)
+    else:
+        qm = quat_model(i, mdl)
+        for l in range(LANES):
+            quat_placement_lane(qm, B, Z, l, LANES)

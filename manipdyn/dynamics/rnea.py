@@ -32,13 +32,14 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import HELICAL, joint_force, joint_placement, joint_velocity
+from ..joints import HELICAL, PLANAR, joint_force, joint_placement, joint_velocity
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record,
-                    motion_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, slide_lane, tree_depth)
+                    motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
+                    quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane, scatter_lanes, set3,
+                    slide_lane, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -193,7 +194,7 @@ def rnea_steps_one(I, F, q, v, a, tau):
     ``rnea_kernel``, whose status names the culprit."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
-    ok = on_lanes(mdl, nq, True)
+    ok = on_lanes(mdl, nq, True, True, True)
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
@@ -212,12 +213,14 @@ def rnea_steps_one(I, F, q, v, a, tau):
         for i in range(nb):                                             # outward, Eqs. 3–14
             j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
             par = base if j < 0 else Rec[j * RECORD + _W:j * RECORD + _W + 9]
-            mm = motion_model(i, mdl, nq)
-            if mdl.nvj[i] > 1:                                          # a free flyer or a ball joint
-                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
-                motion_lane_multi(mm, B, par, Z, 0, 1)
+            if mdl.nvj[i] > 1:                                          # a free flyer, a ball, a planar joint
+                if mdl.kind[i] == PLANAR:
+                    planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                else:
+                    quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+                motion_lane_multi(multi_model(i, mdl, nq), B, par, Z, 0, 1)
             else:
-                pm = placement_model(i, mdl)
+                mm, pm = motion_model(i, mdl, nq), placement_model(i, mdl)
                 placement_lane(pm, B, Z, 0, 1)
                 slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)                # (0 unless helical: no branch)
                 if j < 0:
@@ -228,17 +231,17 @@ def rnea_steps_one(I, F, q, v, a, tau):
         for i in range(nb - 1, -1, -1):                                 # inward, Eqs. 15–18
             j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
             to = Rec[:0] if j < 0 else Rec[j * RECORD + _F:j * RECORD + _F + 6]
-            mm = motion_model(i, mdl, nq)
-            r, n = mm[0], mm[5]
+            r, n = mdl.iv[i], mdl.nvj[i]
             if n > 1:
+                mm = multi_model(i, mdl, nq)
                 for k in range(n):
-                    torque_multi_lane(mm, k, mdl.armature[r + k], B, tau, Z, 0, 1)
+                    torque_multi_lane(mm, k, selected_row(mm, k), mdl.armature[r + k], B, tau, Z, 0, 1)
                 if j >= 0:
                     wrench_up_lane(B, to, 0, 1)
             elif j < 0:
-                torque_lane(mm, mdl.armature[r], B, tau, Z, 0, 1)
+                torque_lane(motion_model(i, mdl, nq), mdl.armature[r], B, tau, Z, 0, 1)
             else:
-                inward_lane(mm, mdl.armature[r], B, to, tau, Z, 0, 1)
+                inward_lane(motion_model(i, mdl, nq), mdl.armature[r], B, to, tau, Z, 0, 1)
         ok = first_nonfinite(tau[np.newaxis, :], 0) < 0
     if ok:
         return OK
@@ -271,7 +274,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     depend on the batch around it; it agrees with the one-state call's to rounding (tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):      # the terms, a joint the lanes do not take
+    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True, True, True):   # the terms, a joint they do not take
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
@@ -294,7 +297,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 j = parent[i]
                 par = base if j < 0 else lane_record(even, odd, depth, j, RECORD)[_W * LANES:(_W + 9) * LANES]
                 B = lane_record(even, odd, depth, i, RECORD)
-                if mdl.nvj[i] > 1 or mdl.kind[i] == HELICAL:            # a free flyer, a ball, a helical joint
+                if mdl.nvj[i] > 1 or mdl.kind[i] == HELICAL:            # a free flyer, a ball, a planar, a helical
                     outward_multi_lanes(i, mdl, B, par, Z, nq)
                 else:
                     outward_lanes(i, mdl, B, par, Z, nq)
@@ -348,16 +351,18 @@ def outward_lanes(i, mdl, B, par, Z, nq):
 
 @njit(cache=True, fastmath=CONTRACT)
 def outward_multi_lanes(i, mdl, B, par, Z, nq):
-    """``outward_lanes`` for a free flyer or a ball joint (joints.multi_dof): its quaternion placement, then
-    ``motion_lane_multi`` and ``inertial_lane``; and for a helical joint, its turn and slide (``lanes.
+    """``outward_lanes`` for a free flyer, a ball or a planar joint: its quaternion (planar: cos, sin) placement
+    (``lanes.quat_placement_lanes``), then ``motion_lane_multi`` and ``inertial_lane``; and for a helical joint, its turn and slide (``lanes.
     placement_lanes``), then ``motion_lane``. (A function of its own: the revolute and prismatic joints' loops
     compile as they would alone — with these in the same function the RNEA's lanes measured 4–7 % slower on ur5.)"""
-    mm, im = motion_model(i, mdl, nq), inertial_model(i, mdl)
+    im = inertial_model(i, mdl)
     if mdl.nvj[i] > 1:
         quat_placement_lanes(i, mdl, B, Z)
+        mm = multi_model(i, mdl, nq)
         for l in range(LANES):
             motion_lane_multi(mm, B, par, Z, l, LANES)
     else:
+        mm = motion_model(i, mdl, nq)
         placement_lanes(i, mdl, B, Z)
         if mdl.parent[i] < 0:
             mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
@@ -402,8 +407,9 @@ def motion_in(B, par, l, L):
 
 @njit(cache=True, inline="always")
 def motion_lane_multi(mm, B, par, Z, l, L):
-    """``motion_lane`` for a free flyer (n = 6, S = 1₆) or a ball joint (n = 3, S = [0; 1₃]), rows 12–20 of B at
-    lane l: S q̇ = (v_l, v_a) is (q̇[0:3], q̇[3:6]) or (0, q̇[0:3]), in the general form of Eqs. 3, 5, 6 (``outward``):
+    """``motion_lane`` for a free flyer (n = 6, S = 1₆), a ball (n = 3, S = [0; 1₃]) or a planar joint (S's rows
+    e_x, e_y | e_z), rows 12–20 of B at lane l (mm: ``lanes.multi_model``): S q̇ = (v_l, v_a) (``lanes.multi_rates``),
+    constant in the body's frame, in the general form of Eqs. 3, 5, 6 (``outward``):
     ω' = w_in + v_a,  ω̇' = ω̇_in + a_a + w_in × v_a,  v̇' = v̇_in + a_l + 2 w_in × v_l + v_a × v_l."""
     w_in, dw_in, dv_in = motion_in(B, par, l, L)
     vl, va = multi_rates(mm, Z, mm[3], l, L)
@@ -488,26 +494,37 @@ def inward_lanes(i, mdl, B, to, TB, Z, nq):
 
 @njit(cache=True, fastmath=CONTRACT)
 def inward_multi_lanes(i, mdl, B, to, TB, Z, nq):
-    """``inward_lanes`` for a free flyer or a ball joint (n velocities): τ = Sᵀ [f'; n'] + armature ⊙ q̈, the last n
-    rows of [f'; n'] (S = [0; 1_n]) plus the rotor terms (``torque_multi_lane``), then ``wrench_up_lane`` unless the
-    base takes the wrench."""
-    mm = motion_model(i, mdl, nq)
+    """``inward_lanes`` for a free flyer, a ball or a planar joint (n velocities): τ = Sᵀ [f'; n'] + armature ⊙ q̈,
+    the rows of [f'; n'] that S selects plus the rotor terms (``torque_multi_lane``), then ``wrench_up_lane`` unless
+    the base takes the wrench."""
+    mm = multi_model(i, mdl, nq)
     r, n = mm[0], mm[5]
     for k in range(n):
-        ak = mdl.armature[r + k]
+        ak, src = mdl.armature[r + k], selected_row(mm, k)
         for l in range(LANES):
-            torque_multi_lane(mm, k, ak, B, TB, Z, l, LANES)
+            torque_multi_lane(mm, k, src, ak, B, TB, Z, l, LANES)
     if mdl.parent[i] >= 0:
         for l in range(LANES):
             wrench_up_lane(B, to, l, LANES)
 
 
 @njit(cache=True, inline="always")
-def torque_multi_lane(mm, k, ak, B, TB, Z, l, L):
-    """τ's row iv_i + k of a free flyer or a ball joint (n velocities, S = [0; 1_n]) at lane l: row 6 − n + k of
-    [f'_i; n'_i] + armature · q̈ (Eqs. 17, 18 and ``rotor``); ak: the armature of that velocity."""
-    r, ra, n = mm[0], mm[4], mm[5]
-    TB[(r + k) * L + l] = B[(_F + 6 - n + k) * L + l] + ak * Z[(ra + k) * L + l]
+def torque_multi_lane(mm, k, src, ak, B, TB, Z, l, L):
+    """τ's row iv_i + k of a free flyer, a ball or a planar joint at lane l (mm: ``lanes.multi_model``): row src of
+    the record, the entry of [f'_i; n'_i] that S's row k selects (``selected_row``), + armature · q̈ (Eqs. 17, 18 and
+    ``rotor``); ak: the armature of that velocity."""
+    r, ra = mm[0], mm[4]
+    TB[(r + k) * L + l] = B[src * L + l] + ak * Z[(ra + k) * L + l]
+
+
+@njit(cache=True, inline="always")
+def selected_row(mm, k):
+    """The record's row of the entry of [f'; n'] that S's row k selects (mm: ``lanes.multi_model``): f'[k] where the
+    linear mask is 1, else n'[k] (k < 3), n'[k − 3] (k ≥ 3, a free flyer's). (Outside the lane loops: indexing the
+    masks there kept the loops scalar, the humanoid's lane RNEA 260 → 507 ns a state.)"""
+    ml = mm[1]
+    m = ml[0] if k == 0 else ml[1] if k == 1 else ml[2] if k == 2 else 1.0
+    return _F + k + (3 if m == 0.0 else 0)
 
 
 @njit(cache=True, inline="always")

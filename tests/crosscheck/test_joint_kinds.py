@@ -188,9 +188,10 @@ def test_frames_and_energies_against_pinocchio(name, seed):
 @pytest.mark.parametrize("name", TREES)
 def test_batches_over_several_lane_blocks_equal_single_calls(name):
     """N = 70 > one lane block: the screw trees run the lane steps (helical joints included) in blocks and one by
-    one; the trees with a planar joint run the scalar kernels."""
+    one; the trees with a planar joint run the RNEA's lane steps and the scalar kernels of the other algorithms."""
     model, *_ = case(name, 0)
     assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True) == name.startswith("screw")
+    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True, True, True)        # the RNEA's: every tree
     rng = np.random.default_rng(5)
     Q, V, A = md.random_configuration(model, rng, 70), rng.normal(size=(70, model.nv)), rng.normal(size=(70, model.nv))
     tau, M = md.rnea(model, Q, V, A), md.mass_matrix(model, Q)
