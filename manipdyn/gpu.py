@@ -212,7 +212,7 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         n, r = mdl.nvj[i], mdl.iv[i]
         Gi = G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N]
         if n > 1:
-            singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, s + 1, N)
+            singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, s + 1, N, False)
         else:
             singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, s, N)
         if j >= 0:
@@ -232,7 +232,7 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         if mdl.nvj[i] > 1:
             acceleration_multi(mdl.nvj[i], mdl.iv[i], B, G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N], par,
-                               QDD, s, s + 1, N)
+                               QDD, s, s + 1, N, False)
         else:
             acceleration_lane(articulated_model(i, mdl, nq), B, par, QDD, s, N)
     if not scatter_lane(QDD, out, s, N) == 0.0:

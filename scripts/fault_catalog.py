@@ -409,8 +409,8 @@ FAULTS = (
           "    for c in range(1):\n        Mb[(e + c) * L + l] = F[6 - n + c]",
           (_LANES_MULTI,), "the lane CRBA couples a column to a free flyer's or ball's first velocity only"),
     Fault("aba-lanes-multi-armature-dropped", "aba", "manipdyn/dynamics/aba.py",
-          "e, src, a = tri(r, c), inertia_row(o + r, o + c), ar[r] if r == c else 0.0",
-          "e, src, a = tri(r, c), inertia_row(o + r, o + c), 0.0",
+          "selected(n, planar, c)), ar[r] if r == c else 0.0",
+          "selected(n, planar, c)), 0.0",
           (_LANES_MULTI,), "the lane ABA leaves a free flyer's or ball's armature out of D"),
     Fault("aba-lanes-multi-handed-bias-dropped", "aba", "manipdyn/dynamics/aba.py",
           "                B[pa * L + l] += G[ya * L + l] * G[t * L + l]",
@@ -1134,6 +1134,17 @@ FAULTS = (
           "    return np.column_stack([e1, e2, np.asarray(n, float)])",
           "    return np.column_stack([e2, -np.asarray(e1), np.asarray(n, float)])",
           (_KINDS,), "the z-aligned frames turn a planar joint's plane a quarter turn (its x runs along its y)"),
+    Fault("crba-planar-ancestor-velocities-dropped", "lagrange", "manipdyn/dynamics/crba.py",
+          "            for c in range(1, mdl.nvj[j]):                # (a planar ancestor's other velocities)\n",
+          "            for c in range(1, 1):                # (a planar ancestor's other velocities)\n",
+          (_KINDS,), "the CRBA's lane steps leave the entries of a planar ancestor's y and turn unwritten"),
+    Fault("crba-one-state-planar-ancestor-dropped", "lagrange", "manipdyn/dynamics/crba.py",
+          "                        for c in range(1, nvj[j]):\n", "                        for c in range(1, 1):\n",
+          (_KINDS,), "the one-state CRBA driver leaves the entries of a planar ancestor's y and turn unwritten"),
+    Fault("aba-planar-turn-selects-angular-x", "aba", "manipdyn/dynamics/aba.py",
+          "    return (r if r < 2 else 5) if planar else 6 - n + r\n",
+          "    return (r if r < 2 else 3) if planar else 6 - n + r\n",
+          (_KINDS,), "the ABA's lane steps take a planar joint's turn about x instead of z"),
 )
 
 

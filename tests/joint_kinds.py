@@ -18,6 +18,9 @@ TREES = {
     "screw_chain": [("screw", -1), ("revolute", 0), ("screw", 1), ("prismatic", 2), ("universal", 3), ("screw", 4)],
     "screw_floating": [("floating", -1), ("screw", 0), ("spherical", 1), ("screw", 2), ("universal", 0),
                        ("prismatic", 4)],
+    # planar joints without a helical one: every algorithm's lane steps, the one-state CRBA and ABA drivers too
+    "planar_chain": [("planar", -1), ("revolute", 0), ("spherical", 1), ("planar", 2), ("prismatic", 0),
+                     ("universal", 4)],
 }
 
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
-from ..joints import joint_placement
+from ..joints import PLANAR, joint_placement
 from ..model import FRICTION_EPS, MimicModel
 from . import mimic
 from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite,
@@ -45,7 +45,8 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
                     motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3, set6, tree_depth)
+                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3,
+                    set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_kernel, rnea_lanes, rnea_steps_one
@@ -293,7 +294,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     Every lane is computed alone, so a state's q̈ does not depend on the batch around it; it agrees with the
     one-state call's to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
+    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True, True, True):
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
@@ -503,11 +504,11 @@ def articulated_multi_lanes(i, mdl, dmin, B, G, Z, child, nq):
     n, r = mdl.nvj[i], mdl.iv[i]
     rt, ar = nq + mdl.S.shape[0] + r, mdl.armature[r:r + n]
     if n == 6:                            # the trip counts known to the compiler
-        singular = articulated_multi(6, ar, rt, dmin, B, G, Z, 0, LANES, LANES)
+        singular = articulated_multi(6, ar, rt, dmin, B, G, Z, 0, LANES, LANES, False)
         if child:
             handed_multi(6, B, G, 0, LANES, LANES)
     else:
-        singular = articulated_multi(3, ar, rt, dmin, B, G, Z, 0, LANES, LANES)
+        singular = articulated_multi(3, ar, rt, dmin, B, G, Z, 0, LANES, LANES, mdl.kind[i] == PLANAR)
         if child:
             handed_multi(3, B, G, 0, LANES, LANES)
     return singular
@@ -518,13 +519,14 @@ def articulated_multi_lanes(i, mdl, dmin, B, G, Z, child, nq):
 # which the compiler vectorises them (a per-lane Cholesky inside the lane loop stayed scalar).
 
 @njit(cache=True, inline="always")
-def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L):
-    """D = Sᵀ I^A S + diag(armature) = 𝓛 𝓛ᵀ (Cholesky), Y = 𝓛⁻¹ U_iᵀ with U_i = I^A S (I^A's last n columns),
-    t = 𝓛⁻¹ u, u = τ − Sᵀ p^A (τ from Z's rows rt …), into G's rows. Returns the number of pivots not > dmin."""
-    o, bad = 6 - n, 0
+def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L, planar):
+    """D = Sᵀ I^A S + diag(armature) = 𝓛 𝓛ᵀ (Cholesky), Y = 𝓛⁻¹ U_iᵀ with U_i = I^A S (the columns of I^A that S
+    selects: ``selected``), t = 𝓛⁻¹ u, u = τ − Sᵀ p^A (τ from Z's rows rt …), into G's rows. Returns the number of
+    pivots not > dmin."""
+    bad = 0
     for r in range(n):                                      # 𝓛, entry by entry
         for c in range(r + 1):
-            e, src, a = tri(r, c), inertia_row(o + r, o + c), ar[r] if r == c else 0.0
+            e, src, a = tri(r, c), inertia_row(selected(n, planar, r), selected(n, planar, c)), ar[r] if r == c else 0.0
             for l in range(l0, l1):
                 G[e * L + l] = B[src * L + l] + a
             for k in range(c):
@@ -543,7 +545,8 @@ def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L):
     for r in range(n):                                      # [Y | t] = 𝓛⁻¹ [Uᵀ | u], forward substitution
         d = tri(r, r)
         for k in range(6):
-            y, src = _Y + 6 * r + k, inertia_row(max(o + r, k), min(o + r, k))
+            x = selected(n, planar, r)
+            y, src = _Y + 6 * r + k, inertia_row(max(x, k), min(x, k))
             for l in range(l0, l1):
                 G[y * L + l] = B[src * L + l]
             for c in range(r):
@@ -554,7 +557,7 @@ def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L):
                 G[y * L + l] /= G[d * L + l]
         t = _T + r
         for l in range(l0, l1):
-            G[t * L + l] = Z[(rt + r) * L + l] - B[(_PA + o + r) * L + l]
+            G[t * L + l] = Z[(rt + r) * L + l] - B[(_PA + selected(n, planar, r)) * L + l]
         for c in range(r):
             e, tc = tri(r, c), _T + c
             for l in range(l0, l1):
@@ -562,6 +565,13 @@ def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L):
         for l in range(l0, l1):
             G[t * L + l] /= G[d * L + l]
     return bad
+
+
+@njit(cache=True, inline="always")
+def selected(n, planar, r):
+    """The entry of [linear; angular] that velocity r of a joint of n velocities moves (S's row r is that unit row):
+    a free flyer's r, a ball's 3 + r, a planar joint's 0, 1, 5 (x, y, the turn about z in z-aligned frames)."""
+    return (r if r < 2 else 5) if planar else 6 - n + r
 
 
 @njit(cache=True, inline="always")
@@ -591,13 +601,13 @@ def acceleration_multi_lanes(i, mdl, B, G, par, QDD):
     """Pass 3 for a free flyer or a ball joint, every lane of the block: ``acceleration_multi``."""
     n, r = mdl.nvj[i], mdl.iv[i]
     if n == 6:
-        acceleration_multi(6, r, B, G, par, QDD, 0, LANES, LANES)
+        acceleration_multi(6, r, B, G, par, QDD, 0, LANES, LANES, False)
     else:
-        acceleration_multi(3, r, B, G, par, QDD, 0, LANES, LANES)
+        acceleration_multi(3, r, B, G, par, QDD, 0, LANES, LANES, mdl.kind[i] == PLANAR)
 
 
 @njit(cache=True, inline="always")
-def acceleration_multi(n, r0, B, G, par, QDD, l0, l1, L):
+def acceleration_multi(n, r0, B, G, par, QDD, l0, l1, L, planar):
     """a' = ⁱX_λ a_λ + c_i, q̈ = 𝓛⁻ᵀ (t − Y a') (D q̈ = u − U_iᵀ a') into rows r0 … of QDD, a_i = a' + S q̈."""
     for l in range(l0, l1):
         R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
@@ -621,9 +631,8 @@ def acceleration_multi(n, r0, B, G, par, QDD, l0, l1, L):
         d = tri(r, r)
         for l in range(l0, l1):
             QDD[q * L + l] /= G[d * L + l]
-    o = 6 - n
     for r in range(n):                                      # a_i = a' + S q̈
-        a, q = _A + o + r, r0 + r
+        a, q = _A + selected(n, planar, r), r0 + r
         for l in range(l0, l1):
             B[a * L + l] += QDD[q * L + l]
 
@@ -732,7 +741,7 @@ def aba_steps_one(I, F, q, v, tau, out):
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    ok = on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
+    ok = on_lanes(mdl, nq, True, False, True) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
         and first_nonfinite(tau[np.newaxis, :], 0) < 0
     if ok:
         m = 0
@@ -753,8 +762,11 @@ def aba_steps_one(I, F, q, v, tau, out):
         for i in range(nb):                                             # pass 1 (outward)
             j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
             par = base[:6] if j < 0 else Rec[j * ARTICULATED + _V:j * ARTICULATED + _V + 6]
-            if nvj[i] > 1:                                              # a free flyer or a ball joint
-                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+            if nvj[i] > 1:                                              # a free flyer, a ball, a planar joint
+                if mdl.kind[i] == PLANAR:
+                    planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                else:
+                    quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
                 velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, 0, 1)
             else:
                 placement_lane(placement_model(i, mdl), B, Z, 0, 1)
@@ -767,7 +779,8 @@ def aba_steps_one(I, F, q, v, tau, out):
             if n > 1:
                 g -= 1                                                  # (records in body order: the last first)
                 Gi, r = G[g * MULTI:(g + 1) * MULTI], mdl.iv[i]
-                singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, 0, 1, 1)
+                singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, 0, 1, 1,
+                                              mdl.kind[i] == PLANAR)
                 if j >= 0:
                     handed_multi(n, B, Gi, 0, 1, 1)
             else:
@@ -784,7 +797,8 @@ def aba_steps_one(I, F, q, v, tau, out):
                 j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
                 par = base[6:] if j < 0 else Rec[j * ARTICULATED + _A:j * ARTICULATED + _A + 6]
                 if nvj[i] > 1:
-                    acceleration_multi(nvj[i], mdl.iv[i], B, G[g * MULTI:(g + 1) * MULTI], par, out, 0, 1, 1)
+                    acceleration_multi(nvj[i], mdl.iv[i], B, G[g * MULTI:(g + 1) * MULTI], par, out, 0, 1, 1,
+                                       mdl.kind[i] == PLANAR)
                     g += 1
                 else:
                     acceleration_lane(articulated_model(i, mdl, nq), B, par, out, 0, 1)

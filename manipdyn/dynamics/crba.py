@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
-from ..joints import joint_placement
+from ..joints import PLANAR, joint_placement
 from ..errors import InputError
 from ..model import MimicModel
 from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
@@ -30,8 +30,8 @@ from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, fi
 from . import mimic
 from .arguments import check_out
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes,
-                    placement_lane, placement_lanes, placement_model, quat_model, quat_placement_lane,
-                    quat_placement_lanes, tree_depth)
+                    placement_lane, placement_lanes, placement_model, planar_placement_lane, quat_model,
+                    quat_placement_lane, quat_placement_lanes, tree_depth)
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
@@ -148,7 +148,7 @@ def crba_steps_one(I, F, q, M):
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    if on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX:
+    if on_lanes(mdl, nq, True, False, True) and x <= SINCOS_MAX:
         parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
         W, mC = np.empty((nb, 3)), np.empty(nb)
         merge_weights(parent, mdl.mass, mC, W)
@@ -159,7 +159,9 @@ def crba_steps_one(I, F, q, M):
             Z[k] = q[k]
         for i in range(nb):                                   # pass 1: placements, own inertias
             B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
-            if nvj[i] > 1:
+            if mdl.kind[i] == PLANAR:
+                planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+            elif nvj[i] > 1:
                 quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
             else:
                 placement_lane(placement_model(i, mdl), B, Z, 0, 1)
@@ -178,8 +180,10 @@ def crba_steps_one(I, F, q, M):
                 k = i
                 while parent[k] >= 0:
                     j, Bk = parent[k], Rec[k * COMPOSITE:(k + 1) * COMPOSITE]
-                    if nvj[j] == 1:
+                    if nvj[j] == 1 or mdl.kind[j] == PLANAR:  # S's rows one by one (``column_multi_lanes``)
                         column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, 0, 1)
+                        for c in range(1, nvj[j]):
+                            block_lane(column_model(i, r, j, c, mdl), Fw, Mb, 0, 1)
                     else:                                     # a free flyer or ball ancestor
                         column_up_multi_lane((iv[i] + r) * nv + iv[j], nvj[j], Bk, Fw, Mb, 0, 1)
                     k = j
@@ -210,7 +214,7 @@ def crba_lanes(I, F, Q, M):
     mass_matrix. A model with a joint the lanes do not take (``lanes.on_lanes``) runs ``crba_kernel``; so does a
     block with a non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
-    if not on_lanes(unpack(I, F), nq, True):
+    if not on_lanes(unpack(I, F), nq, True, True, True):
         return crba_kernel(I, F, Q, M)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
@@ -327,9 +331,10 @@ def column_lanes(i, mdl, m, even, odd, depth, Fw, Mb):
 @njit(cache=True, fastmath=CONTRACT)
 def column_multi_lanes(i, r, mdl, m, even, odd, depth, Fw, Mb):
     """Column iv_i + r of M (r < nv_i: the joint's velocity r) for every lane of the block, on a model with a free
-    flyer or a ball joint: ``column_lane``, the entries of the joint's own block left of the diagonal
+    flyer, a ball or a planar joint: ``column_lane``, the entries of the joint's own block left of the diagonal
     (``block_lane``), then for each ancestor ``column_up_lane`` (a free flyer or ball ancestor:
-    ``column_up_multi_lane``)."""
+    ``column_up_multi_lane``; a planar one: ``column_up_lane`` for its first velocity, ``block_lane`` for the
+    others)."""
     parent = mdl.parent
     B, cm = lane_record(even, odd, depth, i, COMPOSITE), column_model(i, r, i, r, mdl)
     for l in range(LANES):
@@ -341,10 +346,14 @@ def column_multi_lanes(i, r, mdl, m, even, odd, depth, Fw, Mb):
     k, nv = i, mdl.S.shape[0]
     while parent[k] >= 0:
         B, j = lane_record(even, odd, depth, k, COMPOSITE), parent[k]
-        if mdl.nvj[j] == 1:
+        if mdl.nvj[j] == 1 or mdl.kind[j] == PLANAR:
             cm = column_model(i, r, j, 0, mdl)
             for l in range(LANES):
                 column_up_lane(cm, B, Fw, Mb, l, LANES)
+            for c in range(1, mdl.nvj[j]):                # (a planar ancestor's other velocities)
+                cm = column_model(i, r, j, c, mdl)
+                for l in range(LANES):
+                    block_lane(cm, Fw, Mb, l, LANES)
         else:                                             # a free flyer or ball ancestor: its entries in one pass
             e = (mdl.iv[i] + r) * nv + mdl.iv[j]
             if mdl.nvj[j] == 6:
