@@ -20,8 +20,8 @@ thread runs which state, and scratch in device memory (kept between calls of the
 
 Checks as on the CPU, on the device: a non-finite input or result, or a revolute or helical angle beyond
 ``spatial.SINCOS_MAX`` (where the GPU, unlike the CPU, has no one-state fallback: reduce the angle modulo 2π),
-raises the typed error naming the first such row. Every call takes revolute, prismatic, helical, free and ball
-joints; a planar joint is refused by name.
+raises the typed error naming the first such row. Every call takes every joint of the registry: revolute,
+prismatic, helical, planar, free and ball joints.
 Tested on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, tests/gpu/), compiled to PTX where NVVM is installed,
 and timed by ``scripts/gpu_bench.py`` on a GPU.
 """
@@ -46,7 +46,7 @@ from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward
 from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
-from .joints import BALL, FREEFLYER, HELICAL, PRISMATIC, REVOLUTE, TYPE_NAMES
+from .joints import BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, TYPE_NAMES
 from .model import Model
 from .spatial import SINCOS_MAX, mul3t
 
@@ -164,8 +164,10 @@ def _crba_threads(I, F, Q, W, mC, rec, Z, Fw, Mb, M, angle, flags):
             k = i
             while mdl.parent[k] >= 0:
                 j, Bk = mdl.parent[k], rec[k * COMPOSITE * N:(k + 1) * COMPOSITE * N]
-                if mdl.nvj[j] == 1:
+                if mdl.nvj[j] == 1 or mdl.kind[j] == PLANAR:   # (crba.column_multi_lanes)
                     column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, s, N)
+                    for c in range(1, mdl.nvj[j]):
+                        block_lane(column_model(i, r, j, c, mdl), Fw, Mb, s, N)
                 else:                                     # a free flyer or ball ancestor
                     column_up_multi_lane((mdl.iv[i] + r) * nv + mdl.iv[j], mdl.nvj[j], Bk, Fw, Mb, s, N)
                 k = j
@@ -212,7 +214,8 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         n, r = mdl.nvj[i], mdl.iv[i]
         Gi = G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N]
         if n > 1:
-            singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, s + 1, N, False)
+            singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, s, s + 1, N,
+                                          mdl.kind[i] == PLANAR)
         else:
             singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, s, N)
         if j >= 0:
@@ -232,7 +235,7 @@ def _aba_threads(I, F, Q, V, T, dmin, rec, base, Z, QDD, G, slot, out, angle, fl
         B = rec[i * ARTICULATED * N:(i + 1) * ARTICULATED * N]
         if mdl.nvj[i] > 1:
             acceleration_multi(mdl.nvj[i], mdl.iv[i], B, G[slot[i] * MULTI * N:(slot[i] + 1) * MULTI * N], par,
-                               QDD, s, s + 1, N, False)
+                               QDD, s, s + 1, N, mdl.kind[i] == PLANAR)
         else:
             acceleration_lane(articulated_model(i, mdl, nq), B, par, QDD, s, N)
     if not scatter_lane(QDD, out, s, N) == 0.0:
@@ -336,16 +339,16 @@ def to_device(x, name, n, call):
 
 
 def _model(model, call):
-    """The lane steps' model (z-aligned frames, kernel_form.z_aligned) of a Model whose joints they take: revolute,
-    prismatic, helical, free and ball joints (``lanes.on_lanes``)."""
+    """The lane steps' model (z-aligned frames, kernel_form.z_aligned) of a Model whose joints they take: every kind
+    of the registry (``lanes.on_lanes`` with its planar joints; a kind outside it would be refused by name)."""
     if type(model) is not Model:
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays
-    if not on_lanes(unpack(I, F), model.nq, True):
-        taken = (REVOLUTE, PRISMATIC, HELICAL, FREEFLYER, BALL)
+    if not on_lanes(unpack(I, F), model.nq, True, True, True):
+        taken = (REVOLUTE, PRISMATIC, HELICAL, FREEFLYER, BALL, PLANAR)
         others = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in taken]
         raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take revolute, "
-                         f"prismatic, helical, free and ball joints; use the CPU call)")
+                         f"prismatic, helical, planar, free and ball joints; use the CPU call)")
     return I, F
 
 

@@ -1145,6 +1145,13 @@ FAULTS = (
           "    return (r if r < 2 else 5) if planar else 6 - n + r\n",
           "    return (r if r < 2 else 3) if planar else 6 - n + r\n",
           (_KINDS,), "the ABA's lane steps take a planar joint's turn about x instead of z"),
+    Fault("gpu-planar-turn-selects-angular-x", "aba", "manipdyn/gpu.py",
+          "                               QDD, s, s + 1, N, mdl.kind[i] == PLANAR)",
+          "                               QDD, s, s + 1, N, False)",
+          ("tests/gpu/test_gpu.py",), "the GPU's ABA driver adds a planar joint's q̈ as a ball's"),
+    Fault("gpu-crba-planar-ancestor-dropped", "lagrange", "manipdyn/gpu.py",
+          "                    for c in range(1, mdl.nvj[j]):\n", "                    for c in range(1, 1):\n",
+          ("tests/gpu/test_gpu.py",), "the GPU's CRBA driver leaves the entries of a planar ancestor's y and turn"),
 )
 
 

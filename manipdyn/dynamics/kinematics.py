@@ -163,7 +163,7 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     ``frame_kernel`` for J̇ (want = 2), a frame on the fixed base, a model with a planar joint, and a block with a
     non-finite q or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], J.shape[2]
-    if want == 2 or V.shape[1] > 0 or b < 0 or not on_lanes(unpack(I, F), nq, True):
+    if want == 2 or V.shape[1] > 0 or b < 0 or not on_lanes(unpack(I, F), nq, True, True, True):
         return frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ)
     I, F = I.copy(), F.copy()                            # the model for this call alone (as rnea.rnea_lanes)
     mdl = unpack(I, F)
@@ -224,7 +224,7 @@ def world_lanes(i, mdl, B, P, Z):
 
 @njit(cache=True, fastmath=CONTRACT)
 def world_multi_lanes(i, mdl, B, P, Z):
-    """``world_lanes`` for a free flyer or a ball joint (``lanes.quat_placement_lanes``). (A function of its own, as
+    """``world_lanes`` for a free flyer, a ball or a planar joint (``lanes.quat_placement_lanes``). (A function of its own, as
     rnea.outward_multi_lanes: with both placements in one function the arms' frame_placement lanes measured 47 → 56
     ns a state on the AAU arm.)"""
     quat_placement_lanes(i, mdl, B, Z)

@@ -49,7 +49,7 @@ for name, model in (("aau_arm", md.load_urdf({aau!r})), ("tree", tree_model(_tre
         for frame in ("local", "world"):
             out[f"{{name}}/{{N}}"]["rnea_f_ext_" + frame] = gpu.rnea(model, dq, V, A, f_ext=fx_gpu,
                                                                     f_ext_frame=frame).copy_to_host().tolist()
-for name in ("screw_chain", "screw_floating"):
+for name in ("screw_chain", "screw_floating", "planar_root", "planar_chain"):
     model = screw_model(name)
     Q = random_states(model, 7, np.random.default_rng(7))[0]
     tip = model.body_names[-1]
@@ -58,7 +58,8 @@ for name in ("screw_chain", "screw_floating"):
                                  frame_J=gpu.frame_jacobian(model, Q, tip).copy_to_host().tolist(),
                                  frame_J_local=gpu.frame_jacobian(model, Q, tip, reference="local").copy_to_host().tolist())
 for name, model in (("floating", floating_model()), ("ball", ball_model()), ("screw_chain", screw_model("screw_chain")),
-                    ("screw_floating", screw_model("screw_floating"))):
+                    ("screw_floating", screw_model("screw_floating")), ("planar_root", screw_model("planar_root")),
+                    ("planar_chain", screw_model("planar_chain"))):
     for N in (1, 7):
         Q, V, A = random_states(model, N, np.random.default_rng(N))
         dq = cuda.to_device(Q)
@@ -96,8 +97,6 @@ fails("f_ext_nan", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]
 fails("f_ext_name", lambda: gpu.rnea(model, Q, V, A, f_ext={{"no_such_frame": (np.zeros(3), np.zeros(3))}}))
 fails("f_ext_rows", lambda: gpu.rnea(model, Q, V, A, f_ext={{model.body_names[-1]: (cuda.to_device(f[:4]),
                                                                                     np.zeros(3))}}))
-planar = screw_model("planar_root")
-fails("planar", lambda: gpu.frame_placement(planar, md.neutral(planar)[None], planar.body_names[-1]))
 out["errors"] = errors
 print(json.dumps(out))
 """
@@ -205,16 +204,17 @@ def test_gpu_calls_match_the_cpu_kernels(probe, name, N):
         assert err(got["rnea_f_ext_" + frame], got["rnea"]) > 1e-3                       # the wrenches count
 
 
-@pytest.mark.parametrize("name", ["floating", "ball", "screw_chain", "screw_floating"])
+@pytest.mark.parametrize("name", ["floating", "ball", "screw_chain", "screw_floating", "planar_root", "planar_chain"])
 @pytest.mark.parametrize("N", [1, 7])
-def test_gpu_takes_free_flyers_ball_and_helical_joints(probe, name, N):
+def test_gpu_takes_free_flyers_ball_helical_and_planar_joints(probe, name, N):
     """The multi-dof lane steps (lanes.quat_placement_lane, rnea.motion_lane_multi and torque_multi_lane, crba's
     columns of a multi-dof joint, aba.articulated_multi, handed_multi, acceleration_multi) and a helical joint's
-    (lanes.slide_lane) driven one thread per state give the CPU's numbers (whose lanes are held to Pinocchio:
+    (lanes.slide_lane) and a planar joint's (lanes.planar_placement_lane, the masks of lanes.multi_rates, aba.selected)
+    driven one thread per state give the CPU's numbers (whose lanes are held to Pinocchio:
     tests/batch/test_lanes_multi_dof.py, tests/crosscheck/test_joint_kinds.py)."""
     model = {"floating": floating_model, "ball": ball_model}.get(name, lambda: screw_model(name))()
-    assert name.startswith("screw") and (model.kind == md.HELICAL).sum() >= 2 or \
-        model.nq > model.nv and model.armature.all()
+    assert (model.kind == md.HELICAL).sum() >= 2 if name.startswith("screw") else (model.kind == md.PLANAR).sum() == 2 \
+        if name.startswith("planar") else model.nq > model.nv and model.armature.all()
     Q, V, A = random_states(model, N, np.random.default_rng(N))
     got = {k: np.array(x) for k, x in probe[f"{name}/{N}"].items()}
     assert_close(got["rnea"], md.rnea(model, Q, V, A), 1e-14, "rnea")                        # measured ≤ 4.4e-16
@@ -228,8 +228,8 @@ def test_gpu_takes_free_flyers_ball_and_helical_joints(probe, name, N):
     assert_close(got["aba"], md.aba(model, Q, V, A), 1e-14 * cond, "q̈")
 
 
-@pytest.mark.parametrize("name", ["screw_chain", "screw_floating"])
-def test_gpu_frames_take_free_flyers_ball_and_helical_joints(probe, name):
+@pytest.mark.parametrize("name", ["screw_chain", "screw_floating", "planar_root", "planar_chain"])
+def test_gpu_frames_take_every_joint_kind(probe, name):
     """The frame drivers (lanes.body_placement_lane: a helical joint's turn and slide, a free flyer's or ball's
     quaternion; a Jacobian column per velocity) give the CPU's placement and Jacobian."""
     model = screw_model(name)
@@ -253,8 +253,7 @@ def test_gpu_frames_take_free_flyers_ball_and_helical_joints(probe, name):
     ("float32", "InputError", ["float64", "float32"]),
     ("f_ext_nan", "InputError", ["rnea on the GPU, row 3", "f_ext", "force"]),
     ("f_ext_name", "InputError", ["no_such_frame"]),
-    ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"]),
-    ("planar", "InputError", ["do not take the joints j0 (planar), j4 (planar)", "free and ball joints"])])
+    ("f_ext_rows", "InputError", ["force has 4 rows, q has 9"])])
 def test_gpu_errors_name_the_row_and_the_entry(probe, key, kind, words):
     got = probe["errors"][key]
     assert got is not None and got[0] == kind, got

@@ -94,7 +94,7 @@ def test_what_pinocchio_cannot_read_is_said(tmp_path):
         Reference(md.load_urdf(path), path)
 
 
-def test_the_gpu_and_mjcf_export_name_the_kinds_they_lack():
+def test_the_mjcf_export_names_the_kinds_it_lacks_and_the_gpu_takes_every_kind():
     model = md.load_urdf_string(robot(joint("f", "floating", "world", "a"), SCREW))
     with pytest.raises(md.ModelError, match="'s' is a helical joint, which MJCF has no type for"):
         from manipdyn.io.mjcf import to_mjcf
@@ -102,5 +102,5 @@ def test_the_gpu_and_mjcf_export_name_the_kinds_they_lack():
     from manipdyn.gpu import _model
     _model(model, "rnea")                                    # a free flyer and a helical joint: on the lanes
     planar = md.load_urdf_string(robot(joint("p", "planar", "world", "a", '<axis xyz="0 0 1"/>'), SCREW))
-    with pytest.raises(md.InputError, match=r"do not take the joints p \(planar\)"):
-        _model(planar, "frame_placement")
+    I, F = _model(planar, "frame_placement")               # a planar joint too (tests/gpu: its numbers)
+    assert I is planar.kernel.lane_arrays[0] and F is planar.kernel.lane_arrays[1]
