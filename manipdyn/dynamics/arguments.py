@@ -248,7 +248,7 @@ def check_out(call, result, out, shape, inputs=()):
     the result's shape (any memory layout). Returns it; InputError naming what is wrong otherwise. ``inputs``:
     the arrays of a batch, which ``out`` may not share memory with (a batch kernel writes a block's results before
     it reads the next block's states); one state's kernels read every input before they write ``out``, so one
-    state's ``out`` may be one of its inputs (tests/unit/test_out.py) and is not checked for it (~0.2 µs a
+    state's ``out`` may be one of its inputs (tests/batch/test_out.py) and is not checked for it (~0.2 µs a
     check). (Written for speed: a one-state call with out= runs it.)"""
     if type(out) is _ND and out.dtype is _F64 and out.shape == shape and out.flags.writeable:
         for x in inputs:

@@ -143,9 +143,9 @@ def on_lanes(mdl, nq, multi=False, helical=True, planar=False):
     """True when the lane steps apply to the model (nq: a state's q entries): every joint is revolute, prismatic or
     helical about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, kernel_form.z_aligned) —
     or, for a kernel whose steps take them (``multi``), a free flyer or a ball joint (``joints.multi_dof``); without
-    ``helical``, no helical joint; with ``planar`` (the RNEA's steps), a planar joint in the x–y plane too. A joint
-    the steps do not take sends the batch to the lane kernel's scalar kernel, which takes every joint of the
-    registry."""
+    ``helical``, no helical joint; with ``planar``, a planar joint in the x–y plane too (every algorithm's steps take
+    it; the default False leaves it out of the checks of a kernel that has no multi-dof steps). A joint the steps do
+    not take sends the batch to the lane kernel's scalar kernel, which takes every joint of the registry."""
     nb = mdl.parent.shape[0]
     ok = True
     for i in range(nb):

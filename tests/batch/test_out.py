@@ -85,15 +85,12 @@ def test_out_holds_pinocchios_numbers(robot, name):
             assert err(mine[0], ref) <= TOL and err(mine[1], ref) <= TOL, (name, s)
 
 
-@pytest.mark.parametrize("name", ["rnea", "aba", "forward_dynamics cholesky", "nonlinear_effects", "gravity_torques",
-                                  "joint_torque_regressor"])
+@pytest.mark.parametrize("name", ["rnea", "aba", "forward_dynamics cholesky", "nonlinear_effects", "gravity_torques"])
 def test_one_states_out_may_be_its_own_input(robot, name):
     """The one-state kernels read every input before they write: out = v (or q, a, τ) gives the same numbers."""
     model, _, _, Q, V, A = robot
     ours = CALLS[name][0]
     want = ours(model, Q[5], V[5], A[5])
-    if want.shape != (model.nv,):
-        return                                                       # (the regressor: nv × 10 nb)
     for j in ([0] if model.nq == model.nv else []) + [1, 2]:        # (q: when it has nv entries)
         x = [Q[5].copy(), V[5].copy(), A[5].copy()]
         got = ours(model, *x, out=x[j])
@@ -125,10 +122,9 @@ def test_a_wrong_out_is_refused_by_name():
         md.mass_matrix(model, Q, out=np.empty((N, nv)))
     with pytest.raises(md.InputError, match="mass_matrix: out must .* shape \\(5, 5\\)"):
         md.mass_matrix(model, Q[0], method="lagrange", out=np.empty((nv, nv + 1)))
-    for out in (V, V[::-1], np.concatenate([V, A], 1)[:, :nv]):
-        if np.shares_memory(out, V):
-            with pytest.raises(md.InputError, match="rnea: out shares memory with an input array of the batch"):
-                md.rnea(model, Q, V, A, out=out)
+    for out in (V, V[::-1], A):
+        with pytest.raises(md.InputError, match="rnea: out shares memory with an input array of the batch"):
+            md.rnea(model, Q, V, A, out=out)
     with pytest.raises(md.InputError, match="aba: out shares memory"):
         md.aba(model, Q, V, A, out=A, f_ext={"link5": (np.ones(3), np.ones(3))})
     with pytest.raises(md.InputError, match=r"q\[3, 1\]"):                      # a bad state, as without out=
