@@ -37,13 +37,14 @@ def _inertia(rng):
     return Q @ np.diag(d) @ Q.T
 
 
-def kinds_robot(name, seed=0, gravity=(0.0, 0.0, -9.81)):
-    """(urdf text, Pinocchio model) of TREES[name] with seeded random placements, axes, masses and inertias."""
+def kinds_robot(name, seed=0, gravity=(0.0, 0.0, -9.81), tree=None):
+    """(urdf text, Pinocchio model) of TREES[name] (or of ``tree``, a list in TREES' form) with seeded random
+    placements, axes, masses and inertias."""
     rng = np.random.default_rng(seed)
     pm = pin.Model()
     pm.gravity.linear = np.array(gravity, float)
     links, joints, ids = ['<link name="world"/>'], [], []
-    for k, (kind, parent) in enumerate(TREES[name]):
+    for k, (kind, parent) in enumerate(TREES[name] if tree is None else tree):
         xyz, rpy = rng.uniform(-0.3, 0.3, 3), rng.uniform(-np.pi, np.pi, 3)
         mass, com, I = rng.uniform(0.5, 2.0), rng.uniform(-0.2, 0.2, 3), _inertia(rng)
         axis = _unit(rng)
