@@ -35,14 +35,14 @@ from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, accele
                            articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
 from .dynamics.lanes import (body_placement_lane, gather_lane, get3, get_rotation, inertial_model, motion_model,
-                             multi_model, on_lanes, scatter_lane)
+                             multi_model, on_lanes, scatter_lane, selected)
 from .dynamics.model_arrays import unpack
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
                             merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
 from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
-                            selected_row, torque_multi_lane, wrench_up_lane)
+                            torque_multi_lane, wrench_up_lane)
 from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
@@ -125,7 +125,8 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
         if mdl.nvj[i] > 1:
             mm = multi_model(i, mdl, nq)
             for k in range(mdl.nvj[i]):
-                torque_multi_lane(mm, k, selected_row(mm, k), mdl.armature[mdl.iv[i] + k], B, TB, Z, s, N)
+                src = _F + selected(mm[5], mdl.kind[i] == PLANAR, k)
+                torque_multi_lane(mm, k, src, mdl.armature[mdl.iv[i] + k], B, TB, Z, s, N)
             if j >= 0:
                 wrench_up_lane(B, to, s, N)
         else:
@@ -344,7 +345,7 @@ def _model(model, call):
     if type(model) is not Model:
         raise InputError(f"{call}: the GPU kernels take a Model, not a {type(model).__name__}")
     I, F = model.kernel.lane_arrays
-    if not on_lanes(unpack(I, F), model.nq, True, True, True):
+    if not on_lanes(unpack(I, F), model.nq, True):
         taken = (REVOLUTE, PRISMATIC, HELICAL, FREEFLYER, BALL, PLANAR)
         others = [f"{n} ({TYPE_NAMES[int(k)]})" for n, k in zip(model.joint_names, model.kind) if k not in taken]
         raise InputError(f"{call}: the GPU kernels do not take the joints {', '.join(others)} (they take revolute, "

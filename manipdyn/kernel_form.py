@@ -45,7 +45,8 @@ class KernelForm:
     frame_rows: MappingProxyType   # frame name -> (body, X (4, 3) = [R; p]: the frame in its body)
     one_state_rows: MappingProxyType  # (frame name, reference) -> X (5, 3) = [R; p; (body, 0, local)]
     wrench_rows: MappingProxyType  # (frame name, "local" | "world") -> P (13,) = [R (9, row by row: the frame's
-    #                                axes into the body's, identity for "world"); origin in the body (3); body]
+    #                                axes into the body's z-aligned axes, identity for "world"); origin in those axes
+    #                                (3); body]: one wrench of a one-state call, for the lane arrays (z_aligned)
     closure_ints: np.ndarray   # (nc, 3) int64 [parent body, child body, number of orientation pairs (−1: coupling)]
     closure_floats: np.ndarray  # (nc, 24) [pp (3), pc (3), a_1..a_3 (9), b_1..b_3 (9)]; a coupling: [ratio, 0, ...]
     closure_labels: tuple      # (m,) the name of every closure row ("<closure>.x|y|z|r1|r2|r3|c")
@@ -74,10 +75,13 @@ class KernelForm:
             frame_rows[name] = (int(fr.body), X)
             for reference in ("local_world_aligned", "local"):
                 one_state[name, reference] = np.vstack([X, [float(fr.body), 0.0, float(reference == "local")]])
-            for axes in ("local", "world"):
-                wrench[name, axes] = np.concatenate([(R if axes == "local" else np.eye(3)).ravel(), p, [float(fr.body)]])
         ints, floats, labels = _closure_form(model.constraints)
         *turned, turn = z_aligned(model)
+        for name, fr in model.frames.items():
+            Ct = turn[fr.body].T if fr.body >= 0 else np.eye(3)       # body axes -> its z-aligned axes
+            for axes in ("local", "world"):
+                wrench[name, axes] = np.concatenate([(Ct @ fr.R if axes == "local" else np.eye(3)).ravel(),
+                                                     Ct @ np.asarray(fr.p, float), [float(fr.body)]])
         Fz = _floats(model, *turned)
         lane_frames = {}
         for name, (b, X) in frame_rows.items():

@@ -45,8 +45,8 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
                     motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, set3,
-                    set6, tree_depth)
+                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, selected,
+                    set3, set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_kernel, rnea_lanes, rnea_steps_one
@@ -294,7 +294,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     Every lane is computed alone, so a state's q̈ does not depend on the batch around it; it agrees with the
     one-state call's to rounding (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True, True, True):
+    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
         return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
@@ -568,13 +568,6 @@ def articulated_multi(n, ar, rt, dmin, B, G, Z, l0, l1, L, planar):
 
 
 @njit(cache=True, inline="always")
-def selected(n, planar, r):
-    """The entry of [linear; angular] that velocity r of a joint of n velocities moves (S's row r is that unit row):
-    a free flyer's r, a ball's 3 + r, a planar joint's 0, 1, 5 (x, y, the turn about z in z-aligned frames)."""
-    return (r if r < 2 else 5) if planar else 6 - n + r
-
-
-@njit(cache=True, inline="always")
 def handed_multi(n, B, G, l0, l1, L):
     """In place: Iᵃ = I^A − Yᵀ Y and pᵃ = p^A + Iᵃ c + Yᵀ t (``handed_lane`` for n velocities)."""
     for a in range(6):
@@ -741,7 +734,7 @@ def aba_steps_one(I, F, q, v, tau, out):
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    ok = on_lanes(mdl, nq, True, False, True) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
+    ok = on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
         and first_nonfinite(tau[np.newaxis, :], 0) < 0
     if ok:
         m = 0
@@ -849,7 +842,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     for s0 in range(0, N, C):
         s1 = min(N, s0 + C)
         n = s1 - s0
-        code = crba_lanes(I, F, Q[s0:s1], M[:n, :, :]) if lanes else crba_steps_one(I, F, Q[s0], M[0])
+        code = crba_lanes(I, F, Q[s0:s1], M[:n, :, :]) if lanes else crba_steps_one(I, F, Q[s0], M[0][:, :])
         if code <= -2 - nb:                                   # a non-finite M: reported in its state's q̈
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
@@ -858,7 +851,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
                                world, H[:n, :], T0)
         elif code == -1 and not lanes:
-            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0], H[0])
+            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], H[0][::1])   # (views: the one-state entry's layout)
         elif code == -1:
             code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, H[:n, :], T0)
         if code != -1:                                        # a non-finite input, or h: in out, where the
@@ -891,9 +884,8 @@ def cholesky_one(I, F, q, v, tau, out):
 
 @njit(cache=True)
 def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
-    """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1 (the model
-    as it is: M by ``crba.crba_steps_one``, which runs the scalar CRBA unless the model's axes are z; h by
-    ``rnea.rnea_kernel``)."""
+    """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1, (I, F) and
+    the wrench in z-aligned frames (M by ``crba.crba_steps_one``; h by ``rnea.rnea_kernel``)."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], np.bool_(False))

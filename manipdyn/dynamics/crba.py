@@ -148,7 +148,7 @@ def crba_steps_one(I, F, q, M):
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
-    if on_lanes(mdl, nq, True, False, True) and x <= SINCOS_MAX:
+    if on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX:
         parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
         W, mC = np.empty((nb, 3)), np.empty(nb)
         merge_weights(parent, mdl.mass, mC, W)
@@ -214,7 +214,7 @@ def crba_lanes(I, F, Q, M):
     mass_matrix. A model with a joint the lanes do not take (``lanes.on_lanes``) runs ``crba_kernel``; so does a
     block with a non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
-    if not on_lanes(unpack(I, F), nq, True, True, True):
+    if not on_lanes(unpack(I, F), nq, True):
         return crba_kernel(I, F, Q, M)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)

@@ -163,7 +163,7 @@ def frame_lanes(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ):
     ``frame_kernel`` for J̇ (want = 2), a frame on the fixed base, a model with a planar joint, and a block with a
     non-finite q or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], J.shape[2]
-    if want == 2 or V.shape[1] > 0 or b < 0 or not on_lanes(unpack(I, F), nq, True, True, True):
+    if want == 2 or V.shape[1] > 0 or b < 0 or not on_lanes(unpack(I, F), nq, True):
         return frame_kernel(I, F, Q, V, b, Rl, pl, want, local, Rf, pf, J, dJ)
     I, F = I.copy(), F.copy()                            # the model for this call alone (as rnea.rnea_lanes)
     mdl = unpack(I, F)

@@ -139,18 +139,18 @@ def lane_record(even, odd, depth, i, rows):
 
 
 @njit(cache=True, inline="always")
-def on_lanes(mdl, nq, multi=False, helical=True, planar=False):
+def on_lanes(mdl, nq, multi=False, helical=True):
     """True when the lane steps apply to the model (nq: a state's q entries): every joint is revolute, prismatic or
     helical about z — the z-aligned form the batch routes pass (``Model.kernel.lane_arrays``, kernel_form.z_aligned) —
-    or, for a kernel whose steps take them (``multi``), a free flyer or a ball joint (``joints.multi_dof``); without
-    ``helical``, no helical joint; with ``planar``, a planar joint in the x–y plane too (every algorithm's steps take
-    it; the default False leaves it out of the checks of a kernel that has no multi-dof steps). A joint the steps do
-    not take sends the batch to the lane kernel's scalar kernel, which takes every joint of the registry."""
+    or, for a kernel whose steps take several velocities a joint (``multi``: every algorithm's), a free flyer, a ball
+    joint (``joints.multi_dof``) or a planar joint in the x–y plane; without ``helical``, no helical joint. A joint
+    the steps do not take sends the batch to the lane kernel's scalar kernel, which takes every joint of the
+    registry."""
     nb = mdl.parent.shape[0]
     ok = True
     for i in range(nb):
         k = mdl.kind[i]
-        if k == REVOLUTE or k == PRISMATIC or (helical and k == HELICAL) or (planar and k == PLANAR):
+        if k == REVOLUTE or k == PRISMATIC or (helical and k == HELICAL) or (multi and k == PLANAR):
             ok &= mdl.axis[i, 0] == 0.0 and mdl.axis[i, 1] == 0.0 and mdl.axis[i, 2] == 1.0
         else:
             ok &= multi and multi_dof(k)
@@ -266,6 +266,15 @@ def motion_model(i, mdl, nq):
     r, nv = mdl.iv[i], mdl.S.shape[0]
     return r, (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2]), (mdl.S[r, 3], mdl.S[r, 4], mdl.S[r, 5]), nq + r, \
         nq + nv + r, mdl.nvj[i]
+
+
+@njit(cache=True, inline="always")
+def selected(n, planar, r):
+    """The entry of [linear; angular] that velocity r of a joint of n velocities moves (S's row r is that unit row):
+    a free flyer's r, a ball's 3 + r, a planar joint's 0, 1, 5 (x, y, the turn about z in z-aligned frames). (Called
+    outside the lane loops: reading S's masks inside them kept the loops scalar, the humanoid's lane RNEA 260 → 507
+    ns a state.)"""
+    return (r if r < 2 else 5) if planar else 6 - n + r
 
 
 @njit(cache=True, inline="always")

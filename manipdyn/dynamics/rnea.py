@@ -38,8 +38,8 @@ from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put,
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record,
                     motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane, scatter_lanes, set3,
-                    slide_lane, tree_depth)
+                    quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane, scatter_lanes, selected,
+                    set3, slide_lane, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -194,7 +194,7 @@ def rnea_steps_one(I, F, q, v, a, tau):
     ``rnea_kernel``, whose status names the culprit."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
-    ok = on_lanes(mdl, nq, True, True, True)
+    ok = on_lanes(mdl, nq, True)
     x = 0.0
     for k in range(nq):
         x += abs(q[k])
@@ -235,7 +235,7 @@ def rnea_steps_one(I, F, q, v, a, tau):
             if n > 1:
                 mm = multi_model(i, mdl, nq)
                 for k in range(n):
-                    torque_multi_lane(mm, k, selected_row(mm, k), mdl.armature[r + k], B, tau, Z, 0, 1)
+                    torque_multi_lane(mm, k, _F + selected(n, mdl.kind[i] == PLANAR, k), mdl.armature[r + k], B, tau, Z, 0, 1)
                 if j >= 0:
                     wrench_up_lane(B, to, 0, 1)
             elif j < 0:
@@ -274,7 +274,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
     depend on the batch around it; it agrees with the one-state call's to rounding (tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True, True, True):   # the terms, a joint they do not take
+    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):   # the terms, a joint they do not take
         return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
@@ -500,7 +500,7 @@ def inward_multi_lanes(i, mdl, B, to, TB, Z, nq):
     mm = multi_model(i, mdl, nq)
     r, n = mm[0], mm[5]
     for k in range(n):
-        ak, src = mdl.armature[r + k], selected_row(mm, k)
+        ak, src = mdl.armature[r + k], _F + selected(n, mdl.kind[i] == PLANAR, k)
         for l in range(LANES):
             torque_multi_lane(mm, k, src, ak, B, TB, Z, l, LANES)
     if mdl.parent[i] >= 0:
@@ -511,20 +511,10 @@ def inward_multi_lanes(i, mdl, B, to, TB, Z, nq):
 @njit(cache=True, inline="always")
 def torque_multi_lane(mm, k, src, ak, B, TB, Z, l, L):
     """τ's row iv_i + k of a free flyer, a ball or a planar joint at lane l (mm: ``lanes.multi_model``): row src of
-    the record, the entry of [f'_i; n'_i] that S's row k selects (``selected_row``), + armature · q̈ (Eqs. 17, 18 and
+    the record, the entry of [f'_i; n'_i] that S's row k selects (``lanes.selected``), + armature · q̈ (Eqs. 17, 18 and
     ``rotor``); ak: the armature of that velocity."""
     r, ra = mm[0], mm[4]
     TB[(r + k) * L + l] = B[src * L + l] + ak * Z[(ra + k) * L + l]
-
-
-@njit(cache=True, inline="always")
-def selected_row(mm, k):
-    """The record's row of the entry of [f'; n'] that S's row k selects (mm: ``lanes.multi_model``): f'[k] where the
-    linear mask is 1, else n'[k] (k < 3), n'[k − 3] (k ≥ 3, a free flyer's). (Outside the lane loops: indexing the
-    masks there kept the loops scalar, the humanoid's lane RNEA 260 → 507 ns a state.)"""
-    ml = mm[1]
-    m = ml[0] if k == 0 else ml[1] if k == 1 else ml[2] if k == 2 else 1.0
-    return _F + k + (3 if m == 0.0 else 0)
 
 
 @njit(cache=True, inline="always")

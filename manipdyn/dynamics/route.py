@@ -199,6 +199,7 @@ def route(call, names, result, shape, one, batch, **options):
                 k = fast(model, q, v, a)
                 w = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
                 if w is not None:                               # 2. one state, one wrench: straight in
+                    k = model.kernel.lane_arrays                # (every route with wrench_one has one_lanes)
                     out = np.empty(model.kernel.result_shapes[shape]) if out is None else \
                         check_out(r.call, r.result, out, model.kernel.result_shapes[shape])
                     if wrench_one.call(k[0], k[1], q, v, a, w[0], w[1], w[2], f_ext_frame == "world", out) == -1:
@@ -220,7 +221,8 @@ class Route:
     shape     one state's result shape, one of SHAPES: "v" (nv,), "vv" (nv, nv), "regressor" (nv, 10 nb)
     one       entry of the one-state kernel: one(I, F, *state, out)
     one_lanes True: the one-state entry drives the lane steps too, and takes the model in z-aligned frames
-              (``Model.kernel.lane_arrays``); its wrench entry takes the model as it is
+              (``Model.kernel.lane_arrays``); so does its wrench entry (``Model.kernel.wrench_rows``: the
+              wrench in those frames)
     batch     entry of the batch kernel: batch(I, F, *states, [X, body, point, world,] out, *tail)
     tail      constant arguments after out (rnea's empty per-link terms)
     wrenches  True: the call takes f_ext and f_ext_frame, passed to the batch kernel as ``arguments.wrench_rows``
@@ -237,6 +239,9 @@ class Route:
         self.call, self.names, self.result, self.shape = call, tuple(names), result, shape
         self.one, self.batch, self.tail, self.lanes, self.one_lanes = one, batch, tuple(tail), lanes, one_lanes
         self.wrenches, self.wrench_one, self.mimic = wrenches, wrench_one, mimic
+        if wrench_one is not None and not one_lanes:
+            raise ValueError(f"{call}: a wrench entry takes the lane arrays (Model.kernel.wrench_rows' frames): "
+                             f"one_lanes=True")
 
     def by_name(self, a, tau):
         """The third state argument given as ``tau=...`` (aba's and forward_dynamics' name for it)."""

@@ -188,12 +188,10 @@ def test_frames_and_energies_against_pinocchio(name, seed):
 @pytest.mark.parametrize("name", TREES)
 def test_batches_over_several_lane_blocks_equal_single_calls(name):
     """N = 70 > one lane block: the screw trees run the lane steps (helical joints included) in blocks and one by
-    one; the trees with a planar joint too (the one-state CRBA and ABA without a helical joint: planar_chain); the
-    frames of a tree with a planar joint run the scalar kernels."""
+    one; the trees with a planar joint too (the one-state CRBA and ABA without a helical joint: planar_chain)."""
     model, *_ = case(name, 0)
-    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True) == name.startswith("screw")
-    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True, True, True)   # rnea, crba, aba: every tree
-    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True, False, True) == (name == "planar_chain")
+    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True)       # rnea, crba, aba: every tree
+    assert on_lanes(unpack(*model.kernel.lane_arrays), model.nq, True, False) == (name == "planar_chain")
     #                                                              (the one-state CRBA's and ABA's drivers)
     rng = np.random.default_rng(5)
     Q, V, A = md.random_configuration(model, rng, 70), rng.normal(size=(70, model.nv)), rng.normal(size=(70, model.nv))
