@@ -15,7 +15,7 @@ algebra of its own). Two parts:
    - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up`` (tuples) and
      ``inertia_to_parent`` (arrays), ``block3``, ``congruence3``,
      ``mat6``, ``rigid6``, ``inertia_variation``, ``add_force_cross``, and the (m, c, I_C) form of the CRBA:
-     ``merge_shift``, ``merge_inertia``, ``inertia_motion``;
+     ``merge_shift``, ``inertia_motion``;
    - small dense solves: ``cholesky``, ``cholesky_solve``, ``spd_inverse``;
    - the one finiteness check: ``first_nonfinite`` (a vector) and ``first_nonfinite_entry`` (a matrix, row
      by row through it);
@@ -468,25 +468,12 @@ def inertia_variation(Y, v, h, P, out):
 @njit(cache=True, inline="always")
 def merge_shift(k, d):
     """k (|d|² 1 − d dᵀ), a tuple of rows: what the union of two bodies adds to their inertia about the common
-    centre of mass (``merge_inertia``; k = m₁m₂/m, d = c₁ − c₂). The diagonal is formed from sums of the other
+    centre of mass (``crba.merge_lane``; k = m₁m₂/m, d = c₁ − c₂). The diagonal is formed from sums of the other
     two squares (as ``parallel_axis``): a large offset along one axis keeps the small moment about it."""
     dx, dy, dz = d[0], d[1], d[2]
     xy, xz, yz = -k * dx * dy, -k * dx * dz, -k * dy * dz
     return ((k * (dy * dy + dz * dz), xy, xz), (xy, k * (dx * dx + dz * dz), yz),
             (xz, yz, k * (dx * dx + dy * dy)))
-
-
-@njit(cache=True, inline="always")
-def merge_inertia(w, c1, c2, I2):
-    """(c2, I2) ← the union of a body (c1; its inertia already in I2) and the composite (c2, I2), one
-    frame, about their common centre of mass: I2 += (m₁m₂/m)(|d|² 1 − d dᵀ), d = c1 − c2;
-    c2 ← (m₁ c1 + m₂ c2)/m; w = (m₁/m, m₂/m, m₁m₂/m) (``merge_shift``)."""
-    X = merge_shift(w[2], (c1[0] - c2[0], c1[1] - c2[1], c1[2] - c2[2]))
-    for a in range(3):
-        for b in range(3):
-            I2[a, b] += X[a][b]
-    for a in range(3):
-        c2[a] = w[0] * c1[a] + w[1] * c2[a]
 
 
 @njit(cache=True, inline="always")

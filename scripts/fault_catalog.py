@@ -368,9 +368,6 @@ FAULTS = (
           "c = motion_cross((jl[0], jl[1], jl[2], ja[0], ja[1], ja[2]), v)",
           ("tests/batch/test_lanes.py",), "the lane ABA's c_i = v_J × v_i instead of v_i × v_J (batches only)"),
     # joint dynamics (docs/design.md §3): armature in each kernel, one state and lanes; damping and friction signs
-    Fault("crba-armature-dropped", "lagrange", "manipdyn/dynamics/crba.py",
-          "M[r, r] += arrays.armature[r]", "M[r, r] += 0.0 * arrays.armature[r]",
-          (_JD,), "the one-state CRBA forgets the rotors: M without diag(armature)"),
     Fault("crba-lanes-armature-dropped", "lagrange", "manipdyn/dynamics/crba.py",
           "+ sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + ar\n",
           "+ sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + 0.0 * ar\n",
@@ -985,9 +982,9 @@ FAULTS = (
           "p[i, a] = p0[i, a] + b0 * px + b1 * py + b2 * pz", "p[i, a] = p0[max(i - 1, 0), a] + b0 * px + b1 * py + b2 * pz",
           (_RNEA,), "joint_placement (indexed form) reads the previous joint's origin offset"),
     Fault("crba-nonfinite-first-entry-missed", "lagrange", "manipdyn/dynamics/crba.py",
-          "        if k >= 0:\n            return bad_result(nb, s * nv * nv + k)",
-          "        if k > 0:\n            return bad_result(nb, s * nv * nv + k)",
-          ("tests/robustness/test_api_outputs.py",), "CRBA's result check lets a non-finite M[0, 0] through"),
+          "            M[b, a] = y\n            bad += y - y\n",
+          "            M[b, a] = y\n            bad += 0.0\n",
+          ("tests/robustness/test_api_outputs.py",), "the one-state CRBA's result check lets a non-finite M through"),
     Fault("first-nonfinite-entry-blind", "lagrange", "manipdyn/spatial.py",
           "bad += not (X[s, k] - X[s, k] == 0.0)", "bad += 0",
           ("tests/robustness/test_api_outputs.py",), "the result check shared by CRBA, C, the Lagrange M, the "
@@ -1065,7 +1062,8 @@ FAULTS = (
           "        return status + s0\n", "        return status\n",
           ("tests/unit/test_status.py",), "a chunk's bad state is named by its row within the chunk, not the batch"),
     Fault("status-crba-input-flat-index", "rnea", "manipdyn/dynamics/crba.py",
-          "            return bad_input(s)\n", "            return bad_input(s * nv)\n",
+          "                    return shift(code, s, nb, nv * nv)\n",
+          "                    return shift(code, s * nv, nb, nv * nv)\n",
           ("tests/unit/test_status.py",), "the CRBA reports a bad input by a flat index where every other kernel "
                                           "gives the state's row"),
 
@@ -1079,7 +1077,7 @@ FAULTS = (
                                           "index within the block"),
 
     Fault("crba-one-state-upper-triangle-dropped", "lagrange", "manipdyn/dynamics/crba.py",
-          "                M[b, a] = y\n", "                M[b, a] = 0.0\n",
+          "            M[b, a] = y\n", "            M[b, a] = 0.0\n",
           (_CRBA, _FAST), "the one-state driver of the CRBA's lane steps writes M's lower triangle only"),
 
     Fault("aba-one-state-handed-dropped", "aba", "manipdyn/dynamics/aba.py",
@@ -1140,7 +1138,7 @@ FAULTS = (
           "            for c in range(1, 1):                # (a planar ancestor's other velocities)\n",
           (_KINDS,), "the CRBA's lane steps leave the entries of a planar ancestor's y and turn unwritten"),
     Fault("crba-one-state-planar-ancestor-dropped", "lagrange", "manipdyn/dynamics/crba.py",
-          "                        for c in range(1, nvj[j]):\n", "                        for c in range(1, 1):\n",
+          "                    for c in range(1, nvj[j]):\n", "                    for c in range(1, 1):\n",
           (_KINDS,), "the one-state CRBA driver leaves the entries of a planar ancestor's y and turn unwritten"),
     Fault("aba-planar-turn-selects-angular-x", "aba", "manipdyn/dynamics/lanes.py",
           "    return (r if r < 2 else 5) if planar else 6 - n + r\n",
@@ -1167,6 +1165,14 @@ FAULTS = (
           "            dJ[0, r] = by * dz - bz * dy + ay * uz - az * uy\n",
           ("tests/crosscheck/test_kinds_closures.py",),
           "Φ̇_q q̇ drops ω × l of a joint's translation column (a screw's, a planar joint's): x rows only"),
+    Fault("crba-one-state-huge-angle-cos-sin-swapped", "lagrange", "manipdyn/dynamics/lanes.py",
+          "        turned_lane(a0, a1, a2, math.cos(Z[iq]), math.sin(Z[iq]), B, 0, 1)\n",
+          "        turned_lane(a0, a1, a2, math.sin(Z[iq]), math.cos(Z[iq]), B, 0, 1)\n",
+          ("tests/batch/test_lanes.py", _KINDS), "the one-state CRBA turns an angle beyond SINCOS_MAX by π/2 − θ"),
+    Fault("crba-one-state-helical-slide-dropped", "lagrange", "manipdyn/dynamics/lanes.py",
+          "    if mdl.kind[i] == HELICAL:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
+          "    if mdl.kind[i] == -1:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
+          (_KINDS,), "the one-state CRBA turns a screw joint without sliding it"),
 )
 
 

@@ -12,16 +12,17 @@ from ..dynamics.kernel_inputs import no_wrenches, nonfinite_input
 from ..dynamics.status import bad_input, bad_result, reading, singular_row
 from ..dynamics.model_arrays import kernel_arrays
 from ..spatial import cholesky, cholesky_solve, first_nonfinite
-from ..dynamics.crba import crba_kernel
+from ..dynamics.crba import crba_steps_one
 from ..dynamics.rnea import rnea_kernel
 from ..errors import NumericalError, SingularError
 from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
 
 
 @njit(cache=True)
-def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
+def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
-    (I, F): model_arrays.kernel_arrays, read by the closure rows, the CRBA and Newton–Euler.
+    (I, F): model_arrays.kernel_arrays, read by the closure rows and Newton–Euler; (I, Fz) the same model in z-aligned
+    frames (``Model.kernel.lane_arrays``), M by the CRBA's steps (``crba.crba_steps_one``).
     Returns its status (dynamics/status.py): a joint whose row of M has no positive pivot (M is not positive
     definite); λ's row s (after q̈'s N·nv entries) where G M⁻¹ Gᵀ is not (the kept rows G are dependent to
     working precision)."""
@@ -35,7 +36,7 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
         if nonfinite_input(Q, V, s) >= 0 or first_nonfinite(T, s) >= 0:
             return bad_input(s)
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[::1], Jc[:, :], bias[::1])   # (views: closure_kernel's layout)
-        crba_kernel(I, F, Q[s:s + 1, :], M)
+        crba_steps_one(I, Fz, Q[s], M[0])                 # (q finite: checked above)
         rnea_kernel(I, F, Q[s:s + 1, :], V[s:s + 1, :], Z, X, xb, xp, world, h, T0)   # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
@@ -85,7 +86,7 @@ def constrained_fd_kernel(I, F, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM,
     return -1
 
 
-CONSTRAINED_FD = entry(constrained_fd_kernel, *MODEL, *CLOSURE_FORM, numba.int64, A2, A2, A2, numba.float64,
+CONSTRAINED_FD = entry(constrained_fd_kernel, *MODEL, MODEL[1], *CLOSURE_FORM, numba.int64, A2, A2, A2, numba.float64,
                        numba.float64, numba.float64, A2, A2, I1)   # its compiled code (``_jit.entry``)
 
 
@@ -96,7 +97,8 @@ def constrained_fd_fast(model, Q, V, T, baumgarte=None):
     m = n_rows(model)
     alpha, beta = (0.0, 0.0) if baumgarte is None else (float(baumgarte[0]), float(baumgarte[1]))
     QDD, LAM, RANK = np.empty(V.shape), np.empty((Q.shape[0], m)), np.empty(Q.shape[0], np.int64)
-    code = CONSTRAINED_FD.call(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    code = CONSTRAINED_FD.call(I, F, model.kernel.lane_arrays[1], CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD,
+                               LAM, RANK)
     what, k = reading(code, model.njoints)
     if what == "result" and k >= QDD.size:                   # λ: G M⁻¹ Gᵀ is singular
         _overflowed(model, Q, V)

@@ -22,16 +22,16 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
-from ..joints import PLANAR, joint_placement
+from ..joints import PLANAR
 from ..errors import InputError
 from ..model import MimicModel
-from ..spatial import (SINCOS_MAX, add, block3, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
-                       inertia_motion, merge_inertia, merge_shift, mul3, rot3, sandwich3, sub)
+from ..spatial import (SINCOS_MAX, add, congruence3, first_nonfinite, first_nonfinite_entry, force_up,
+                       inertia_motion, merge_shift, mul3, sub)
 from . import mimic
 from .arguments import check_out
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3, lane_record, on_lanes,
-                    placement_lane, placement_lanes, placement_model, planar_placement_lane, quat_model,
-                    quat_placement_lane, quat_placement_lanes, tree_depth)
+                    placement_lanes, placement_model, planar_placement_lane, quat_model, quat_placement_lane,
+                    quat_placement_lanes, screw_placement_one, tree_depth)
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
@@ -57,78 +57,6 @@ def merge_weights(parent, mass, mC, W):
         mC[j] = m
 
 
-@njit(cache=True, inline="always")
-def composite_pass(arrays, q, W, R, p, cC, IC, d, tmp):
-    """Pass 1: placements (R, p)[i] of every body in its parent (joints.joint_placement), then the
-    composites C_i = (mC_i, cC_i, IC_i) in body i's frame, leaves → root (RBDA §6.2: I^c_λ += X_iᵀ I^c_i X_i,
-    carried as centre of mass and inertia about it). arrays = model_arrays.unpack(I, F); W from merge_weights."""
-    parent, kind, iq, axis, R0, p0 = arrays.parent, arrays.kind, arrays.iq, arrays.axis, arrays.R0, arrays.p0
-    pitch = arrays.pitch
-    com, inertia = arrays.com, arrays.inertia
-    for i in range(parent.shape[0]):
-        joint_placement(i, kind, iq, axis, pitch, R0, p0, q, R, p)
-    for i in range(parent.shape[0]):           # start from each body's own CoM and inertia (loops: cheaper
-        for a in range(3):                     # than slice copies of these strided views)
-            cC[i, a] = com[i, a]
-            for b in range(3):
-                IC[i, a, b] = inertia[i, a, b]
-    for i in range(parent.shape[0] - 1, -1, -1):
-        j = parent[i]
-        if j < 0:
-            continue
-        rot3(R[i], cC[i], d)                   # c_i in λ's frame: R c_i + p
-        for a in range(3):
-            d[a] += p[i, a]
-        sandwich3(R[i], IC[i], tmp, IC[j])     # R I_c,i Rᵀ: about its own centre of mass
-        merge_inertia(W[i], d, cC[j], IC[j])
-
-
-@njit(cache=True, inline="always")
-def column_pass(arrays, R, p, mC, cC, IC, M):
-    """Pass 2: M (nv, nv) column by column: for every row r of joint i's S, F = I^c_i s_r and
-    M_kr = S_kᵀ F for joint i and, F carried up, for every ancestor k (RBDA §6.2; joints.joint_force
-    written with scalars); the upper triangle mirrors the lower."""
-    parent, iv, nvj, S = arrays.parent, arrays.iv, arrays.nvj, arrays.S
-    M[:, :] = 0.0                              # bodies on different branches do not couple
-    for i in range(parent.shape[0]):
-        for r in range(iv[i], iv[i] + nvj[i]):
-            fx, fy, fz, nx, ny, nz = inertia_motion(mC[i], cC[i], block3(IC[i], 0, 0), (S[r, 0], S[r, 1], S[r, 2]),
-                                                    (S[r, 3], S[r, 4], S[r, 5]))
-            k = i
-            while True:
-                for x in range(iv[k], iv[k] + nvj[k]):     # M[r, rows of k] = S_kᵀ F
-                    M[r, x] = (S[x, 0] * fx + S[x, 1] * fy + S[x, 2] * fz
-                               + S[x, 3] * nx + S[x, 4] * ny + S[x, 5] * nz)
-                if parent[k] < 0:
-                    break
-                fx, fy, fz, nx, ny, nz = force_up(block3(R[k], 0, 0), p[k], fx, fy, fz, nx, ny, nz)
-                k = parent[k]
-    for r in range(M.shape[0]):
-        M[r, r] += arrays.armature[r]          # M + diag(armature): rotor inertia (docs/design.md §3, Joint dynamics)
-        for a in range(r):
-            M[a, r] = M[r, a]
-
-
-@njit(cache=True)
-def crba_kernel(I, F, Q, M):
-    """M(q) (N, nv, nv) for every state of Q (N, nq) by the composite-rigid-body algorithm (RBDA §6.2).
-    Returns its status (dynamics/status.py; a non-finite M: its flat index)."""
-    arrays = unpack(I, F)
-    N, nb, nv = Q.shape[0], I.shape[1], M.shape[2]
-    R3, B3, mC = np.empty((2 * nb + 1, 3, 3)), np.empty((3 * nb + 1, 3)), np.empty(nb)   # scratch, cut below
-    R, IC, tmp, p, W, cC, d = R3[:nb], R3[nb:2 * nb], R3[2 * nb], B3[:nb], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb]
-    merge_weights(arrays.parent, arrays.mass, mC, W)
-    for s in range(N):
-        if first_nonfinite(Q, s) >= 0:
-            return bad_input(s)
-        composite_pass(arrays, Q[s], W, R, p, cC, IC, d, tmp)
-        column_pass(arrays, R, p, mC, cC, IC, M[s])
-        k = first_nonfinite_entry(M[s])        # the result is finite (else an intermediate overflowed)
-        if k >= 0:
-            return bad_result(nb, s * nv * nv + k)
-    return OK
-
-
 @njit(cache=True)
 def crba_one(I, F, q, M):
     """One state: q (nq,), M (nv, nv), through the lane kernel's steps for one lane (``crba_steps_one``; (I, F) in
@@ -139,64 +67,64 @@ def crba_one(I, F, q, M):
 @njit(cache=True, fastmath=CONTRACT)
 def crba_steps_one(I, F, q, M):
     """M (nv, nv) of one state by the steps of the lane kernel (``crba_lanes``), driven for one lane (L = 1): the same
-    placement, own-inertia, merge and column steps as a batch (the GPU's driver too), in the same z-aligned frames.
-    A model the lane steps do not take (``lanes.on_lanes``; nor a helical joint: with its slide here the one-state
-    M measured 1.65 → 1.83–1.97 µs on the AAU arm, which has none), a non-finite q, an angle beyond ``spatial.SINCOS_MAX``
-    or a non-finite M runs ``crba_kernel``, whose status names the culprit."""
+    placement, own-inertia, merge and column steps as a batch (the GPU's driver too), in the same z-aligned frames
+    ((I, F) = ``Model.kernel.lane_arrays``: another form raises). An angle beyond ``spatial.SINCOS_MAX`` is placed
+    with libm's sin and cos (``lanes.screw_placement_one``). Returns its status (dynamics/status.py): a non-finite q,
+    or M's first non-finite entry (an intermediate overflowed)."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], M.shape[0]
-    x = 0.0
+    if not on_lanes(mdl, nq, True):
+        raise ValueError("the CRBA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
+    if first_nonfinite(q[np.newaxis, :], 0) >= 0:
+        return bad_input(0)
+    parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
+    W, mC = np.empty((nb, 3)), np.empty(nb)
+    merge_weights(parent, mdl.mass, mC, W)
+    S = np.zeros(nb * COMPOSITE + nq + 6 + nv * nv)   # the bodies' records, q, the carried wrench, M's entries
+    Rec, Z = S[:nb * COMPOSITE], S[nb * COMPOSITE:nb * COMPOSITE + nq]
+    Fw, Mb = S[nb * COMPOSITE + nq:nb * COMPOSITE + nq + 6], S[nb * COMPOSITE + nq + 6:]
     for k in range(nq):
-        x += abs(q[k])
-    if on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX:
-        parent, iv, nvj = mdl.parent, mdl.iv, mdl.nvj
-        W, mC = np.empty((nb, 3)), np.empty(nb)
-        merge_weights(parent, mdl.mass, mC, W)
-        S = np.zeros(nb * COMPOSITE + nq + 6 + nv * nv)   # the bodies' records, q, the carried wrench, M's entries
-        Rec, Z = S[:nb * COMPOSITE], S[nb * COMPOSITE:nb * COMPOSITE + nq]
-        Fw, Mb = S[nb * COMPOSITE + nq:nb * COMPOSITE + nq + 6], S[nb * COMPOSITE + nq + 6:]
-        for k in range(nq):
-            Z[k] = q[k]
-        for i in range(nb):                                   # pass 1: placements, own inertias
-            B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
-            if mdl.kind[i] == PLANAR:
-                planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
-            elif nvj[i] > 1:
-                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
-            else:
-                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
-            own_inertia_lane(own_inertia_model(i, mdl), B, 0, 1)
-        for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
-            j = parent[i]
-            if j >= 0:
-                merge_lane((W[i, 0], W[i, 1], W[i, 2]), Rec[i * COMPOSITE:(i + 1) * COMPOSITE],
-                           Rec[j * COMPOSITE:(j + 1) * COMPOSITE], 0, 1)
-        for i in range(nb):                                   # pass 2: columns iv_i + r of M
-            B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
-            for r in range(nvj[i]):
-                column_lane(column_model(i, r, i, r, mdl), mC[i], B, Fw, Mb, 0, 1)
-                for c in range(r):
-                    block_lane(column_model(i, r, i, c, mdl), Fw, Mb, 0, 1)
-                k = i
-                while parent[k] >= 0:
-                    j, Bk = parent[k], Rec[k * COMPOSITE:(k + 1) * COMPOSITE]
-                    if nvj[j] == 1 or mdl.kind[j] == PLANAR:  # S's rows one by one (``column_multi_lanes``)
-                        column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, 0, 1)
-                        for c in range(1, nvj[j]):
-                            block_lane(column_model(i, r, j, c, mdl), Fw, Mb, 0, 1)
-                    else:                                     # a free flyer or ball ancestor
-                        column_up_multi_lane((iv[i] + r) * nv + iv[j], nvj[j], Bk, Fw, Mb, 0, 1)
-                    k = j
-        bad = 0.0
-        for a in range(nv):                                   # the lower triangle, mirrored
-            for b in range(a + 1):
-                y = Mb[a * nv + b]
-                M[a, b] = y
-                M[b, a] = y
-                bad += y - y
-        if bad == 0.0:
-            return OK
-    return crba_kernel(I, F, q[np.newaxis, :], M[np.newaxis, :, :])
+        Z[k] = q[k]
+    for i in range(nb):                                   # pass 1: placements, own inertias
+        B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
+        if mdl.kind[i] == PLANAR:
+            planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+        elif nvj[i] > 1:
+            quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+        else:
+            screw_placement_one(i, mdl, B, Z)
+        own_inertia_lane(own_inertia_model(i, mdl), B, 0, 1)
+    for i in range(nb - 1, -1, -1):                       # leaves → root: C_λ(i) ← C_λ(i) ∪ C_i
+        j = parent[i]
+        if j >= 0:
+            merge_lane((W[i, 0], W[i, 1], W[i, 2]), Rec[i * COMPOSITE:(i + 1) * COMPOSITE],
+                       Rec[j * COMPOSITE:(j + 1) * COMPOSITE], 0, 1)
+    for i in range(nb):                                   # pass 2: columns iv_i + r of M
+        B = Rec[i * COMPOSITE:(i + 1) * COMPOSITE]
+        for r in range(nvj[i]):
+            column_lane(column_model(i, r, i, r, mdl), mC[i], B, Fw, Mb, 0, 1)
+            for c in range(r):
+                block_lane(column_model(i, r, i, c, mdl), Fw, Mb, 0, 1)
+            k = i
+            while parent[k] >= 0:
+                j, Bk = parent[k], Rec[k * COMPOSITE:(k + 1) * COMPOSITE]
+                if nvj[j] == 1 or mdl.kind[j] == PLANAR:  # S's rows one by one (``column_multi_lanes``)
+                    column_up_lane(column_model(i, r, j, 0, mdl), Bk, Fw, Mb, 0, 1)
+                    for c in range(1, nvj[j]):
+                        block_lane(column_model(i, r, j, c, mdl), Fw, Mb, 0, 1)
+                else:                                     # a free flyer or ball ancestor
+                    column_up_multi_lane((iv[i] + r) * nv + iv[j], nvj[j], Bk, Fw, Mb, 0, 1)
+                k = j
+    bad = 0.0
+    for a in range(nv):                                   # the lower triangle, mirrored
+        for b in range(a + 1):
+            y = Mb[a * nv + b]
+            M[a, b] = y
+            M[b, a] = y
+            bad += y - y
+    if bad == 0.0:
+        return OK
+    return bad_result(nb, first_nonfinite_entry(M))
 
 
 # -- the lane kernel: the same two passes across a block of states ----------------------------------------------
@@ -210,12 +138,13 @@ COMPOSITE = 21
 
 @njit(cache=True, fastmath=CONTRACT)
 def crba_lanes(I, F, Q, M):
-    """``crba_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of
-    mass_matrix. A model with a joint the lanes do not take (``lanes.on_lanes``) runs ``crba_kernel``; so does a
-    block with a non-finite q or M or an angle beyond ``spatial.SINCOS_MAX`` (its code then names the entry)."""
+    """M (N, nv, nv) for every state of Q (N, nq), block by block across lanes: the batch entry of mass_matrix, in
+    z-aligned frames (another form raises). A block with a non-finite q or M or an angle beyond
+    ``spatial.SINCOS_MAX`` runs its states one by one as a one-state call does (``crba_steps_one``), whose status
+    names the state and entry."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], M.shape[2]
     if not on_lanes(unpack(I, F), nq, True):
-        return crba_kernel(I, F, Q, M)
+        raise ValueError("the CRBA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -300,7 +229,7 @@ def merge_lanes(w, B, P):
 @njit(cache=True, inline="always")
 def merge_lane(w, B, P, l, L):
     """The composite of B's body carried into its parent's frame and merged into the parent's (P) at lane l:
-    d = R c + p, I_c,λ += R I_c Rᵀ, then ``spatial.merge_inertia`` (w = its weights, ``merge_weights``)."""
+    d = R c + p, I_c,λ += R I_c Rᵀ + ``spatial.merge_shift``, c_λ ← (m₁ c + m₂ c_λ)/m (w: ``merge_weights``)."""
     w0, w1, k = w
     R = get_rotation(B, l, L)
     d = add(mul3(R, get3(B, 12, l, L)), get3(B, 9, l, L))                       # c_i in λ's frame: R c + p

@@ -8,6 +8,8 @@ which models the lane steps take.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._jit import njit
@@ -192,6 +194,22 @@ def placement_lane(pm, B, Z, l, L):
     d = (1.0 - turn) * qi
     turned_lane(a0, a1, a2, c, s, B, l, L)
     B[9 * L + l], B[10 * L + l], B[11 * L + l] = o[0] + d * a0[2], o[1] + d * a1[2], o[2] + d * a2[2]
+
+
+@njit(cache=True, inline="always")
+def screw_placement_one(i, mdl, B, Z):
+    """Rows 0–11 of body i's record for one state (L = 1: the one-state drivers) for a revolute, prismatic or helical
+    joint: ``placement_lane``, with libm's sin and cos for an angle beyond ``spatial.SINCOS_MAX`` (sincos' range: a
+    lane block holding one runs state by state through here), then a helical joint's slide (``slide_lane``)."""
+    pm = placement_model(i, mdl)
+    a0, a1, a2, o, turn, iq = pm
+    if turn == 1.0 and abs(Z[iq]) > SINCOS_MAX:
+        turned_lane(a0, a1, a2, math.cos(Z[iq]), math.sin(Z[iq]), B, 0, 1)
+        B[9], B[10], B[11] = o[0], o[1], o[2]
+    else:
+        placement_lane(pm, B, Z, 0, 1)
+    if mdl.kind[i] == HELICAL:
+        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)
 
 
 @njit(cache=True, inline="always")

@@ -191,7 +191,8 @@ def closed_chain_errors(model, name, q0, n, where, baumgarte):
             out[key] = max(out[key], err(x, y))
     alpha, beta = (0.0, 0.0) if baumgarte is None else baumgarte
     QDD, LAM, RANK = np.empty(Q.shape), np.empty((N, m)), np.empty(N, np.int64)
-    code = CONSTRAINED_FD.call(I, F, CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM, RANK)
+    code = CONSTRAINED_FD.call(I, F, model.kernel.lane_arrays[1], CI, CF, m, Q, V, T, alpha, beta, RANK_RTOL, QDD, LAM,
+                               RANK)
     assert code == -1, f"kernel returned {code}"
     qdd, lam, rank = readable_constrained_fd(model, Q, V, T, baumgarte)
     assert RANK.tolist() == rank.tolist(), f"rank {RANK} != readable {rank}"

@@ -122,6 +122,19 @@ def test_a_block_with_a_huge_angle_runs_the_one_state_form(models):
     assert_close(tau[LANES + 3], pin.rnea(pm, data, Q[LANES + 3], V[LANES + 3], A[LANES + 3]), 1e-14, "huge angle")
 
 
+def test_a_block_with_a_huge_angle_mass_matrix(models):
+    """The CRBA's block with an angle beyond SINCOS_MAX runs state by state through the one-state driver, which
+    places that joint with libm's sin and cos (lanes.screw_placement_one): Pinocchio's crba at that state."""
+    model, pm = models["aau_arm"]
+    Q = random_states(model, 2 * LANES, np.random.default_rng(1))[0]
+    Q[LANES + 3, 0] = 4 * SINCOS_MAX
+    M = md.mass_matrix(model, Q)
+    one = np.stack([md.mass_matrix(model, q) for q in Q])
+    assert np.array_equal(M[LANES:], one[LANES:])     # the one-state driver itself, bit for bit
+    ref = pin.crba(pm, pm.createData(), Q[LANES + 3])
+    assert_close(M[LANES + 3], np.triu(ref) + np.triu(ref, 1).T, 1e-14, "huge angle")   # measured 1.3e-16
+
+
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_a_non_finite_input_is_named_by_its_row(models, bad):
     model, _ = models["tree"]

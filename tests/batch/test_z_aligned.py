@@ -1,6 +1,7 @@
 """The lane kernels' model: every 1-dof body frame turned so that its joint axis is z (kernel_form.z_aligned,
-Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the scalar kernels, which take
-any axis: the same τ and M from both forms on a tree with unaligned axes; the rotation C_i that turns e_z into the
+Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the scalar Newton–Euler kernel, which
+takes any axis: the same τ and M (its columns M e_k = τ(q, 0, e_k) − τ(q, 0, 0)) from both forms on a tree with
+unaligned axes; the rotation C_i that turns e_z into the
 axis; the batch routes reaching the lane steps only with that form (any other falls back to the scalar kernel)."""
 import numpy as np
 import pytest
@@ -10,7 +11,6 @@ from test_lanes import _tree
 import manipdyn as md
 from manipdyn.dynamics.lanes import on_lanes
 from manipdyn.dynamics.model_arrays import unpack
-from manipdyn.dynamics.crba import crba_kernel
 from manipdyn.dynamics.rnea import NT, rnea_kernel
 from manipdyn.dynamics.arguments import wrench_rows
 from manipdyn.kernel_form import z_turn
@@ -30,12 +30,15 @@ def test_z_turn_is_a_rotation_taking_z_to_the_axis(k):
 
 
 def _scalar(I, F, Q, V, A):
-    N, nv = Q.shape[0], V.shape[1]
-    tau, M = np.empty((N, nv)), np.empty((N, nv, nv))
-    rnea_kernel(I, F, Q, V, A, np.zeros((1, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), False, tau,
-                np.zeros((0, I.shape[1], NT)))
-    crba_kernel(I, F, Q, M)
-    return tau, M
+    def tau_of(V, A):
+        tau = np.empty(V.shape)
+        rnea_kernel(I, F, Q, V, A, np.zeros((1, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), False, tau,
+                    np.zeros((0, I.shape[1], NT)))
+        return tau
+    zero, nv = np.zeros_like(V), V.shape[1]
+    h = tau_of(zero, zero)
+    M = np.stack([tau_of(zero, np.tile(e, (len(Q), 1))) - h for e in np.eye(nv)], axis=2)   # column k: M e_k
+    return tau_of(V, A), M
 
 
 @pytest.mark.parametrize("name", ["aau_arm", "tree"])

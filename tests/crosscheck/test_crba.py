@@ -213,7 +213,7 @@ sys.path.insert(0, {tests!r})
 from manipdyn import _jit
 assert _jit.NOJIT
 from manipdyn.dynamics import crba
-assert not hasattr(crba.crba_kernel, "py_func"), "compiled"
+assert not hasattr(crba.crba_steps_one, "py_func"), "compiled"
 import test_crba as t
 import numpy as np
 out = {{}}
@@ -225,7 +225,7 @@ print(json.dumps(out))
 
 
 def test_uncompiled_source_gives_the_same_numbers():
-    """MANIPDYN_NOJIT=1 runs crba_kernel as the Python function it is written as."""
+    """MANIPDYN_NOJIT=1 runs the CRBA's steps (crba_steps_one, crba_lanes) as the Python functions they are written as."""
     script = NOJIT_SCRIPT.format(tests=str(ROOT / "tests" / "crosscheck"), names=NOJIT_MODELS)
     path = os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])   # this source tree
     env = dict(os.environ, MANIPDYN_NOJIT="1", PYTHONWARNINGS="ignore", PYTHONPATH=path)

@@ -42,6 +42,7 @@ import manipdyn as md
 from manipdyn.dynamics.lagrange import christoffel_coriolis
 from manipdyn.dynamics.lanes import on_lanes
 from manipdyn.dynamics.model_arrays import unpack
+from manipdyn.spatial import SINCOS_MAX
 
 CASES = [(name, seed) for name in TREES for seed in range(3)]
 TOL = dict(config=1e-13, tau=1e-13, M=1e-13, qdd=1e-12, C=1e-13, d=1e-9, J=1e-13, E=1e-13)   # ≤ 100× the worst
@@ -183,6 +184,18 @@ def test_frames_and_energies_against_pinocchio(name, seed):
         worst["E:T"] = max(worst["E:T"], err(md.kinetic_energy(model, q, v), pin.computeKineticEnergy(pm, pd, q, v)))
         worst["E:V"] = max(worst["E:V"], err(md.potential_energy(model, q), pin.computePotentialEnergy(pm, pd, q)))
     check(worst)
+
+
+def test_a_huge_screw_angle_one_state():
+    """A screw joint turned beyond SINCOS_MAX (the lanes' sin and cos range): the one-state CRBA places it with libm's
+    sin and cos and slides it h θ (lanes.screw_placement_one) — Pinocchio's crba; rnea and aba too."""
+    model, pm, pd, Q, V, A = case("screw_chain", 0)
+    q = Q[0].copy()
+    q[0] = 4 * SINCOS_MAX                                     # j0: the chain's root, a screw joint
+    ref = pin.crba(pm, pd, q)
+    assert err(md.mass_matrix(model, q), np.triu(ref) + np.triu(ref, 1).T) < 5e-14      # measured 8.4e-16
+    assert err(md.rnea(model, q, V[0], A[0]), pin.rnea(pm, pd, q, V[0], A[0])) < 5e-14     # 3.8e-16
+    assert err(md.aba(model, q, V[0], A[0]), pin.aba(pm, pd, q, V[0], A[0])) < 5e-14       # 5.3e-16
 
 
 @pytest.mark.parametrize("name", TREES)

@@ -199,7 +199,7 @@ ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "ener
 # ABA, the regressor reuses the outward pass, the Lagrange M sums the frame Jacobians) — never a helper of the
 # algebra, which lives in spatial.py.
 BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "rnea_steps_one", "outward", "rnea_workspace"},
-            "crba": {"crba", "crba_kernel", "crba_lanes", "crba_steps_one", "mass_matrix"},
+            "crba": {"crba", "crba_lanes", "crba_steps_one", "mass_matrix"},
             "aba": {"aba_kernel"},
             "lagrange": {"lagrange_mass_matrix"},
             "kinematics": {"body_point", "point_jacobian", "point_jacobian_dot", "point_velocity", "com_jacobians",
