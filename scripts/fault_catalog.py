@@ -349,9 +349,8 @@ FAULTS = (
           ("tests/batch/test_lanes.py", _RNEA), "the lane kernel turns a world wrench into the body with "
           "R_1ᵀ ⋯ R_bᵀ (the path from the body in) instead of R_bᵀ ⋯ R_1ᵀ"),
     Fault("rnea-lanes-fallback-wrench-rows-of-block-0", "rnea", "manipdyn/dynamics/rnea.py",
-          "A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,", "A[s0:s0 + n], X, xb, xp, world,",
-          ("tests/batch/test_lanes.py",), "a lane block run by the one-state form takes the first block's "
-          "wrenches"),
+          "A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s])", "A[s], X[0], xb, xp, world, tau[s])",
+          ("tests/batch/test_lanes.py",), "a lane block run state by state takes the first state's wrenches"),
     Fault("crba-lanes-merge-shift-term-dropped", "lagrange", "manipdyn/dynamics/crba.py",
           "add_sym3(P, 15, l, L, merge_shift(k, sub(d, c2)))", "add_sym3(P, 15, l, L, merge_shift(k, sub(c2, c2)))",
           ("tests/batch/test_lanes.py",), "the lane CRBA's composite merge drops the shift m₁m₂/m (|d|²1 − ddᵀ) "
@@ -990,8 +989,8 @@ FAULTS = (
           ("tests/robustness/test_api_outputs.py",), "the result check shared by CRBA, C, the Lagrange M, the "
           "regressor and the derivatives passes every matrix: an overflowed result is returned as if finite"),
     Fault("cholesky-lanes-bias-with-accelerations", "aba", "manipdyn/dynamics/aba.py",
-          "code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X,",
-          "code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], V[s0:s1], X,",
+          "code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if",
+          "code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], V[s0:s1], X[s0:s1] if",
           (_ABA,), "the batched M⁻¹ route's h by the lanes with q̈ = q̇ instead of 0: h + M q̇ subtracted from τ"),
     Fault("cholesky-chunk-wrench-rows", "aba", "manipdyn/dynamics/aba.py",
           "X[s0:s1] if X.shape[0] > 1 else X", "X[:s1 - s0] if X.shape[0] > 1 else X",
@@ -1068,13 +1067,13 @@ FAULTS = (
                                           "gives the state's row"),
 
     Fault("rnea-one-state-rates-swapped", "rnea", "manipdyn/dynamics/rnea.py",
-          "            Z[nq + k], Z[nq + nv + k] = v[k], a[k]\n", "            Z[nq + k], Z[nq + nv + k] = a[k], v[k]\n",
+          "        Z[nq + k], Z[nq + nv + k] = v[k], a[k]\n", "        Z[nq + k], Z[nq + nv + k] = a[k], v[k]\n",
           (_RNEA, _FAST), "the one-state driver of the lane steps reads q̈ for q̇ and q̇ for q̈"),
 
     Fault("rnea-lanes-wrench-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
-          "                return shift(code, s0, nb, nv)", "                return code",
-          ("tests/batch/test_lanes.py",), "with external wrenches, a bad state in a later lane block is named by its "
-                                          "index within the block"),
+          "                    return shift(code, s, nb, nv)", "                    return code",
+          ("tests/batch/test_lanes.py",), "a bad state in a later lane block (external wrenches or not) is named by "
+                                          "its index within the block"),
 
     Fault("crba-one-state-upper-triangle-dropped", "lagrange", "manipdyn/dynamics/crba.py",
           "            M[b, a] = y\n", "            M[b, a] = 0.0\n",
@@ -1089,9 +1088,9 @@ FAULTS = (
     Fault("lanes-helical-slide-sign", "rnea", "manipdyn/dynamics/lanes.py",
           "    d = h * Z[iq * L + l]\n", "    d = -h * Z[iq * L + l]\n",
           (_KINDS,), "the lane steps slide a helical joint against its pitch (batches, one state, the GPU)"),
-    Fault("lanes-helical-slide-dropped", "rnea", "manipdyn/dynamics/rnea.py",
-          "                slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)                # (0 unless helical: no branch)\n", "",
-          (_KINDS,), "the one-state RNEA's lane steps turn a helical joint without its slide (the block loops keep it)"),
+    Fault("lanes-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
+          "    if mdl.kind[i] == HELICAL:\n        slide_lanes(i, mdl, B, Z)\n", "",
+          (_KINDS,), "the block loops turn a helical joint without its slide (the batch RNEA, CRBA and ABA)"),
     Fault("gpu-helical-slide-dropped", "rnea", "manipdyn/dynamics/lanes.py",
           "        if mdl.kind[i] == HELICAL:\n            slide_lane(pm, mdl.pitch[i], B, Z, l, L)\n", "",
           ("tests/gpu/test_gpu.py",), "the GPU drivers turn a helical joint without its slide"),
@@ -1103,8 +1102,8 @@ FAULTS = (
           "            for c in range(mdl.nvj[i]):\n", "            for c in range(1):\n",
           ("tests/gpu/test_gpu.py",), "the GPU frame driver writes a free flyer's or ball's first Jacobian column only"),
     Fault("cholesky-one-state-velocity-dropped", "aba", "manipdyn/dynamics/aba.py",
-          "            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], H[0][::1])",
-          "            code = rnea_steps_one(I, F, Q[s0], Z[0][::1], Z[0][::1], H[0][::1])",
+          "            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], X[s0 if",
+          "            code = rnea_steps_one(I, F, Q[s0], Z[0][::1], Z[0][::1], X[s0 if",
           (_JD, _FAST), "one state's M⁻¹ route takes h = g (its velocity dropped from the RNEA's steps)"),
     Fault("out-shape-unchecked", "route", "manipdyn/dynamics/arguments.py",
           "    if type(out) is _ND and out.dtype is _F64 and out.shape == shape and out.flags.writeable:\n",
@@ -1172,7 +1171,21 @@ FAULTS = (
     Fault("crba-one-state-helical-slide-dropped", "lagrange", "manipdyn/dynamics/lanes.py",
           "    if mdl.kind[i] == HELICAL:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
           "    if mdl.kind[i] == -1:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
-          (_KINDS,), "the one-state CRBA turns a screw joint without sliding it"),
+          (_KINDS,), "the one-state RNEA and CRBA turn a screw joint without sliding it"),
+    Fault("rnea-one-state-world-wrench-turned-leaf-first", "rnea", "manipdyn/dynamics/rnea.py",
+          "            for t in range(m - 1, -1, -1):\n                R = get_rotation(Rec[path[t] * RECORD",
+          "            for t in range(m):\n                R = get_rotation(Rec[path[t] * RECORD",
+          ("tests/crosscheck/test_compiled_terms.py", "tests/crosscheck/test_rnea_kernel.py"),
+          "one state's world-axes wrench turned into its body by R_1ᵀ ⋯ R_bᵀ (the path's rotations from the leaf in)"),
+    Fault("rnea-one-state-nonfinite-tau-missed", "rnea", "manipdyn/dynamics/rnea.py",
+          "    return OK if k < 0 else bad_result(nb, k)\n", "    return OK\n",
+          ("tests/robustness/test_api_outputs.py", "tests/batch/test_lanes.py"),
+          "one state's RNEA returns an overflowed τ as if it were finite"),
+    Fault("rnea-one-state-input-unchecked", "rnea", "manipdyn/dynamics/rnea.py",
+          "    if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):\n        return bad_input(0)\n",
+          "    if False:\n        return bad_input(0)\n",
+          ("tests/batch/test_lanes.py", "tests/unit/test_status.py"),
+          "one state's RNEA lets a NaN input through, to be reported as a non-finite result"),
 )
 
 

@@ -13,7 +13,7 @@ from ..dynamics.status import bad_input, bad_result, reading, singular_row
 from ..dynamics.model_arrays import kernel_arrays
 from ..spatial import cholesky, cholesky_solve, first_nonfinite
 from ..dynamics.crba import crba_steps_one
-from ..dynamics.rnea import rnea_kernel
+from ..dynamics.rnea import rnea_steps_one
 from ..errors import NumericalError, SingularError
 from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
 
@@ -21,8 +21,9 @@ from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, clo
 @njit(cache=True)
 def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, LAM, RANK):
     """q̈, λ (zero on redundant rows) and the rank, for every state: Eq. 27 on the independent rows.
-    (I, F): model_arrays.kernel_arrays, read by the closure rows and Newton–Euler; (I, Fz) the same model in z-aligned
-    frames (``Model.kernel.lane_arrays``), M by the CRBA's steps (``crba.crba_steps_one``).
+    (I, F): model_arrays.kernel_arrays, read by the closure rows; (I, Fz) the same model in z-aligned frames
+    (``Model.kernel.lane_arrays``), read by the CRBA's and the Newton–Euler steps (``crba.crba_steps_one``,
+    ``rnea.rnea_steps_one``).
     Returns its status (dynamics/status.py): a joint whose row of M has no positive pivot (M is not positive
     definite); λ's row s (after q̈'s N·nv entries) where G M⁻¹ Gᵀ is not (the kept rows G are dependent to
     working precision)."""
@@ -31,13 +32,12 @@ def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, 
     W = closure_scratch(I.shape[1], nv)
     M, h, Z = np.empty((1, nv, nv))[:, :, :], np.empty((1, nv))[:, :], np.zeros((1, nv))[:, :]   # the kernels'
     X, xb, xp, world = no_wrenches(I, F)                                                   # layout (_jit: "A")
-    T0 = F[:0, :, :]                                      # no per-link terms
     for s in range(N):
         if nonfinite_input(Q, V, s) >= 0 or first_nonfinite(T, s) >= 0:
             return bad_input(s)
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[::1], Jc[:, :], bias[::1])   # (views: closure_kernel's layout)
         crba_steps_one(I, Fz, Q[s], M[0])                 # (q finite: checked above)
-        rnea_kernel(I, F, Q[s:s + 1, :], V[s:s + 1, :], Z, X, xb, xp, world, h, T0)   # h = C q̇ + g
+        rnea_steps_one(I, Fz, Q[s], V[s], Z[0], X[0], xb, xp, world, h[0])   # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):

@@ -49,7 +49,7 @@ from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get
                     set3, set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
-from .rnea import rnea, rnea_kernel, rnea_lanes, rnea_steps_one
+from .rnea import rnea, rnea_lanes, rnea_steps_one
 from .route import route
 from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
 
@@ -823,14 +823,13 @@ def cholesky_kernel(I, F, Q, V, Tau, X, body, point, world, out):
 @njit(cache=True, fastmath=CONTRACT)
 def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     """q̈ = M⁻¹ (τ − h) for every state (the M⁻¹ route): M by the CRBA (crba.crba_lanes), factored in place,
-    M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_lanes; with wrenches rnea.rnea_kernel,
-    whose rows of X may broadcast) into scratch H (not out: one state's out may be its τ, ``route``), then
+    M = L Lᵀ; h = rnea(q, q̇, 0, f_ext) = C q̇ + g − Σ Jᵀ f_ext (rnea.rnea_lanes, wrenches included; X a row a
+    state or one row for all) into scratch H (not out: one state's out may be its τ, ``route``), then
     out ← L⁻ᵀ L⁻¹ (τ − h). A chunk of LANES states at a time (with
     ``lanes``, the lane kernels' block: M and h across states; N = 1000, one thread: chain32 13.0 → 7.7 µs a state,
     AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state, N = 1: a block of lanes
-    costs LANES states) the one-lane drivers of the same steps (``crba.crba_steps_one``, ``rnea.rnea_steps_one``;
-    with wrenches h by ``rnea.rnea_kernel``). (I, F) in z-aligned frames where the steps run (``lanes.on_lanes``
-    turns anything else to the scalar kernels). Wrenches as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
+    costs LANES states) the one-lane drivers of the same steps (``crba.crba_steps_one``, ``rnea.rnea_steps_one``).
+    (I, F) in z-aligned frames (``Model.kernel.lane_arrays``), the wrenches in them as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
     pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
@@ -847,13 +846,12 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             s = s0 + (-2 - nb - code) // (nv * nv)
             out[s, 0] = np.nan
             return bad_result(nb, s * nv)
-        if code == -1 and body.shape[0] > 0:                  # h
-            code = rnea_kernel(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
-                               world, H[:n, :], T0)
-        elif code == -1 and not lanes:
-            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], H[0][::1])   # (views: the one-state entry's layout)
-        elif code == -1:
-            code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X, body, point, world, H[:n, :], T0)
+        if code == -1 and not lanes:                          # h (views: the one-state entry's layout)
+            code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], X[s0 if X.shape[0] > 1 else 0], body, point, world,
+                                  H[0][::1])
+        elif code == -1:                                      # (X: a row a state, or one row for every state)
+            code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
+                              world, H[:n, :], T0)
         if code != -1:                                        # a non-finite input, or h: in out, where the
             out[s0:s1, :] = H[:n, :]                          # error reads the entry at fault
             return shift(code, s0, nb, nv)

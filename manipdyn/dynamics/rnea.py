@@ -39,7 +39,7 @@ from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record,
                     motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
                     quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane, scatter_lanes, selected,
-                    set3, slide_lane, tree_depth)
+                    screw_placement_one, set3, tree_depth)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -101,15 +101,16 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
 def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: the lane kernel's steps driven for one
     state (``rnea_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
-    return rnea_steps_one(I, F, q, v, a, tau)
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau)
 
 
 @njit(cache=True)
 def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
-    """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form: ``rnea_kernel``, N = 1."""
+    """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned
+    frames, as (I, F)): ``rnea_steps_one``."""
     X, xb, xp = wrench_rows_of(f, m, P)
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
-                       tau[np.newaxis, :], F[:0, :, :])
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau)
 
 
 @njit(cache=True)
@@ -132,7 +133,8 @@ def bias_one(I, F, q, v, tau):
     """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_steps_one`` with zero
     accelerations ((I, F) in z-aligned frames)."""
     Z = np.zeros((1, tau.shape[0]))[:, :][0]         # (a view of any layout, as the entry's arrays: one signature)
-    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, tau)
+    X, xb, xp, world = no_wrenches(I, F)
+    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, X[0], xb, xp, world, tau)
 
 
 @njit(cache=True)
@@ -185,69 +187,76 @@ def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def rnea_steps_one(I, F, q, v, a, tau):
+def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau):
     """τ (nv,) of one state by the steps of the lane kernel (``rnea_lanes``), driven for one lane: records of one
     number a row (L = 1), the same placement, motion, inertial, wrench and torque steps, the same z-aligned frames
-    ((I, F) = ``Model.kernel.lane_arrays``) — one source for a batch and for one state. Measured: AAU arm 411 against
-    905 ns a state for ``rnea_kernel`` in a compiled loop (docs/bench/measurements.md). A model the lane steps do not
-    take (``lanes.on_lanes``), a non-finite input, an angle beyond ``spatial.SINCOS_MAX`` or a non-finite τ runs
-    ``rnea_kernel``, whose status names the culprit."""
+    ((I, F) = ``Model.kernel.lane_arrays``: another form raises) — one source for a batch and for one state.
+    Measured: AAU arm 411 against 905 ns a state for the scalar kernel in a compiled loop (docs/bench/measurements.md).
+    External wrenches X (K, 6) on bodies xb about their points xp, in the bodies' z-aligned axes or (world) in world
+    axes, between the passes (as ``external_lanes``; K = 0 for none: ``kernel_inputs.no_wrenches``). An angle beyond
+    ``spatial.SINCOS_MAX`` is placed with libm's sin and cos (``lanes.screw_placement_one``). Returns its status
+    (dynamics/status.py): a non-finite q, q̇ or q̈, or τ's first non-finite entry."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
-    ok = on_lanes(mdl, nq, True)
-    x = 0.0
+    if not on_lanes(mdl, nq, True):
+        raise ValueError("the RNEA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
+    if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):
+        return bad_input(0)
+    W = np.empty(nb * RECORD + nq + 2 * nv + 9)      # the bodies' records, then q, q̇, q̈ (Z), then the base
+    Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
     for k in range(nq):
-        x += abs(q[k])
-    ok &= x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 and first_nonfinite(a[np.newaxis, :], 0) < 0
-    if ok:
-        W = np.empty(nb * RECORD + nq + 2 * nv + 9)      # the bodies' records, then q, q̇, q̈ (Z), then the base
-        Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
-        for k in range(nq):
-            Z[k] = q[k]
-        for k in range(nv):
-            Z[nq + k], Z[nq + nv + k] = v[k], a[k]
-        for k in range(6):
-            base[k] = 0.0
-        base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
-        mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
-        for i in range(nb):                                             # outward, Eqs. 3–14
-            j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
-            par = base if j < 0 else Rec[j * RECORD + _W:j * RECORD + _W + 9]
-            if mdl.nvj[i] > 1:                                          # a free flyer, a ball, a planar joint
-                if mdl.kind[i] == PLANAR:
-                    planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
-                else:
-                    quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
-                motion_lane_multi(multi_model(i, mdl, nq), B, par, Z, 0, 1)
+        Z[k] = q[k]
+    for k in range(nv):
+        Z[nq + k], Z[nq + nv + k] = v[k], a[k]
+    for k in range(6):
+        base[k] = 0.0
+    base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
+    mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
+    for i in range(nb):                                             # outward, Eqs. 3–14
+        j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
+        par = base if j < 0 else Rec[j * RECORD + _W:j * RECORD + _W + 9]
+        if mdl.nvj[i] > 1:                                          # a free flyer, a ball, a planar joint
+            if mdl.kind[i] == PLANAR:
+                planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
             else:
-                mm, pm = motion_model(i, mdl, nq), placement_model(i, mdl)
-                placement_lane(pm, B, Z, 0, 1)
-                slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)                # (0 unless helical: no branch)
-                if j < 0:
-                    root_motion_lane(mm, B, mg, Z, 0, 1)
-                else:
-                    motion_lane(mm, B, par, Z, 0, 1)
-            inertial_lane(inertial_model(i, mdl), B, 0, 1)
-        for i in range(nb - 1, -1, -1):                                 # inward, Eqs. 15–18
-            j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
-            to = Rec[:0] if j < 0 else Rec[j * RECORD + _F:j * RECORD + _F + 6]
-            r, n = mdl.iv[i], mdl.nvj[i]
-            if n > 1:
-                mm = multi_model(i, mdl, nq)
-                for k in range(n):
-                    torque_multi_lane(mm, k, _F + selected(n, mdl.kind[i] == PLANAR, k), mdl.armature[r + k], B, tau, Z, 0, 1)
-                if j >= 0:
-                    wrench_up_lane(B, to, 0, 1)
-            elif j < 0:
-                torque_lane(motion_model(i, mdl, nq), mdl.armature[r], B, tau, Z, 0, 1)
+                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+            motion_lane_multi(multi_model(i, mdl, nq), B, par, Z, 0, 1)
+        else:
+            mm = motion_model(i, mdl, nq)
+            screw_placement_one(i, mdl, B, Z)
+            if j < 0:
+                root_motion_lane(mm, B, mg, Z, 0, 1)
             else:
-                inward_lane(motion_model(i, mdl, nq), mdl.armature[r], B, to, tau, Z, 0, 1)
-        ok = first_nonfinite(tau[np.newaxis, :], 0) < 0
-    if ok:
-        return OK
-    X, xb, xp, world = no_wrenches(I, F)
-    return rnea_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], X, xb, xp, world,
-                       tau[np.newaxis, :], F[:0, :, :])
+                motion_lane(mm, B, par, Z, 0, 1)
+        inertial_lane(inertial_model(i, mdl), B, 0, 1)
+    for k in range(xb.shape[0]):                                    # external wrenches (as external_lanes)
+        b = xb[k]
+        fe, ne = (X[k, 0], X[k, 1], X[k, 2]), (X[k, 3], X[k, 4], X[k, 5])
+        if world:                                                   # into body b's axes: R_bᵀ ⋯ R_1ᵀ x
+            path, m, j = np.empty(nb, np.int64), 0, b
+            while j >= 0:
+                path[m] = j
+                m, j = m + 1, mdl.parent[j]
+            for t in range(m - 1, -1, -1):
+                R = get_rotation(Rec[path[t] * RECORD:(path[t] + 1) * RECORD], 0, 1)
+                fe, ne = mul3t(R, fe), mul3t(R, ne)
+        external_lane(Rec[b * RECORD:(b + 1) * RECORD], fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), 0, 1)
+    for i in range(nb - 1, -1, -1):                                 # inward, Eqs. 15–18
+        j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
+        to = Rec[:0] if j < 0 else Rec[j * RECORD + _F:j * RECORD + _F + 6]
+        r, n = mdl.iv[i], mdl.nvj[i]
+        if n > 1:
+            mm = multi_model(i, mdl, nq)
+            for k in range(n):
+                torque_multi_lane(mm, k, _F + selected(n, mdl.kind[i] == PLANAR, k), mdl.armature[r + k], B, tau, Z, 0, 1)
+            if j >= 0:
+                wrench_up_lane(B, to, 0, 1)
+        elif j < 0:
+            torque_lane(motion_model(i, mdl, nq), mdl.armature[r], B, tau, Z, 0, 1)
+        else:
+            inward_lane(motion_model(i, mdl, nq), mdl.armature[r], B, to, tau, Z, 0, 1)
+    k = first_nonfinite(tau[np.newaxis, :], 0)                      # (an intermediate overflowed)
+    return OK if k < 0 else bad_result(nb, k)
 
 
 # -- the lane kernel: the same recursion across a block of states ------------------------------------------------
@@ -264,13 +273,14 @@ _W, _F = 12, 21             # the first rows of ω' (the motion a child reads) a
 
 @njit(cache=True, fastmath=CONTRACT)
 def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
-    """``rnea_kernel``'s result (and code) for a batch, block by block across lanes: the batch entry of rnea.
+    """τ (N, nv) for every state, block by block across lanes: the batch entry of rnea (its status as
+    ``rnea_steps_one``'s, the state shifted). X (N, K, 6): the wrenches of each state (``arguments.wrench_rows``), or
+    one row for every state (K = 0: ``kernel_inputs.no_wrenches``).
 
     External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
-    itself for what the lanes do not cover — per-link terms, a joint other than a screw joint, a free flyer or a
-    ball (``lanes.on_lanes``). A block with a non-finite input or result or an angle beyond ``spatial.SINCOS_MAX``
-    runs its states one by one as a one-state call does (``rnea_steps_one``; with external wrenches, ``rnea_kernel``
-    on the block): its status names the state or entry. Every lane is computed alone, so a state's τ does not
+    itself for the per-link terms (``rnea_terms``, in the model's own frames). A block with a non-finite input or
+    result or an angle beyond ``spatial.SINCOS_MAX`` runs its states one by one as a one-state call does
+    (``rnea_steps_one``): its status names the state or entry. Every lane is computed alone, so a state's τ does not
     depend on the batch around it; it agrees with the one-state call's to rounding (tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
@@ -312,14 +322,9 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 else:
                     inward_lanes(i, mdl, B, to, TB, Z, nq)
             ok = scatter_lanes(TB, n, tau, s0)
-        if not ok and xb.shape[0] > 0:              # the block's states one by one: the status names the culprit
-            code = rnea_kernel(I, F, Q[s0:s0 + n], V[s0:s0 + n], A[s0:s0 + n], X[s0:s0 + n], xb, xp, world,
-                               tau[s0:s0 + n], T)
-            if code != OK:
-                return shift(code, s0, nb, nv)
-        elif not ok:                                # each state as a one-state call computes it
-            for s in range(s0, s0 + n):
-                code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], tau[s])
+        if not ok:                                  # each state as a one-state call computes it: its status
+            for s in range(s0, s0 + n):             # names the culprit
+                code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s])
                 if code != OK:
                     return shift(code, s, nb, nv)
     return OK
