@@ -1167,7 +1167,7 @@ FAULTS = (
     Fault("crba-one-state-huge-angle-cos-sin-swapped", "lagrange", "manipdyn/dynamics/lanes.py",
           "        turned_lane(a0, a1, a2, math.cos(Z[iq]), math.sin(Z[iq]), B, 0, 1)\n",
           "        turned_lane(a0, a1, a2, math.sin(Z[iq]), math.cos(Z[iq]), B, 0, 1)\n",
-          ("tests/batch/test_lanes.py", _KINDS), "the one-state CRBA turns an angle beyond SINCOS_MAX by π/2 − θ"),
+          ("tests/batch/test_lanes.py", _KINDS), "the one-state RNEA and CRBA turn an angle beyond SINCOS_MAX by π/2 − θ"),
     Fault("crba-one-state-helical-slide-dropped", "lagrange", "manipdyn/dynamics/lanes.py",
           "    if mdl.kind[i] == HELICAL:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
           "    if mdl.kind[i] == -1:\n        slide_lane(pm, mdl.pitch[i], B, Z, 0, 1)\n",
