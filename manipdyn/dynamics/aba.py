@@ -44,9 +44,9 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, c
                        motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                    motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes, selected,
-                    set3, set6, tree_depth)
+                    motion_model, multi_model, multi_rates, on_lanes, placement_lanes, placement_model,
+                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes,
+                    screw_placement_one, selected, set3, set6, tree_depth)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_lanes, rnea_steps_one
@@ -724,18 +724,14 @@ def aba_steps_one(I, F, q, v, tau, out):
     """q̈ (nv,) of one state by the steps of the lane kernel (``aba_lanes``), driven for one lane: records of one
     number a row (L = 1), the same velocity, bias, articulated-inertia, hand-off and acceleration steps (a free
     flyer's or a ball's multi-dof steps included), in the same z-aligned frames — one source for a batch and for
-    one state. A model the lane steps do not take (``lanes.on_lanes``; nor a helical joint, as
-    ``crba.crba_steps_one``: with its slide here the one-state q̈ measured 2.11 → 2.27 µs on the AAU arm), a non-finite input, an angle beyond
-    ``spatial.SINCOS_MAX``, a D_i not > dmin or a non-finite q̈ runs ``aba_kernel``, whose status names the
-    culprit."""
+    one state. A helical joint's slide and an angle beyond ``spatial.SINCOS_MAX`` are placed as the RNEA's and the
+    CRBA's drivers place them (``lanes.screw_placement_one``). A model the lane steps do not take (``lanes.on_lanes``),
+    a non-finite input, a D_i not > dmin or a non-finite q̈ runs ``aba_kernel``, whose status names the culprit."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
     parent, nvj = mdl.parent, mdl.nvj
-    x = 0.0
-    for k in range(nq):
-        x += abs(q[k])
-    ok = on_lanes(mdl, nq, True, False) and x <= SINCOS_MAX and first_nonfinite(v[np.newaxis, :], 0) < 0 \
-        and first_nonfinite(tau[np.newaxis, :], 0) < 0
+    ok = on_lanes(mdl, nq, True) and first_nonfinite(q[np.newaxis, :], 0) < 0 \
+        and first_nonfinite(v[np.newaxis, :], 0) < 0 and first_nonfinite(tau[np.newaxis, :], 0) < 0
     if ok:
         m = 0
         for i in range(nb):
@@ -762,7 +758,7 @@ def aba_steps_one(I, F, q, v, tau, out):
                     quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
                 velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, 0, 1)
             else:
-                placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+                screw_placement_one(i, mdl, B, Z)
                 velocity_lane(motion_model(i, mdl, nq), B, par, Z, 0, 1)
             bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, 0, 1)
         singular, g = 0, m
