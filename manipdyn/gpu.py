@@ -47,6 +47,7 @@ from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
 from .extras import missing, require
 from .joints import BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, TYPE_NAMES
+from .kernel_form import wrench_axes
 from .model import Model
 from .spatial import SINCOS_MAX, mul3t
 
@@ -459,8 +460,7 @@ def _wrenches(model, f_ext, f_ext_frame, N, call):
     X = c.device_array((max(6 * K * N, 1),))
     paths, poff = [], [0]
     for k, (name, fr, f, m) in enumerate(rows):
-        Ct = model.kernel.lane_turns[fr.body].T            # body axes -> its z-aligned axes (the lane steps')
-        R = np.eye(3) if f_ext_frame == "world" else Ct @ fr.R
+        R = wrench_axes(model.kernel.lane_turns[fr.body], fr, f_ext_frame)[0]   # into the z-aligned axes
         _launch("put_wrench", _put_wrench, N, X, k, f, m, c.to_device(np.ascontiguousarray(R, float).ravel()))
         path, j = [], fr.body
         while j >= 0:
@@ -469,7 +469,8 @@ def _wrenches(model, f_ext, f_ext_frame, N, call):
         paths += path[::-1]
         poff.append(len(paths))
     xb = np.array([fr.body for _, fr, _, _ in rows], np.int64)
-    xp = np.array([model.kernel.lane_turns[fr.body].T @ fr.p for _, fr, _, _ in rows], float).reshape(K, 3)
+    xp = np.array([wrench_axes(model.kernel.lane_turns[fr.body], fr, f_ext_frame)[1] for _, fr, _, _ in rows],
+                  float).reshape(K, 3)
     extra = [(f"f_ext[{name!r}] {what}", x) for name, _, f, m in rows for what, x in (("force", f), ("moment", m))]
     return (X, c.to_device(xb), c.to_device(xp), c.to_device(np.array(paths or [0], np.int64)),
             c.to_device(np.array(poff, np.int64)), f_ext_frame == "world"), extra, [name for name, *_ in rows]

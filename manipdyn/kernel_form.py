@@ -78,10 +78,9 @@ class KernelForm:
         ints, floats, labels = _closure_form(model.constraints)
         *turned, turn = z_aligned(model)
         for name, fr in model.frames.items():
-            Ct = turn[fr.body].T if fr.body >= 0 else np.eye(3)       # body axes -> its z-aligned axes
             for axes in ("local", "world"):
-                wrench[name, axes] = np.concatenate([(Ct @ fr.R if axes == "local" else np.eye(3)).ravel(),
-                                                     Ct @ np.asarray(fr.p, float), [float(fr.body)]])
+                R, p = wrench_axes(turn[fr.body] if fr.body >= 0 else np.eye(3), fr, axes)
+                wrench[name, axes] = np.concatenate([R.ravel(), p, [float(fr.body)]])
         Fz = _floats(model, *turned)
         lane_frames = {}
         for name, (b, X) in frame_rows.items():
@@ -97,6 +96,16 @@ class KernelForm:
                    ints, floats, labels,
                    ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)),
                    (I, Fz), turn, MappingProxyType(lane_frames))
+
+
+def wrench_axes(C, fr, axes):
+    """(R, p) for a wrench given at frame fr in ``axes`` ("local": the frame's, "world"), on fr's body whose kernel
+    frame is C in the body's own (x_body = C x; C = ``lane_turns``' C_i for the lane arrays, the identity for the
+    model's): R turns the wrench into the kernel frame's axes (the identity for "world": the kernels turn it with the
+    orientation they compute), p is the frame's origin in those axes, about which its moment acts. The one place a
+    wrench's frame is turned (``KernelForm.wrench_rows``, ``arguments.wrench_rows``, ``gpu``)."""
+    Ct = np.asarray(C, float).T
+    return (Ct @ np.asarray(fr.R, float) if axes == "local" else np.eye(3)), Ct @ np.asarray(fr.p, float)
 
 
 def _floats(model, R0, inertia, axis, p0, com):

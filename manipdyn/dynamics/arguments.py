@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InputError, NumericalError, SingularError
 from ..model import MimicModel, Model
+from ..kernel_form import wrench_axes
 from .mimic import TAKES_MIMIC
 from .status import reading
 
@@ -184,10 +185,8 @@ def wrench_rows(model, f_ext, f_ext_frame, N, lanes=False):
     rows = [w for w in (check_f_ext(model, f_ext, f_ext_frame, N) or ()) if w[0].body >= 0]
     X, body, point = np.empty((N, len(rows), 6)), np.empty(len(rows), np.int64), np.empty((len(rows), 3))
     for k, (fr, f, m) in enumerate(rows):
-        Ct = model.kernel.lane_turns[fr.body].T if lanes else np.eye(3)     # body axes -> lane axes
-        if f_ext_frame == "local":       # frame axes -> body axes
-            f, m = f @ (Ct @ fr.R).T, m @ (Ct @ fr.R).T
-        X[:, k, :3], X[:, k, 3:], body[k], point[k] = f, m, fr.body, Ct @ fr.p
+        R, p = wrench_axes(model.kernel.lane_turns[fr.body] if lanes else np.eye(3), fr, f_ext_frame)
+        X[:, k, :3], X[:, k, 3:], body[k], point[k] = f @ R.T, m @ R.T, fr.body, p
     return X, body, point
 
 
