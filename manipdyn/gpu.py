@@ -34,14 +34,14 @@ import numpy as np
 from .dynamics.aba import (_A, _V, ARTICULATED, MULTI, acceleration_lane, acceleration_multi, articulated_lane,
                            articulated_model, articulated_multi, bias_lane, bias_up_lane, handed_lane, handed_multi,
                            inertia_up_lane, rigid_model, singular_threshold, velocity_lane, velocity_multi_lane)
-from .dynamics.lanes import (body_placement_lane, gather_lane, get3, get_rotation, inertial_model, motion_model,
-                             multi_model, on_lanes, scatter_lane, selected)
+from .dynamics.lanes import (body_placement_lane, external_lane, gather_lane, get3, get_rotation, inertial_model,
+                             motion_model, multi_model, on_lanes, scatter_lane, selected)
 from .dynamics.model_arrays import unpack
 from .dynamics.crba import (COMPOSITE, block_lane, column_lane, column_model, column_up_lane, column_up_multi_lane,
                             merge_lane, merge_weights, own_inertia_lane, own_inertia_model)
 from .dynamics.kinematics import (WORLD, _check_reference, frame_point_lane, frame_row, jacobian_lane, jacobian_model,
                                   local_lane, world_lane)
-from .dynamics.rnea import (_F, _W, RECORD, external_lane, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
+from .dynamics.rnea import (_F, _W, RECORD, inertial_lane, inward_lane, motion_lane, motion_lane_multi,
                             torque_multi_lane, wrench_up_lane)
 from .dynamics.arguments import as_real, check_finite, frame_of
 from .errors import InputError, ManipdynError, NumericalError
@@ -78,7 +78,7 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
     """Thread s: state s's τ by the Newton–Euler recursion (``rnea.rnea_lanes``' steps); without v (a), q̇ (q̈) = 0.
     External wrenches (``_wrenches``): wrench k, rows 6k … 6k + 5 of X (rows N long), on body xb[k] about xp[k]; in
     world axes (world) it is turned into the body by the placements of the bodies paths[poff[k]:poff[k + 1]], from
-    the base out (as ``rnea.external_lanes``)."""
+    the base out (as ``lanes.external_lanes``)."""
     s = cuda.grid(1)
     N, nb, nq, nv = tau.shape[0], I.shape[1], Q.shape[1], tau.shape[1]
     if s >= N:
@@ -118,7 +118,7 @@ def _rnea_threads(I, F, Q, V, A, X, xb, xp, paths, poff, world, rec, base, spare
                 R = get_rotation(rec[paths[t] * RECORD * N:(paths[t] + 1) * RECORD * N], s, N)
                 fe, ne = mul3t(R, fe), mul3t(R, ne)
         b = xb[k]
-        external_lane(rec[b * RECORD * N:(b + 1) * RECORD * N], fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), s, N)
+        external_lane(rec[b * RECORD * N:(b + 1) * RECORD * N], _F, fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), s, N)
     for i in range(nb - 1, -1, -1):                       # inward, Eqs. 15–18
         j = mdl.parent[i]
         B = rec[i * RECORD * N:(i + 1) * RECORD * N]

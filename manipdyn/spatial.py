@@ -9,11 +9,10 @@ algebra of its own). Two parts:
    - 6-vectors, order [linear; angular] (the order of the motion subspace S and of Pinocchio), in a body's
      own frame about its origin — motion m = [v_O; ω], force f = [f; n_O]: ``row6``, ``dot6``,
      ``motion_cross`` (v ×), ``force_cross`` (v ×*), their array forms ``cross_motion`` / ``cross_force``,
-     the transforms ``motion_down`` / ``motion_to_child`` (ⁱX_λ), ``force_up`` / ``force_to_parent`` (^λX*_i),
+     the transforms ``motion_down`` / ``motion_to_child`` (ⁱX_λ), ``force_up`` (^λX*_i),
      ``compose`` (a placement in a placed frame), ``world_motion``
      (⁰X_i), ``rotate6`` (R on both halves);
-   - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up`` (tuples) and
-     ``inertia_to_parent`` (arrays), ``block3``, ``congruence3``,
+   - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up``, ``block3``, ``congruence3``,
      ``mat6``, ``rigid6``, ``inertia_variation``, ``add_force_cross``, and the (m, c, I_C) form of the CRBA:
      ``merge_shift``, ``inertia_motion``;
    - small dense solves: ``cholesky``, ``cholesky_solve``, ``spd_inverse``;
@@ -317,18 +316,6 @@ def force_up(R, p, fx, fy, fz, nx, ny, nz):
 
 
 @njit(cache=True, inline="always")
-def force_to_parent(R, p, f, out):
-    """out += ^λX*_i f (``force_up`` of the array f (6,))."""
-    gx, gy, gz, mx, my, mz = force_up(block3(R, 0, 0), p, f[0], f[1], f[2], f[3], f[4], f[5])
-    out[0] += gx
-    out[1] += gy
-    out[2] += gz
-    out[3] += mx
-    out[4] += my
-    out[5] += mz
-
-
-@njit(cache=True, inline="always")
 def world_motion(R, p, s, out):
     """out = ⁰X_i s = [R s_lin + p × R s_ang; R s_ang] for body i at (R, p) in the world (RBDA Table 2.2)."""
     for a in range(3):
@@ -386,19 +373,6 @@ def block3(X, r0, c0):
     """X[r0:r0+3, c0:c0+3] as a tuple of its rows (values: the lane kernels' form, ``mul3``)."""
     return ((X[r0, c0], X[r0, c0 + 1], X[r0, c0 + 2]), (X[r0 + 1, c0], X[r0 + 1, c0 + 1], X[r0 + 1, c0 + 2]),
             (X[r0 + 2, c0], X[r0 + 2, c0 + 1], X[r0 + 2, c0 + 2]))
-
-
-@njit(cache=True, inline="always")
-def inertia_to_parent(R, p, Ia, out):
-    """out += ^λX*_i Iᵃ ⁱX_λ (RBDA Table 7.1, pass 2) for a symmetric Iᵃ (6, 6) = [[C, Bᵀ], [B, A]]: ``inertia_up``
-    of its blocks, added into out's."""
-    C, B, A = inertia_up(block3(R, 0, 0), (p[0], p[1], p[2]), block3(Ia, 0, 0), block3(Ia, 3, 0), block3(Ia, 3, 3))
-    for a in range(3):
-        for b in range(3):
-            out[a, b] += C[a][b]
-            out[3 + a, b] += B[a][b]
-            out[b, 3 + a] += B[a][b]
-            out[3 + a, 3 + b] += A[a][b]
 
 
 @njit(cache=True, inline="always")

@@ -5,11 +5,13 @@ model (``joints``), run as plain Python under MANIPDYN_NOJIT=1. Three passes ove
   1 (outward)  velocities v_i, velocity-product accelerations c_i, rigid inertias, bias forces p^A_i;
   2 (inward)   articulated inertias I^A_i and bias forces p^A_i, handed to the parent;
   3 (outward)  accelerations a_i and q̈_i.
-The passes are functions nested in ``aba_kernel`` (which numba inlines), in the chapter's symbols.
+Each pass is a set of steps on a body's record (``velocity_lane``, ``bias_lane``, ``articulated_lane``, ``handed_lane``,
+``acceleration_lane`` and their multi-dof forms), driven across a block of states (``aba_lanes``, the batch), for one
+state (``aba_steps_one``) and by a GPU thread (gpu.py): one source, in the chapter's symbols.
 It is generic over joint types: joint i has n_i = nv_j velocities and the motion subspace S_i (6 × n_i, its
 rows ``S[iv:iv+n_i]`` in the model's kernel form), constant in the body frame (c_J = 0, no Ṡ). For a
-1-dof joint D_i = S_iᵀ I^A_i S_i is a number; for the free-flyer root (S = 1₆) it is 6 × 6, factored by
-Cholesky (``cholesky``, n_i ≤ 6).
+1-dof joint D_i = S_iᵀ I^A_i S_i is a number; for a free flyer (S = 1₆), a ball or a planar joint it is n_i × n_i,
+factored by Cholesky (``articulated_multi``).
 
 Spatial vectors (owned here): 6-vectors in the order [linear; angular] — the order of S's rows and of
 Pinocchio — in each body's own frame, about its origin:
@@ -20,9 +22,10 @@ With (R, p) body i's placement in its parent λ (x_λ = R x_i + p, ``core``):
   ^λX*_i f = [R f; R n + p × R f]            force, body → parent
 Gravity enters as the base acceleration a_0 = −a_g = [−g; 0] (RBDA §5.3, docs/design.md §6).
 
-External wrenches enter inside the kernel (Table 7.1: p^A_i = v_i ×* I_i v_i − f^x_i, f^x_i in body
-coordinates), as ``arguments.wrench_rows`` lays them out: one row per named frame (body, the frame's origin in
-it, [force; moment about that origin] in body axes, or in world axes which the kernel turns into the body's).
+External wrenches enter after pass 1 (Table 7.1: p^A_i = v_i ×* I_i v_i − f^x_i, f^x_i in body coordinates;
+``lanes.external_lane``), as ``arguments.wrench_rows`` lays them out: one row per named frame (body, the frame's
+origin in it, [force; moment about that origin] in the body's z-aligned axes, or in world axes which the one-state
+driver turns into the body's, ``lanes.wrench_in_body``).
 
 ``forward_dynamics(..., method="cholesky")``: the M⁻¹ route, Cholesky of M (CRBA) with the right-hand side
 τ − rnea(q, q̇, 0) from the Newton–Euler code.
@@ -30,52 +33,26 @@ it, [force; moment about that origin] in body axes, or in world axes which the k
 from __future__ import annotations
 
 import math
-from collections import namedtuple
 
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..errors import InputError
-from ..joints import PLANAR, joint_placement
+from ..joints import PLANAR
 from ..model import FRICTION_EPS, MimicModel
 from . import mimic
-from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, cross_force, cross_motion, first_nonfinite,
-                       force_cross, force_to_parent, force_up, inertia_motion, inertia_to_parent, inertia_up,
-                       motion_cross, motion_down, motion_to_child, mul3, mul3t, rigid_inertia, scale)
+from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, first_nonfinite, force_cross, force_up,
+                       inertia_motion, inertia_up, motion_cross, motion_down, mul3, mul3t, scale)
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
-from .lanes import (LANES, add_sym3, gather_lanes, get3, get6, get_rotation, get_sym3, inertial_model, lane_record,
-                    motion_model, multi_model, multi_rates, on_lanes, placement_lanes, placement_model,
-                    planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes, scatter_lanes,
-                    screw_placement_one, selected, set3, set6, tree_depth)
+from .lanes import (LANES, add_sym3, external_lane, external_lanes, gather_lanes, get3, get6, get_rotation, get_sym3,
+                    inertial_model, lane_record, motion_model, multi_model, multi_rates, on_lanes, placement_lanes,
+                    placement_model, planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes,
+                    scatter_lanes, screw_placement_one, selected, set3, set6, tree_depth, wrench_in_body)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_lanes, rnea_steps_one
 from .route import route
 from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
-
-
-# -- the articulated-body algorithm -----------------------------------------------------------------------
-# One kernel; its three passes (and the external wrenches) are functions nested in it that share its model
-# and scratch arrays. numba inlines them; an array shared this way costs nothing per call, whereas every
-# array handed to an inlined function costs atomic reference counting (measured on ur5: the same passes
-# as module-level functions taking their ~20 arrays, 2.9 µs per state instead of 1.7 µs).
-
-Work = namedtuple("Work", "Rl pl Rw vel c pA acc IA I0 U L u Y t vJ a0")
-Work.__doc__ = """Scratch of one ABA kernel call (``workspace``), named as RBDA Table 7.1 names them: per body Rl (3, 3),
-pl (3,) its placement in its parent, Rw (3, 3) in the world, vel v_i, c c_i, pA p^A_i, acc a_i (6,), IA I^A_i, I0
-its rigid inertia I_i (6, 6); per joint velocity U (6,) (a row of U_iᵀ), L (6,) (a row of D_i's Cholesky factor),
-u (a number); temporaries Y (6, 6), t, vJ (6,) and a0 (6,), the base acceleration −a_g."""
-
-
-@njit(cache=True, inline="always")
-def workspace(nb, nv):
-    """The ``Work`` of a model with nb bodies and nv velocities, cut from five allocations into row blocks."""
-    R33, pl, u = np.empty((2 * nb, 3, 3)), np.empty((nb, 3)), np.empty(nv)
-    B6, B66 = np.empty((4 * nb + 2 * nv + 3, 6)), np.empty((2 * nb + 1, 6, 6))
-    e = 4 * nb + 2 * nv                                   # B6 rows: vel, c, pA, acc, U, L, then t, vJ, a0
-    return Work(R33[:nb], pl, R33[nb:], B6[:nb], B6[nb:2 * nb], B6[2 * nb:3 * nb], B6[3 * nb:4 * nb],
-                B66[:nb], B66[nb:2 * nb], B6[4 * nb:4 * nb + nv], B6[4 * nb + nv:e], u, B66[2 * nb],
-                B6[e], B6[e + 1], B6[e + 2])
 
 
 @njit(cache=True, inline="always")
@@ -88,188 +65,6 @@ def singular_threshold(inertia, mass):
             for b in range(3):
                 x = max(x, abs(inertia[i, a, b]))
     return 1e-14 * x
-
-
-@njit(cache=True, fastmath=False)              # as derivatives.py (its note)
-def aba_kernel(I, F, Q, V, Tau, X, body, point, world, out):
-    """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), with the applied wrenches X (N, K, 6)
-    on body (K,) about point (K, 3), in world axes if ``world`` (``arguments.wrench_rows``), by RBDA Table 7.1. Returns its status (dynamics/status.py):
-    -2 - i a singular D_i (joint i); -2 - nb - k a non-finite q̈ at flat index k of out
-    (arguments.raise_kernel_error)."""
-    mdl = unpack(I, F)
-    parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
-    axis, pitch, R0, p0, mass, com, inertia = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mass, mdl.com, mdl.inertia
-    mg, armature = mdl.mg, mdl.armature
-    N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
-    w = workspace(nb, nv)
-    Rl, pl, Rw, vel, c, pA, acc, IA, I0 = w.Rl, w.pl, w.Rw, w.vel, w.c, w.pA, w.acc, w.IA, w.I0
-    U, L, u, Y, t, vJ, a0 = w.U, w.L, w.u, w.Y, w.t, w.vJ, w.a0
-    for i in range(nb):
-        rigid_inertia(mass[i], com[i], inertia[i], I0[i])     # I_i, constant
-    for a in range(3):
-        a0[a], a0[3 + a] = mg[a], 0.0                         # a_0 = −a_g = [−g; 0]
-    dmin = singular_threshold(inertia, mass)
-
-    def velocities_and_biases(q, v):
-        """Pass 1 (outward):  v_J = S q̇,  v_i = ⁱX_λ v_λ + v_J,  c_i = v_i × v_J (c_J = 0: S constant in
-        the body frame),  I^A_i = I_i,  p^A_i = v_i ×* I_i v_i; with ``world`` also the bodies' world
-        orientations Rw_i = Rw_λ Rl_i (for world-axes external wrenches)."""
-        for i in range(nb):
-            joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)
-            for k in range(6):                # v_J = S_i q̇_i (as joints.joint_velocity; here 40 ns/body less)
-                x = 0.0
-                for r in range(iv[i], iv[i] + nvj[i]):
-                    x += S[r, k] * v[r]
-                vJ[k] = x
-            j = parent[i]
-            if j >= 0:
-                motion_to_child(Rl[i], pl[i], vel[j], vel[i])
-            for k in range(6):
-                vel[i, k] = vJ[k] + (vel[i, k] if j >= 0 else 0.0)
-            cross_motion(vel[i], vJ, c[i])
-            for a in range(6):                                    # I^A_i = I_i;  t = I_i v_i
-                x = 0.0
-                for b in range(6):
-                    IA[i, a, b] = I0[i, a, b]
-                    x += I0[i, a, b] * vel[i, b]
-                t[a] = x
-            cross_force(vel[i], t, pA[i])
-            if world:
-                for a in range(3):
-                    for b in range(3):
-                        Rw[i, a, b] = Rl[i, a, b] if j < 0 else \
-                            Rw[j, a, 0] * Rl[i, 0, b] + Rw[j, a, 1] * Rl[i, 1, b] + Rw[j, a, 2] * Rl[i, 2, b]
-
-    def subtract_applied_wrenches(w):
-        """p^A_i −= f^x_i (Table 7.1, pass 1): w[k] = [force; moment about point[k]] on body[k], in body
-        axes (or world axes with ``world``: turned by Rwᵀ first); about the body origin: n + p × f."""
-        for k in range(body.shape[0]):
-            b = body[k]
-            for a in range(3):
-                if world:
-                    t[a] = Rw[b, 0, a] * w[k, 0] + Rw[b, 1, a] * w[k, 1] + Rw[b, 2, a] * w[k, 2]
-                    t[3 + a] = Rw[b, 0, a] * w[k, 3] + Rw[b, 1, a] * w[k, 4] + Rw[b, 2, a] * w[k, 5]
-                else:
-                    t[a], t[3 + a] = w[k, a], w[k, 3 + a]
-            px, py, pz = point[k, 0], point[k, 1], point[k, 2]
-            t[3] += py * t[2] - pz * t[1]
-            t[4] += pz * t[0] - px * t[2]
-            t[5] += px * t[1] - py * t[0]
-            for a in range(6):
-                pA[b, a] -= t[a]
-
-    def articulated_inertias(tau, qdd):
-        """Pass 2 (inward):  U_i = I^A_i S_i,  D_i = S_iᵀ U_i + diag(armature_i) (= L Lᵀ),  u_i = τ_i − S_iᵀ p^A_i,  and for a
-        child of a body:  Iᵃ = I^A_i − U_i D_i⁻¹ U_iᵀ,  pᵃ = p^A_i + Iᵃ c_i + U_i D_i⁻¹ u_i,
-        I^A_λ += ^λX*_i Iᵃ ⁱX_λ,  p^A_λ += ^λX*_i pᵃ  (with Y = L⁻¹ U_iᵀ: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ L⁻¹ u).
-        A one-dof joint's scalar D is used as it is, U (Uᵀ / D): through Y = U / √D the subtraction Iᵃ = I^A − Y Yᵀ,
-        which cancels heavily on ill-conditioned chains, lost ~10× in q̈ (median relative error 6e-15 against
-        4e-16 on a uniform 6-link planar chain, 50-digit reference; bench report, hard cases).
-        Returns -1, -2 - i when D_i has a pivot not > dmin (singular), or -2 - nb - r (pivot NaN, in qdd[r])."""
-        for i in range(nb - 1, -1, -1):
-            a, n = iv[i], nvj[i]
-            for r in range(a, a + n):
-                for k in range(6):                              # U = I^A S, over S's nonzero entries
-                    U[r, k] = 0.0
-                for col in range(6):
-                    if S[r, col] != 0.0:
-                        for k in range(6):
-                            U[r, k] += IA[i, k, col] * S[r, col]
-                for k in range(n):                              # D = Sᵀ U;  u = τ − Sᵀ p^A
-                    L[r, k] = (S[r, 0] * U[a + k, 0] + S[r, 1] * U[a + k, 1] + S[r, 2] * U[a + k, 2]
-                               + S[r, 3] * U[a + k, 3] + S[r, 4] * U[a + k, 4] + S[r, 5] * U[a + k, 5])
-                L[r, r - a] += armature[r]                      # D = Sᵀ I^A S + diag(armature) (Pinocchio's aba)
-                u[r] = tau[r] - (S[r, 0] * pA[i, 0] + S[r, 1] * pA[i, 1] + S[r, 2] * pA[i, 2]
-                                 + S[r, 3] * pA[i, 3] + S[r, 4] * pA[i, 4] + S[r, 5] * pA[i, 5])
-            if n == 1:                                          # a scalar D_i stays as it is (below)
-                k = -1 if L[a, 0] > dmin else 0
-            else:
-                k = cholesky(L[a:a + n], n, dmin)
-            if k >= 0:
-                if np.isnan(L[a + k, k]):                       # an intermediate overflowed
-                    qdd[a + k] = L[a + k, k]
-                    return bad_result(nb, a + k)
-                return singular_joint(i)
-            j = parent[i]
-            if j < 0:
-                continue
-            if n == 1:                                          # Iᵃ = I^A − U (Uᵀ / D),  pᵃ = p^A + Iᵃ c + U u / D
-                D, ud = L[a, 0], u[a] / L[a, 0]
-                for k1 in range(6):
-                    for k2 in range(k1 + 1):
-                        x = IA[i, k1, k2] - U[a, k1] * (U[a, k2] / D)
-                        IA[i, k1, k2] = x
-                        IA[i, k2, k1] = x
-                for k1 in range(6):
-                    x = U[a, k1] * ud
-                    for k2 in range(6):
-                        x += IA[i, k1, k2] * c[i, k2]
-                    pA[i, k1] += x
-                inertia_to_parent(Rl[i], pl[i], IA[i], IA[j])
-                force_to_parent(Rl[i], pl[i], pA[i], pA[j])
-                continue
-            for r in range(n):                                  # [Y | t] = L⁻¹ [U_iᵀ | u_i]  (n × 7)
-                d = 1.0 / L[a + r, r]
-                for k in range(6):
-                    x = U[a + r, k]
-                    for b in range(r):
-                        x -= L[a + r, b] * Y[b, k]
-                    Y[r, k] = x * d
-                x = u[a + r]
-                for b in range(r):
-                    x -= L[a + r, b] * t[b]
-                t[r] = x * d
-            for k1 in range(6):                                 # Iᵃ = I^A_i − Yᵀ Y, in place (symmetric)
-                for k2 in range(k1 + 1):
-                    x = IA[i, k1, k2]
-                    for r in range(n):
-                        x -= Y[r, k1] * Y[r, k2]
-                    IA[i, k1, k2] = x
-                    IA[i, k2, k1] = x
-            for k1 in range(6):                                 # pᵃ = p^A_i + Iᵃ c_i + Yᵀ t, in place
-                x = 0.0
-                for k2 in range(6):
-                    x += IA[i, k1, k2] * c[i, k2]
-                for r in range(n):
-                    x += Y[r, k1] * t[r]
-                pA[i, k1] += x
-            inertia_to_parent(Rl[i], pl[i], IA[i], IA[j])
-            force_to_parent(Rl[i], pl[i], pA[i], pA[j])
-        return -1
-
-    def accelerations(qdd):
-        """Pass 3 (outward):  a'_i = ⁱX_λ a_λ + c_i (a_0 = −a_g),  q̈_i = D_i⁻¹ (u_i − U_iᵀ a'_i) (Cholesky
-        solve),  a_i = a'_i + S_i q̈_i."""
-        for i in range(nb):
-            j = parent[i]
-            motion_to_child(Rl[i], pl[i], a0 if j < 0 else acc[j], acc[i])
-            for k in range(6):
-                acc[i, k] += c[i, k]
-            a, n = iv[i], nvj[i]
-            for r in range(a, a + n):
-                qdd[r] = u[r] - (U[r, 0] * acc[i, 0] + U[r, 1] * acc[i, 1] + U[r, 2] * acc[i, 2]
-                                 + U[r, 3] * acc[i, 3] + U[r, 4] * acc[i, 4] + U[r, 5] * acc[i, 5])
-            if n == 1:
-                qdd[a] /= L[a, 0]
-            else:
-                cholesky_solve(L[a:a + n], n, qdd[a:a + n])
-            for r in range(a, a + n):                             # a_i = a'_i + S_i q̈_i
-                for k in range(6):
-                    acc[i, k] += S[r, k] * qdd[r]
-
-    for s in range(N):
-        if not finite_state(Q, V, Tau, s):
-            return bad_input(s)
-        velocities_and_biases(Q[s], V[s])                          # pass 1
-        subtract_applied_wrenches(X[s])
-        code = articulated_inertias(Tau[s], out[s])                # pass 2
-        if code != OK:
-            return shift(code, s, nb, nv)
-        accelerations(out[s])                                       # pass 3
-        k = first_nonfinite(out, s)
-        if k >= 0:                                                  # an intermediate overflowed
-            return bad_result(nb, s * nv + k)
-    return OK
 
 
 # -- the lane kernel: the three passes across a block of states ------------------------------------------------
@@ -285,17 +80,19 @@ ARTICULATED = 65                                                              # 
 
 @njit(cache=True, fastmath=CONTRACT)
 def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
-    """``aba_kernel``'s q̈ (and code) for a batch, block by block across lanes: the batch entry of aba.
+    """q̈ (N, nv) into out for every state of Q (N, nq), V, Tau (N, nv), block by block across lanes (RBDA Table 7.1):
+    the batch entry of aba. Its status as ``aba_steps_one``'s, the state shifted. (I, F): the model in z-aligned
+    frames (``Model.kernel.lane_arrays``: another form raises).
 
-    Runs ``aba_kernel`` itself for external wrenches and for a model with a joint the lanes do not take
-    (``lanes.on_lanes``), and
-    runs a block with a non-finite input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` state by
-    state as a one-state call does (``aba_steps_one``: its code then names the state, the joint or the entry).
-    Every lane is computed alone, so a state's q̈ does not depend on the batch around it; it agrees with the
-    one-state call's to rounding (tests/batch/test_lanes.py)."""
+    External wrenches X (N, K, 6) (``arguments.wrench_rows``, in z-aligned axes; K = 0 for none) enter between the
+    first two passes (``lanes.external_lanes``). A block with a non-finite
+    input or q̈, a singular D_i or an angle beyond ``spatial.SINCOS_MAX`` runs state by state too, as a one-state
+    call does: its status names the state, the joint or the entry. Every lane is computed alone, so a state's q̈
+    does not depend on the batch around it; it agrees with the one-state call's to rounding
+    (tests/batch/test_lanes.py)."""
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if body.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):
-        return aba_kernel(I, F, Q, V, Tau, X, body, point, world, out)
+    if not on_lanes(unpack(I, F), nq, True):
+        raise ValueError("the ABA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone (as rnea_lanes)
     mdl = unpack(I, F)
@@ -310,6 +107,7 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
     for i in range(nb):
         slot[i], m = m, m + (mdl.nvj[i] > 1)
     G = np.empty(m * MULTI * L)
+    W, path = np.empty(6 * L), np.empty(nb, np.int64)      # a wrench of the block, a body's path (external_lanes)
     for s0 in range(0, N, L):
         n = min(L, N - s0)
         ok = gather_lanes(Q, s0, n, Z, 0, SINCOS_MAX) & gather_lanes(V, s0, n, Z, nq) \
@@ -323,6 +121,8 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
                     velocity_multi_lanes(i, mdl, B, par, Z, nq)
                 else:
                     velocity_lanes(i, mdl, B, par, Z, nq)
+            if body.shape[0] > 0:                                        # external wrenches: p^A_b −= f^x_b
+                external_lanes(parent, even, odd, depth, ARTICULATED, _PA, X, s0, n, body, point, world, W, path)
             singular = 0
             for i in range(nb - 1, -1, -1):                              # pass 2 (inward)
                 j = parent[i]
@@ -347,7 +147,8 @@ def aba_lanes(I, F, Q, V, Tau, X, body, point, world, out):
             ok = scatter_lanes(QDD, n, out, s0)
         if not ok:                                  # each state as a one-state call computes it: its code
             for s in range(s0, s0 + n):             # names the culprit
-                code = aba_steps_one(Im, Fm, Q[s], V[s], Tau[s], out[s])
+                code = aba_steps_one(Im, Fm, Q[s], V[s], Tau[s], X[s if X.shape[0] > 1 else 0], body, point, world,
+                                     out[s])
                 if code != OK:
                     return shift(code, s, nb, nv)
     return OK
@@ -367,7 +168,7 @@ def rigid_model(i, mdl):
 
 @njit(cache=True, fastmath=CONTRACT)
 def velocity_lanes(i, mdl, B, par, Z, nq):
-    """Pass 1 for body i, every lane of the block (``aba_kernel``'s velocities_and_biases): placement, then
+    """Pass 1 for body i, every lane of the block (pass 1): placement, then
     ``velocity_lane``, then ``bias_lane``."""
     placement_lanes(i, mdl, B, Z)
     mm, rm, im = motion_model(i, mdl, nq), rigid_model(i, mdl), inertial_model(i, mdl)
@@ -439,7 +240,7 @@ def articulated_model(i, mdl, nq):
 
 @njit(cache=True, fastmath=CONTRACT, error_model="numpy")      # (x / 0 is ±inf, not a raise: a branch less)
 def articulated_lanes(i, mdl, dmin, B, Z, child, nq):
-    """Pass 2 for body i, every lane of the block (``aba_kernel``'s articulated_inertias, one velocity):
+    """Pass 2 for body i, every lane of the block (one velocity):
     ``articulated_lane``, and for a child of a body (``child``) ``handed_lane``. Returns the number of lanes whose
     D_i is not > dmin (singular, or NaN)."""
     am = articulated_model(i, mdl, nq)
@@ -474,7 +275,7 @@ def articulated_lane(am, dmin, B, Z, l, L):
 # -- a free flyer or a ball joint: n velocities, S = [0; 1_n] (the last n rows of a spatial vector, o = 6 − n) --------
 # Its record (MULTI rows of L numbers): the Cholesky factor 𝓛 of D_i = Sᵀ I^A_i S + diag(armature) (21 rows, packed
 # lower triangle: row r, column c at r(r+1)/2 + c), Y = 𝓛⁻¹ U_iᵀ (6 rows per velocity), t = 𝓛⁻¹ u_i (6 rows); as the
-# one-state kernel's multi-dof branch (``aba_kernel``: U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ t, q̈ = 𝓛⁻ᵀ (t − Y a')): ``articulated_multi``,
+# one-dof steps, with D a matrix (U D⁻¹ Uᵀ = Yᵀ Y, U D⁻¹ u = Yᵀ t, q̈ = 𝓛⁻ᵀ (t − Y a')): ``articulated_multi``,
 # ``handed_multi``, ``acceleration_multi``.
 MULTI = 63
 _Y, _T = 21, 57                     # first rows of Y and t
@@ -632,7 +433,10 @@ def acceleration_multi(n, r0, B, G, par, QDD, l0, l1, L, planar):
 
 @njit(cache=True, inline="always")
 def handed_lane(B, l, L):
-    """At lane l, in place: Iᵃ = I^A_i − U (Uᵀ/D) and pᵃ = p^A_i + Iᵃ c_i + U u/D, what body i hands its parent."""
+    """At lane l, in place: Iᵃ = I^A_i − U (Uᵀ/D) and pᵃ = p^A_i + Iᵃ c_i + U u/D, what body i hands its parent.
+    The scalar D is used as it is: through Y = U / √D the subtraction Iᵃ = I^A − Y Yᵀ, which cancels heavily on
+    ill-conditioned chains, lost ~10× in q̈ (median relative error 6e-15 against 4e-16 on a uniform 6-link planar
+    chain, 50-digit reference; bench report, hard cases)."""
     U, D, u = get6(B, _U, l, L), B[_D * L + l], B[(_D + 1) * L + l]
     W, ud = (U[0] / D, U[1] / D, U[2] / D, U[3] / D, U[4] / D, U[5] / D), u / D
     for k in range(3):                                      # C −= U_l W_lᵀ, A −= U_a W_aᵀ (xx, yy, zz, xy, xz, yz)
@@ -698,7 +502,7 @@ def acceleration_lanes(i, mdl, B, par, QDD, nq):
 
 @njit(cache=True, inline="always")
 def acceleration_lane(am, B, par, QDD, l, L):
-    """At lane l (``aba_kernel``'s accelerations): a'_i = ⁱX_λ a_λ + c_i (par: a_λ), q̈_i = (u_i − U_iᵀ a'_i) / D_i into
+    """At lane l (pass 3): a'_i = ⁱX_λ a_λ + c_i (par: a_λ), q̈_i = (u_i − U_iᵀ a'_i) / D_i into
     row iv_i of QDD, a_i = a'_i + s q̈_i (am: ``articulated_model``)."""
     r, s, _, _ = am
     R, p, w = get_rotation(B, l, L), get3(B, 9, l, L), get3(par, 3, l, L)
@@ -714,97 +518,107 @@ def acceleration_lane(am, B, par, QDD, l, L):
 
 @njit(cache=True)
 def aba_one(I, F, q, v, tau, out):
-    """One state (nq,), (nv,) without external wrenches, through the lane kernel's steps for one lane
-    (``aba_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
-    return aba_steps_one(I, F, q, v, tau, out)
-
-
-@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
-def aba_steps_one(I, F, q, v, tau, out):
-    """q̈ (nv,) of one state by the steps of the lane kernel (``aba_lanes``), driven for one lane: records of one
-    number a row (L = 1), the same velocity, bias, articulated-inertia, hand-off and acceleration steps (a free
-    flyer's or a ball's multi-dof steps included), in the same z-aligned frames — one source for a batch and for
-    one state. A helical joint's slide and an angle beyond ``spatial.SINCOS_MAX`` are placed as the RNEA's and the
-    CRBA's drivers place them (``lanes.screw_placement_one``). A model the lane steps do not take (``lanes.on_lanes``),
-    a non-finite input, a D_i not > dmin or a non-finite q̈ runs ``aba_kernel``, whose status names the culprit."""
-    mdl = unpack(I, F)
-    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
-    parent, nvj = mdl.parent, mdl.nvj
-    ok = on_lanes(mdl, nq, True) and first_nonfinite(q[np.newaxis, :], 0) < 0 \
-        and first_nonfinite(v[np.newaxis, :], 0) < 0 and first_nonfinite(tau[np.newaxis, :], 0) < 0
-    if ok:
-        m = 0
-        for i in range(nb):
-            m += nvj[i] > 1
-        W = np.empty(nb * ARTICULATED + 12 + nq + 2 * nv + m * MULTI)   # records, the base, q q̇ τ, multi-dof
-        Rec, base = W[:nb * ARTICULATED], W[nb * ARTICULATED:nb * ARTICULATED + 12]
-        Z = W[nb * ARTICULATED + 12:nb * ARTICULATED + 12 + nq + 2 * nv]
-        G = W[nb * ARTICULATED + 12 + nq + 2 * nv:]
-        for k in range(nq):
-            Z[k] = q[k]
-        for k in range(nv):
-            Z[nq + k], Z[nq + nv + k] = v[k], tau[k]
-        for k in range(12):
-            base[k] = 0.0
-        base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]     # a_0 = [−g; 0]
-        dmin = singular_threshold(mdl.inertia, mdl.mass)
-        for i in range(nb):                                             # pass 1 (outward)
-            j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
-            par = base[:6] if j < 0 else Rec[j * ARTICULATED + _V:j * ARTICULATED + _V + 6]
-            if nvj[i] > 1:                                              # a free flyer, a ball, a planar joint
-                if mdl.kind[i] == PLANAR:
-                    planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
-                else:
-                    quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
-                velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, 0, 1)
-            else:
-                screw_placement_one(i, mdl, B, Z)
-                velocity_lane(motion_model(i, mdl, nq), B, par, Z, 0, 1)
-            bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, 0, 1)
-        singular, g = 0, m
-        for i in range(nb - 1, -1, -1):                                 # pass 2 (inward)
-            j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
-            n = nvj[i]
-            if n > 1:
-                g -= 1                                                  # (records in body order: the last first)
-                Gi, r = G[g * MULTI:(g + 1) * MULTI], mdl.iv[i]
-                singular += articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, 0, 1, 1,
-                                              mdl.kind[i] == PLANAR)
-                if j >= 0:
-                    handed_multi(n, B, Gi, 0, 1, 1)
-            else:
-                singular += articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, 0, 1)
-                if j >= 0:
-                    handed_lane(B, 0, 1)
-            if j >= 0:
-                P = Rec[j * ARTICULATED:(j + 1) * ARTICULATED]
-                inertia_up_lane(B, P, 0, 1)
-                bias_up_lane(B, P, 0, 1)
-        ok = singular == 0
-        if ok:
-            for i in range(nb):                                         # pass 3 (outward)
-                j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
-                par = base[6:] if j < 0 else Rec[j * ARTICULATED + _A:j * ARTICULATED + _A + 6]
-                if nvj[i] > 1:
-                    acceleration_multi(nvj[i], mdl.iv[i], B, G[g * MULTI:(g + 1) * MULTI], par, out, 0, 1, 1,
-                                       mdl.kind[i] == PLANAR)
-                    g += 1
-                else:
-                    acceleration_lane(articulated_model(i, mdl, nq), B, par, out, 0, 1)
-            ok = first_nonfinite(out[np.newaxis, :], 0) < 0
-    if ok:
-        return OK
+    """One state (nq,), (nv,) without external wrenches: ``aba_steps_one`` ((I, F) in z-aligned frames,
+    ``Model.kernel.lane_arrays``)."""
     X, xb, xp, world = no_wrenches(I, F)
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
-                      out[np.newaxis, :])
+    return aba_steps_one(I, F, q, v, tau, X[0], xb, xp, world, out)
 
 
 @njit(cache=True)
 def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
-    """One state with one external wrench in ``arguments.fast_wrenches``' form: aba_kernel with N = 1."""
+    """One state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned frames, as
+    (I, F)): ``aba_steps_one``."""
     X, xb, xp = wrench_rows_of(f, m, P)
-    return aba_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
-                      out[np.newaxis, :])
+    return aba_steps_one(I, F, q, v, tau, X[0], xb, xp, world, out)
+
+
+@njit(cache=True, fastmath=CONTRACT, error_model="numpy")
+def aba_steps_one(I, F, q, v, tau, X, xb, xp, world, out):
+    """q̈ (nv,) of one state by the steps of the lane kernel (``aba_lanes``), driven for one lane: records of one
+    number a row (L = 1), the same velocity, bias, articulated-inertia, hand-off and acceleration steps (a free
+    flyer's, a ball's or a planar joint's multi-dof steps included), in the same z-aligned frames ((I, F) =
+    ``Model.kernel.lane_arrays``: another form raises) — one source for a batch and for one state. A helical joint's
+    slide and an angle beyond ``spatial.SINCOS_MAX`` are placed as the RNEA's and the CRBA's drivers place them
+    (``lanes.screw_placement_one``). External wrenches X (K, 6) on bodies xb about their points xp, in the bodies'
+    z-aligned axes or (world) in world axes, enter after pass 1: p^A_b −= f^x_b (Table 7.1; ``lanes.external_lane``;
+    K = 0 for none: ``kernel_inputs.no_wrenches``). Returns its status (dynamics/status.py): a non-finite q, q̇ or
+    τ; −2 − i for joint i whose D_i has a pivot not > dmin (``singular_threshold``: a massless moving subtree); −2 −
+    nb − r for a non-finite q̈_r (an intermediate overflowed: a NaN pivot of D_i is reported in its first row)."""
+    mdl = unpack(I, F)
+    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
+    parent, nvj = mdl.parent, mdl.nvj
+    if not on_lanes(mdl, nq, True):
+        raise ValueError("the ABA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
+    if not finite_state(q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], 0):
+        return bad_input(0)
+    m = 0
+    for i in range(nb):
+        m += nvj[i] > 1
+    W = np.empty(nb * ARTICULATED + 12 + nq + 2 * nv + m * MULTI)   # records, the base, q q̇ τ, multi-dof
+    Rec, base = W[:nb * ARTICULATED], W[nb * ARTICULATED:nb * ARTICULATED + 12]
+    Z = W[nb * ARTICULATED + 12:nb * ARTICULATED + 12 + nq + 2 * nv]
+    G = W[nb * ARTICULATED + 12 + nq + 2 * nv:]
+    for k in range(nq):
+        Z[k] = q[k]
+    for k in range(nv):
+        Z[nq + k], Z[nq + nv + k] = v[k], tau[k]
+    for k in range(12):
+        base[k] = 0.0
+    base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]     # a_0 = [−g; 0]
+    dmin = singular_threshold(mdl.inertia, mdl.mass)
+    for i in range(nb):                                             # pass 1 (outward)
+        j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+        par = base[:6] if j < 0 else Rec[j * ARTICULATED + _V:j * ARTICULATED + _V + 6]
+        if nvj[i] > 1:                                              # a free flyer, a ball, a planar joint
+            if mdl.kind[i] == PLANAR:
+                planar_placement_lane(placement_model(i, mdl), B, Z, 0, 1)
+            else:
+                quat_placement_lane(quat_model(i, mdl), B, Z, 0, 1)
+            velocity_multi_lane(multi_model(i, mdl, nq), B, par, Z, 0, 1)
+        else:
+            screw_placement_one(i, mdl, B, Z)
+            velocity_lane(motion_model(i, mdl, nq), B, par, Z, 0, 1)
+        bias_lane(rigid_model(i, mdl), inertial_model(i, mdl), B, 0, 1)
+    for k in range(xb.shape[0]):                                    # external wrenches: p^A_b −= f^x_b
+        fe, ne = wrench_in_body(parent, Rec, ARTICULATED, X, k, xb[k], world)
+        external_lane(Rec[xb[k] * ARTICULATED:(xb[k] + 1) * ARTICULATED], _PA, fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]),
+                      0, 1)
+    g = m
+    for i in range(nb - 1, -1, -1):                                 # pass 2 (inward)
+        j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+        n, r = nvj[i], mdl.iv[i]
+        g -= n > 1                                                  # (records in body order: the last first)
+        Gi = G[g * MULTI:(g + 1) * MULTI]
+        if n > 1:
+            bad = articulated_multi(n, mdl.armature[r:r + n], nq + nv + r, dmin, B, Gi, Z, 0, 1, 1,
+                                    mdl.kind[i] == PLANAR)
+        else:
+            bad = articulated_lane(articulated_model(i, mdl, nq), dmin, B, Z, 0, 1)
+        if bad:                                                     # singular, or NaN from an overflow in I^A
+            for k in range(_IA, _PA):
+                if not math.isfinite(B[k]):
+                    out[r] = np.nan
+                    return bad_result(nb, r)
+            return singular_joint(i)
+        if j >= 0:
+            if n > 1:
+                handed_multi(n, B, Gi, 0, 1, 1)
+            else:
+                handed_lane(B, 0, 1)
+            P = Rec[j * ARTICULATED:(j + 1) * ARTICULATED]
+            inertia_up_lane(B, P, 0, 1)
+            bias_up_lane(B, P, 0, 1)
+    for i in range(nb):                                             # pass 3 (outward)
+        j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]
+        par = base[6:] if j < 0 else Rec[j * ARTICULATED + _A:j * ARTICULATED + _A + 6]
+        if nvj[i] > 1:
+            acceleration_multi(nvj[i], mdl.iv[i], B, G[g * MULTI:(g + 1) * MULTI], par, out, 0, 1, 1,
+                               mdl.kind[i] == PLANAR)
+            g += 1
+        else:
+            acceleration_lane(articulated_model(i, mdl, nq), B, par, out, 0, 1)
+    k = first_nonfinite(out[np.newaxis, :], 0)                      # (an intermediate overflowed)
+    return OK if k < 0 else bad_result(nb, k)
 
 
 # -- the M⁻¹ route ----------------------------------------------------------------------------------------
@@ -825,7 +639,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     ``lanes``, the lane kernels' block: M and h across states; N = 1000, one thread: chain32 13.0 → 7.7 µs a state,
     AAU arm 1.25 → 0.43 µs), so that their M (scratch) stay in cache; without (one state, N = 1: a block of lanes
     costs LANES states) the one-lane drivers of the same steps (``crba.crba_steps_one``, ``rnea.rnea_steps_one``).
-    (I, F) in z-aligned frames (``Model.kernel.lane_arrays``), the wrenches in them as ``aba_kernel``'s. Returns its status (dynamics/status.py): -2 - i a
+    (I, F) in z-aligned frames (``Model.kernel.lane_arrays``), the wrenches in them as ``aba_lanes``'s. Returns its status (dynamics/status.py): -2 - i a
     pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
@@ -891,7 +705,10 @@ _QVT, _FD = ("q", "v", "tau"), (*MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2)      #
 _ONE, _FEXT_ONE = (*MODEL, A1, A1, A1, A1), (*MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1)
 
 
-@route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), entry(aba_lanes, *_FD), wrenches=True,
+ABA = entry(aba_lanes, *_FD)          # the batch entry (also the derivatives' q̈: derivatives.py)
+
+
+@route("aba", _QVT, "q̈", "v", entry(aba_one, *_ONE), ABA, wrenches=True,
        lanes=True, one_lanes=True, wrench_one=entry(aba_fext_one, *_FEXT_ONE), mimic=lambda mm, *x, **kw: mimic.forward_dynamics(mm, rnea, crba, *x, **kw))
 def aba(model, q, v, tau, *, f_ext=None, f_ext_frame="local", threads=None, out=None):
     """q̈ (nv,) or (N, nv) by the articulated-body algorithm (RBDA Table 7.1).

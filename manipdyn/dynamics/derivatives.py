@@ -32,22 +32,23 @@ angular part of J_j), = [ω_j × f; p × (ω_j × f) + ω_j × n] =: A^ext_b ω_
 subtree as A^c_i), added to ∂τ_j/∂q_i and ∂τ_i/∂q_j as J_jᵀ A^c_i ω_i and J_iᵀ A^c_i ω_j.
 
 Forward dynamics: ∂q̈/∂τ = M⁻¹, ∂q̈/∂q = −M⁻¹ ∂τ/∂q |_{q̈ = aba(q, q̇, τ)}, ∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇ (differentiating
-τ = ID(q, q̇, FD(q, q̇, τ))). q̈ from ``aba_kernel``; M⁻¹ by a Cholesky factorisation of the M = ∂τ/∂q̈ of the
+τ = ID(q, q̇, FD(q, q̇, τ))). q̈ from the ABA (``aba.aba_steps_one``, ``aba.aba_lanes``), first; M⁻¹ by a Cholesky factorisation of the M = ∂τ/∂q̈ of the
 same pass, in the kernel (O(n³) where the passes are O(n·d); not the O(n²) ABA-based M⁻¹).
 """
 from __future__ import annotations
 
 import numpy as np
 
-# These kernels round as written, without fused multiply-adds (_jit.CONTRACT), and so does aba.aba_kernel, whose
-# q̈ they differentiate: ∂q̈ is a solve with M, which magnifies a rounding change by cond(M) (above 1e-14 on
-# solo12), and the uncompiled source must give the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py).
+# These kernels round as written, without fused multiply-adds (_jit.CONTRACT), so that the uncompiled source gives
+# the compiled numbers bit for bit (tests/crosscheck/test_derivatives.py). The q̈ they differentiate is the ABA's lane
+# steps', which fuse: ∂q̈ is a solve with M, which magnifies that rounding change by cond(M) (measured 2.5e-14 between
+# the compiled and the uncompiled ∂q̈/∂q on solo12).
 
 from .._jit import A1, A2, A3, C2, C3, FLAG, I1, MODEL, entry, njit
 from ..joints import joint_placement
 from ..spatial import (cross_force, cross_motion, dot6, first_nonfinite_entry, inertia_variation, mat6, rigid6,
                        spd_inverse, world_inertia, world_motion)
-from .aba import aba_kernel
+from .aba import ABA, aba_steps_one
 from .route import is_dask, lazy, run_chunks, thread_count
 from .kernel_inputs import finite_state, no_wrenches
 from .model_arrays import kernel_arrays, unpack
@@ -279,14 +280,11 @@ def rnea_derivatives_kernel(I, F, Q, V, A, X, xb, xp, world, dq, dv, da):
 
 @njit(cache=True, fastmath=False)
 def aba_derivatives_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd, dq, dv, Minv):
-    """∂q̈/∂q, ∂q̈/∂q̇ (N, nv, nv) into dq, dv and M⁻¹ into Minv: q̈ = aba (into qdd), the RNEA derivatives at
-    q̈ (M into Minv), then M⁻¹ by Cholesky and ∂q̈/∂x = −M⁻¹ ∂τ/∂x. Returns -1; aba_kernel's codes (a bad
-    input, −2 − i a singular joint i, −2 − nb − k a non-finite q̈ at flat index k < N·nv of qdd); −2 − i for
+    """∂q̈/∂q, ∂q̈/∂q̇ (N, nv, nv) into dq, dv and M⁻¹ into Minv at q̈ = aba(q, q̇, τ), given in qdd (N, nv) (the ABA's,
+    computed first by ``aba.aba_lanes`` or ``aba.aba_steps_one``): the RNEA derivatives at q̈ (M into Minv), then M⁻¹ by Cholesky and
+    ∂q̈/∂x = −M⁻¹ ∂τ/∂x. Tau is not read (the signature of the batch entries). Returns -1; a bad input; −2 − i for
     a pivot of M not > 0 at joint i; −2 − nb − N·nv − k for a non-finite derivative, k as in
-    rnea_derivatives_kernel (w = 0 dq, 1 dv, 2 M⁻¹)."""
-    code = aba_kernel(I, F, Q, V, Tau, X, xb, xp, world, qdd)
-    if code != -1:
-        return code
+    rnea_derivatives_kernel (w = 0 dq, 1 dv, 2 M⁻¹): after the N·nv entries of q̈, which the ABA reports."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     code = rnea_derivatives_kernel(I, F, Q, V, qdd, X, xb, xp, world, dq, dv, Minv)
     if code != -1:
@@ -325,8 +323,13 @@ def rnea_derivatives_one(I, F, q, v, a, dq, dv, da):
 
 
 @njit(cache=True, fastmath=False)
-def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
-    """One state (nq,), (nv,), no external wrench: the kernel on row views, no Python-side reshapes."""
+def aba_derivatives_one(I, F, Il, Fl, q, v, tau, qdd, dq, dv, Minv):
+    """One state (nq,), (nv,), no external wrench: q̈ by ``aba.aba_steps_one`` on the model in z-aligned frames
+    (Il, Fl: ``Model.kernel.lane_arrays``), then the kernel on row views, no Python-side reshapes."""
+    X, xb, xp, world = no_wrenches(Il, Fl)
+    code = aba_steps_one(Il, Fl, q, v, tau, X[0], xb, xp, world, qdd)
+    if code != OK:
+        return code
     X, xb, xp, world = no_wrenches(I, F)
     return aba_derivatives_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                                   qdd[np.newaxis, :], one_block(dq), one_block(dv), one_block(Minv))
@@ -337,7 +340,7 @@ def aba_derivatives_one(I, F, q, v, tau, qdd, dq, dv, Minv):
 RNEA_DERIVATIVES = entry(rnea_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, C3, C3, C3)
 ABA_DERIVATIVES = entry(aba_derivatives_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, C3, C3, C3)
 RNEA_DERIVATIVES_ONE = entry(rnea_derivatives_one, *MODEL, A1, A1, A1, C2, C2, C2)
-ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, A1, A1, A1, A1, C2, C2, C2)
+ABA_DERIVATIVES_ONE = entry(aba_derivatives_one, *MODEL, *MODEL, A1, A1, A1, A1, C2, C2, C2)
 
 
 # -- Python entry points ----------------------------------------------------------------------------------
@@ -385,7 +388,7 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
         D = (np.empty((nv, nv)), np.empty((nv, nv)), np.empty((nv, nv)))
         if fd:
             qdd = np.empty(nv)
-            code = ABA_DERIVATIVES_ONE.call(*kernel_arrays(model), q, v, x, qdd, *D)
+            code = ABA_DERIVATIVES_ONE.call(*kernel_arrays(model), *model.kernel.lane_arrays, q, v, x, qdd, *D)
         else:
             code = RNEA_DERIVATIVES_ONE.call(*kernel_arrays(model), q, v, x, *D)
         if code == -1:
@@ -395,6 +398,7 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
         (Q, V, Xs), single = as_batch(model, **dict(zip(names, (q, v, x))))
         N, nv = Q.shape[0], model.nv
         ext = wrench_rows(model, f_ext, f_ext_frame, N)
+        ext_lanes = wrench_rows(model, f_ext, f_ext_frame, N, True) if fd else ext   # (the ABA's: z-aligned axes)
         if model.njoints == 0:
             return tuple(unbatch(np.zeros((N, nv, nv)), single) for _ in range(3))
         D = tuple(np.empty((3, N, nv, nv)))   # one block, three views; every entry written (fresh zeros cost
@@ -406,6 +410,11 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
 
         def run(a, b):                          # rows a … b − 1 (route.run_chunks: on several threads)
             x = (ext[0][a:b] if ext[0].shape[0] == N else ext[0], *ext[1:])
+            if fd:                              # q̈ first: the ABA's batch entry
+                xl = (ext_lanes[0][a:b] if ext_lanes[0].shape[0] == N else ext_lanes[0], *ext_lanes[1:])
+                code = ABA.call(*model.kernel.lane_arrays, Q[a:b], V[a:b], Xs[a:b], *xl, world, qdd[a:b])
+                if code != OK:
+                    return code
             return kernel.call(*kernel_arrays(model), Q[a:b], V[a:b], Xs[a:b], *x, world, *(r[a:b] for r in results))
         code = run_chunks(run, N, thread_count(threads, call))
         if code == -1:
@@ -415,7 +424,7 @@ def _call(model, q, v, x, f_ext, f_ext_frame, fd, threads=None):
 
 def _raise(model, code, names, batches, call, outs, D, qdd):
     """The error of a kernel's return code: a bad input (InputError), a singular M (SingularError), a
-    non-finite q̈ (aba_kernel's codes, first N·nv of the flat codes when qdd is given) or a non-finite
+    non-finite q̈ (the ABA's codes, first N·nv of the flat codes when qdd is given) or a non-finite
     derivative entry (NumericalError naming the matrix, its row's joint and the state)."""
     nb, nv, N = model.njoints, model.nv, batches[0].shape[0]
     what, k = reading(code, nb)

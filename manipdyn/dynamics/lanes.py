@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import CONTRACT, njit
 from ..joints import HELICAL, PLANAR, PRISMATIC, REVOLUTE, multi_dof, quat_layout, quat_rotation
-from ..spatial import SINCOS_MAX, sincos
+from ..spatial import SINCOS_MAX, add, cross, mul3t, sincos, sub
 
 
 FINITE = 1.7976931348623157e308   # the largest float64: Σ|x| ≤ FINITE means every x is finite (gather_lanes)
@@ -120,6 +120,60 @@ def add_sym3(B, r, l, L, X):
 def get_rotation(B, l, L):
     """R, rows 0–8 of a lane record (``placement_lane``) at lane l, as a tuple of its rows."""
     return get3(B, 0, l, L), get3(B, 3, l, L), get3(B, 6, l, L)
+
+
+@njit(cache=True, inline="always")
+def external_lane(B, row, fe, ne, p, l, L):
+    """Rows row … row + 5 of a lane record, a wrench [f; n] about the body's origin (the RNEA's f'_i, n'_i, the ABA's
+    p^A_i), at lane l −= the wrench (f_e, n_e) the environment applies on the body about its point p, all in body
+    axes: f −= f_e, n −= n_e + p × f_e (the one place an external wrench enters a lane record)."""
+    set3(B, row, l, L, sub(get3(B, row, l, L), fe))
+    set3(B, row + 3, l, L, sub(get3(B, row + 3, l, L), add(ne, cross(p, fe))))
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def external_lanes(parent, even, odd, depth, rows, row, X, s0, n, xb, xp, world, W, path):
+    """``external_lane`` for every lane of the block, on rows row … row + 5 of the records (``rows`` numbers each;
+    ``lane_record``) of the bodies xb: for each wrench k, (f_e, n_e) = X[s, k] on body xb[k] about its point xp[k]
+    (body axes). A wrench in world axes is first turned into the body, Rw_bᵀ x = R_bᵀ ⋯ R_1ᵀ x with the placements R
+    of the bodies on the path from the base to b (their records, rows 0–8), applied from the base out. W: scratch
+    of 6 rows, path: of nb entries."""
+    for k in range(xb.shape[0]):
+        b = xb[k]
+        for c in range(6):
+            for l in range(LANES):
+                W[c * LANES + l] = X[s0 + min(l, n - 1), k, c]
+        if world:
+            m, j = 0, b
+            while j >= 0:                                   # the path b, λ(b), …, up to a child of the base
+                path[m] = j
+                m, j = m + 1, parent[j]
+            for t in range(m - 1, -1, -1):                  # from the base out: x ← R_jᵀ x
+                Bj = lane_record(even, odd, depth, path[t], rows)
+                for l in range(LANES):
+                    R = get_rotation(Bj, l, LANES)
+                    set3(W, 0, l, LANES, mul3t(R, get3(W, 0, l, LANES)))
+                    set3(W, 3, l, LANES, mul3t(R, get3(W, 3, l, LANES)))
+        B, p = lane_record(even, odd, depth, b, rows), (xp[k, 0], xp[k, 1], xp[k, 2])
+        for l in range(LANES):
+            external_lane(B, row, get3(W, 0, l, LANES), get3(W, 3, l, LANES), p, l, LANES)
+
+
+@njit(cache=True, inline="always")
+def wrench_in_body(parent, Rec, rows, X, k, b, world):
+    """(f_e, n_e): row k of X (K, 6), [force; moment] on body b, in b's axes — as given, or (``world``) turned from
+    world axes, R_bᵀ ⋯ R_1ᵀ x, with the placements R (rows 0–8) of the bodies from the base out to b, read from
+    one-lane records of ``rows`` numbers each (Rec, the one-state drivers')."""
+    fe, ne = (X[k, 0], X[k, 1], X[k, 2]), (X[k, 3], X[k, 4], X[k, 5])
+    if world:
+        path, m, j = np.empty(parent.shape[0], np.int64), 0, b
+        while j >= 0:                                   # the path b, λ(b), …, up to a child of the base
+            path[m] = j
+            m, j = m + 1, parent[j]
+        for t in range(m - 1, -1, -1):                  # from the base out: x ← R_jᵀ x
+            R = get_rotation(Rec[path[t] * rows:(path[t] + 1) * rows], 0, 1)
+            fe, ne = mul3t(R, fe), mul3t(R, ne)
+    return fe, ne
 
 
 @njit(cache=True, inline="always")

@@ -36,10 +36,10 @@ from ..joints import HELICAL, PLANAR, joint_force, joint_placement, joint_veloci
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
-from .lanes import (LANES, gather_lanes, get3, get_rotation, inertial_model, lane_record,
-                    motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes, placement_model,
-                    quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane, scatter_lanes, selected,
-                    screw_placement_one, set3, tree_depth)
+from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, get_rotation, inertial_model,
+                    lane_record, motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes,
+                    placement_model, quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane,
+                    scatter_lanes, selected, screw_placement_one, set3, tree_depth, wrench_in_body)
 from .model_arrays import kernel_arrays, unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -230,17 +230,8 @@ def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau):
                 motion_lane(mm, B, par, Z, 0, 1)
         inertial_lane(inertial_model(i, mdl), B, 0, 1)
     for k in range(xb.shape[0]):                                    # external wrenches (as external_lanes)
-        b = xb[k]
-        fe, ne = (X[k, 0], X[k, 1], X[k, 2]), (X[k, 3], X[k, 4], X[k, 5])
-        if world:                                                   # into body b's axes: R_bᵀ ⋯ R_1ᵀ x
-            path, m, j = np.empty(nb, np.int64), 0, b
-            while j >= 0:
-                path[m] = j
-                m, j = m + 1, mdl.parent[j]
-            for t in range(m - 1, -1, -1):
-                R = get_rotation(Rec[path[t] * RECORD:(path[t] + 1) * RECORD], 0, 1)
-                fe, ne = mul3t(R, fe), mul3t(R, ne)
-        external_lane(Rec[b * RECORD:(b + 1) * RECORD], fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), 0, 1)
+        fe, ne = wrench_in_body(mdl.parent, Rec, RECORD, X, k, xb[k], world)
+        external_lane(Rec[xb[k] * RECORD:(xb[k] + 1) * RECORD], _F, fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), 0, 1)
     for i in range(nb - 1, -1, -1):                                 # inward, Eqs. 15–18
         j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
         to = Rec[:0] if j < 0 else Rec[j * RECORD + _F:j * RECORD + _F + 6]
@@ -312,7 +303,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
                 else:
                     outward_lanes(i, mdl, B, par, Z, nq)
             if xb.shape[0] > 0:
-                external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path)
+                external_lanes(mdl.parent, even, odd, depth, RECORD, _F, X, s0, n, xb, xp, world, W, path)
             for i in range(nb - 1, -1, -1):                              # inward, Eqs. 15–18
                 j = parent[i]                                            # (a root's ``to`` is not read)
                 to = TB if j < 0 else lane_record(even, odd, depth, j, RECORD)[_F * LANES:(_F + 6) * LANES]
@@ -446,42 +437,6 @@ def inertial_lane(im, B, l, L):
     nc = add(mul3(J, dw), cross(w, mul3(J, w)))                                  # Eq. 14
     set3(B, 21, l, L, fc)
     set3(B, 24, l, L, add(nc, cross(cm, fc)))
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def external_lanes(mdl, even, odd, depth, X, s0, n, xb, xp, world, W, path):
-    """``external`` for every lane of the block: f'_b −= f_e, n'_b −= n_e + p × f_e (rows 21–26 of body b's record)
-    for each wrench k, (f_e, n_e) = X[s, k] on body xb[k] about its point xp[k] (body axes). A wrench in world axes
-    is first turned into the body, Rw_bᵀ x = R_bᵀ ⋯ R_1ᵀ x with the placements R of the bodies on the path from the
-    base to b (their records, rows 0–8), applied from the base out. W: scratch of 6 rows, path: of nb entries."""
-    parent = mdl.parent
-    for k in range(xb.shape[0]):
-        b = xb[k]
-        for c in range(6):
-            for l in range(LANES):
-                W[c * LANES + l] = X[s0 + min(l, n - 1), k, c]
-        if world:
-            m, j = 0, b
-            while j >= 0:                                   # the path b, λ(b), …, up to a child of the base
-                path[m] = j
-                m, j = m + 1, parent[j]
-            for t in range(m - 1, -1, -1):                  # from the base out: x ← R_jᵀ x
-                Bj = lane_record(even, odd, depth, path[t], RECORD)
-                for l in range(LANES):
-                    R = get_rotation(Bj, l, LANES)
-                    set3(W, 0, l, LANES, mul3t(R, get3(W, 0, l, LANES)))
-                    set3(W, 3, l, LANES, mul3t(R, get3(W, 3, l, LANES)))
-        B, p = lane_record(even, odd, depth, b, RECORD), (xp[k, 0], xp[k, 1], xp[k, 2])
-        for l in range(LANES):
-            external_lane(B, get3(W, 0, l, LANES), get3(W, 3, l, LANES), p, l, LANES)
-
-
-@njit(cache=True, inline="always")
-def external_lane(B, fe, ne, p, l, L):
-    """f' −= f_e, n' −= n_e + p × f_e (rows 21–26 of a body's record B at lane l): the wrench (f_e, n_e) the
-    environment applies on the body about its point p, all in body axes (as ``external`` for one state)."""
-    set3(B, _F, l, L, sub(get3(B, _F, l, L), fe))
-    set3(B, _F + 3, l, L, sub(get3(B, _F + 3, l, L), add(ne, cross(p, fe))))
 
 
 @njit(cache=True, fastmath=CONTRACT)

@@ -106,7 +106,7 @@ def test_multi_dof_lanes_match_pinocchio_and_the_one_state_kernels(models, name,
 
 
 def test_lane_rnea_with_wrenches_on_a_floating_base():
-    """External wrenches in body and world axes on the lanes (rnea.external_lanes turns a world wrench by the
+    """External wrenches in body and world axes on the lanes (lanes.external_lanes turns a world wrench by the
     bodies' placements, the free flyer's quaternion placement first) against Pinocchio's rnea with fext."""
     model, _, _ = _ur5_floating()
     ref = Reference(model, UR5)

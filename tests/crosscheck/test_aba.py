@@ -2,7 +2,7 @@
 
 - Pinocchio's aba on every example-robot-data arm, the AAU arm, random trees (revolute, prismatic and fixed
   joints: merged links give frames with offsets) and solo12 on a free-flyer root — one state (the
-  ``aba_one`` entry) and batches (``aba_kernel``), with f_ext per frame converted to Pinocchio's per-joint
+  ``aba_one`` entry: ``aba_steps_one``) and batches (``aba_lanes``), with f_ext per frame converted to Pinocchio's per-joint
   fext, in both frames;
 - the identity M q̈ + h = τ with Pinocchio's M (crba) and h (nonLinearEffects);
 - the same source run uncompiled (MANIPDYN_NOJIT=1, in a subprocess) on three small models, to 1e-14.

@@ -200,7 +200,7 @@ ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "ener
 # algebra, which lives in spatial.py.
 BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "rnea_steps_one", "outward", "rnea_workspace"},
             "crba": {"crba", "crba_lanes", "crba_steps_one", "mass_matrix"},
-            "aba": {"aba_kernel"},
+            "aba": {"ABA", "aba_steps_one"},
             "lagrange": {"lagrange_mass_matrix"},
             "kinematics": {"body_point", "point_jacobian", "point_jacobian_dot", "point_velocity", "com_jacobians",
                            "supports"}}
