@@ -104,10 +104,11 @@ _CACHE = None if NOJIT else cache_dir()
 # Floating point: kernels round as written (no fast-math), so that for the same formula they give Pinocchio's
 # numbers to the last bits. CONTRACT lets LLVM fuse a·b + c into one fused multiply-add (nothing else of
 # fast-math: no reassociation, NaN and ±inf keep their meaning, so the finiteness checks stay exact); it is
-# given only to the two kernels whose batch speed target needs it — rnea.rnea_kernel (batched rnea 0.55x ->
-# 0.48x rneaInParallel(1), target 0.5x) and aba.cholesky_states (1.02x -> 0.98x Pinocchio's loop on chain32) —
-# and costs their results a rounding change of the order of 1e-16 (measured: batched rnea's worst error against
-# Pinocchio 3.8e-16 -> 4.2e-16 on ur5). Each kernel is compiled once, so one state and a batch round alike.
+# given to the kernels whose speed targets need it — the lane steps' drivers (rnea, crba, aba, the frame calls) and
+# aba.cholesky_states (1.02x -> 0.98x Pinocchio's loop on chain32; the scalar RNEA then went 0.55x -> 0.48x
+# rneaInParallel(1)) — and costs their results a rounding change of the order of 1e-16 (measured: batched rnea's
+# worst error against Pinocchio 3.8e-16 -> 4.2e-16 on ur5). Each kernel is compiled once, so one state and a batch
+# round alike; the derivative kernels do without it (derivatives.py, its note).
 FASTMATH = False
 CONTRACT = {"contract"}
 

@@ -248,15 +248,6 @@ def joint_velocity(S, iv, nvj, x):
     return (l0, l1, l2), (a0, a1, a2)
 
 
-@njit(cache=True, inline="always")
-def joint_force(S, iv, nvj, f, n, out):
-    """out[iv:iv+nvj] = Sᵀ [f; n]: the joint's generalized force from the wrench (force f, moment n about
-    the body origin, body frame) transmitted across it (Eqs. 17, 18)."""
-    for r in range(iv, iv + nvj):
-        out[r] = (S[r, 0] * f[0] + S[r, 1] * f[1] + S[r, 2] * f[2]
-                  + S[r, 3] * n[0] + S[r, 4] * n[1] + S[r, 5] * n[2])
-
-
 # -- the configuration space: integrate, difference, compiled -----------------------------------------
 
 @njit(cache=True, inline="always")

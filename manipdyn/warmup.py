@@ -25,7 +25,7 @@ import numpy as np
 
 # Each group compiles its own kernels, in about equal time on this machine: a kernel that both workers need
 # would be compiled twice (and, with different signatures, only one worker's entry would survive in its cache
-# index). The kernels several calls share stay within one group: rnea_kernel and crba_steps_one (rnea, the bias
+# index). The kernels several calls share stay within one group: rnea_steps_one and crba_steps_one (rnea, the bias
 # forces, the Cholesky route, the closed chain) in the first, aba_steps_one (aba, the derivatives) in the second.
 GROUPS = (("rnea", "bias", "crba", "fd", "fext", "closed", "regressor", "coriolis", "energy"),
           ("aba", "aba_fext", "derivatives", "frames", "lagrange", "config"))

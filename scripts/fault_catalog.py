@@ -174,37 +174,36 @@ FAULTS = (
           (_FLOAT, _LOOPS), "J̇ linear x row without l̇ = ω_j × l (a free flyer's or prismatic column turning with its body)"),
     # ---------------------------------------------------------------- RNEA (dynamics/rnea.py, state.py, fast.py)
     Fault("rnea-coriolis-sign", "rnea", "manipdyn/dynamics/rnea.py",
-          "put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))",
-          "put(dw, i, add(add(dw_in, AA), cross(VA, w_in)))",
-          (_RNEA, _ANALYTIC), "Eq. 5: ω̇ gains θ̇ z × ω instead of ω × θ̇ z"),
+          "set3(B, 15, l, L, add(add(dw_in, aa), cross(w_in, va)))",
+          "set3(B, 15, l, L, add(add(dw_in, aa), cross(va, w_in)))",
+          (_RNEA, _ANALYTIC, _BALL), "Eq. 5 of a multi-dof joint (ball, free flyer, planar: every driver of the lane "
+          "steps): ω̇ gains v_a × ω instead of ω × v_a"),
     Fault("rnea-gravity-sign", "rnea", "manipdyn/dynamics/rnea.py",
-          "dv_in = rot_t(Rl, i, (mg[0], mg[1], mg[2]))",
-          "dv_in = rot_t(Rl, i, (-mg[0], -mg[1], -mg[2]))",
-          (_RNEA, _ANALYTIC), "v̇'_0 = +g instead of −g"),
+          "    mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])\n    for i in range(nb):                                             # outward",
+          "    mg = (-mdl.mg[0], -mdl.mg[1], -mdl.mg[2])\n    for i in range(nb):                                             # outward",
+          (_RNEA, _ANALYTIC), "the one-state RNEA's v̇'_0 = +g instead of −g for a body on the fixed base"),
     Fault("rnea-eq7-centripetal-dropped", "rnea", "manipdyn/dynamics/rnea.py",
-          "dvc_i = add(vec(dv, i), add(cross(dwi, c), cross(wi, cross(wi, c))))",
-          "dvc_i = add(vec(dv, i), cross(dwi, c))",
+          "fc = scale(m, add(dv, add(cross(dw, cm), cross(w, cross(w, cm)))))          # Eqs. 7, 13",
+          "fc = scale(m, add(dv, cross(dw, cm)))          # Eqs. 7, 13",
           (_RNEA, _ANALYTIC), "Eq. 7 without ω × (ω × p_C) (the CoM acceleration of Eq. 32d as printed)"),
-    Fault("rnea-prismatic-coriolis-factor", "rnea", "manipdyn/dynamics/rnea.py",
-          "put(dv, i, add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL))))",
-          "put(dv, i, add(add(dv_in, AL), add(cross(w_in, VL), cross(VA, VL))))",
-          (_RNEA, _ANALYTIC), "Eq. 12 with ω × ḋ z instead of 2 ω × ḋ z (prismatic Coriolis)"),
-    Fault("rnea-free-flyer-va-cross-vl-dropped", "rnea", "manipdyn/dynamics/rnea.py",
-          "put(dv, i, add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL))))",
-          "put(dv, i, add(add(dv_in, AL), scale(2.0, cross(w_in, VL))))",
-          (_RNEA,), "a joint moving both ways (the free flyer) loses va × vl from the origin's acceleration"),
     Fault("rnea-eq16-lever-dropped", "rnea", "manipdyn/dynamics/rnea.py",
-          "put(n, j, add(vec(n, j), add(rot(Rl, i, vec(n, i)), cross(vec(pl, i), Rf))))",
-          "put(n, j, add(vec(n, j), rot(Rl, i, vec(n, i))))",
-          (_RNEA, _ANALYTIC), "Eq. 16 without p^{i−1}_i × R f'_i: a child's force exerts no moment on its parent"),
+          "    Rf, Rn = mul3(R, f), mul3(R, n)\n    n_up = add(Rn, cross(get3(B, 9, l, L), Rf))\n    to[l] += Rf[0]\n"
+          "    to[L + l] += Rf[1]\n    to[2 * L + l] += Rf[2]\n    to[3 * L + l] += n_up[0]\n    to[4 * L + l] += n_up[1]\n"
+          "    to[5 * L + l] += n_up[2]\n\n\n@njit(cache=True, inline=\"always\")\ndef wrench_up_lane(",
+          "    Rf, Rn = mul3(R, f), mul3(R, n)\n    n_up = Rn\n    to[l] += Rf[0]\n"
+          "    to[L + l] += Rf[1]\n    to[2 * L + l] += Rf[2]\n    to[3 * L + l] += n_up[0]\n    to[4 * L + l] += n_up[1]\n"
+          "    to[5 * L + l] += n_up[2]\n\n\n@njit(cache=True, inline=\"always\")\ndef wrench_up_lane(",
+          (_RNEA, _ANALYTIC), "Eq. 16 without p^{i−1}_i × R f'_i (the one-dof lane step, every driver): a child's force "
+          "exerts no moment on its parent"),
     Fault("rnea-fext-frame-transposed", "rnea", "manipdyn/dynamics/arguments.py",
           "= f @ R.T, m @ R.T, fr.body, p",
           "= f @ R, m @ R, fr.body, p",
           (_ANALYTIC, _PROPS), "f_ext in a frame's axes rotated into the body by Rᵀ instead of R"),
-    Fault("rnea-fext-world-rotation-transposed", "rnea", "manipdyn/dynamics/rnea.py",
-          "fe, ne = rot_t(Rw, b, fe), rot_t(Rw, b, ne)",
-          "fe, ne = rot(Rw, b, fe), rot(Rw, b, ne)",
-          (_RNEA, "tests/batch/test_batch.py"), "a world-axes f_ext turned into the body by Rw instead of Rwᵀ"),
+    Fault("rnea-fext-world-rotation-transposed", "rnea", "manipdyn/dynamics/lanes.py",
+          "set3(W, 0, l, LANES, mul3t(R, get3(W, 0, l, LANES)))",
+          "set3(W, 0, l, LANES, get3(W, 0, l, LANES))",
+          (_RNEA, "tests/batch/test_batch.py", "tests/batch/test_lanes.py"), "a batch's world-axes f_ext (RNEA, ABA "
+          "lanes) left in world axes (its moment turned)"),
     # ---------------------------------------------------------------- CRBA / Lagrange (dynamics/lagrange.py, fast.py)
     Fault("lagrange-christoffel-sign", "lagrange", "manipdyn/dynamics/lagrange.py",
           '- np.einsum("nijk,nk->nij", dM, V))',
@@ -352,7 +351,7 @@ FAULTS = (
           ("tests/batch/test_lanes.py", _RNEA, _ABA), "the lane kernels (RNEA, ABA) turn a world wrench into the body with "
           "R_1ᵀ ⋯ R_bᵀ (the path from the body in) instead of R_bᵀ ⋯ R_1ᵀ"),
     Fault("rnea-lanes-fallback-wrench-rows-of-block-0", "rnea", "manipdyn/dynamics/rnea.py",
-          "A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s])", "A[s], X[0], xb, xp, world, tau[s])",
+          "A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s],\n", "A[s], X[0], xb, xp, world, tau[s],\n",
           ("tests/batch/test_lanes.py",), "a lane block run state by state takes the first state's wrenches"),
     Fault("crba-lanes-merge-shift-term-dropped", "lagrange", "manipdyn/dynamics/crba.py",
           "add_sym3(P, 15, l, L, merge_shift(k, sub(d, c2)))", "add_sym3(P, 15, l, L, merge_shift(k, sub(c2, c2)))",
@@ -375,8 +374,9 @@ FAULTS = (
           "+ sa[0] * F[3] + sa[1] * F[4] + sa[2] * F[5] + 0.0 * ar\n",
           (_JD,), "the lane CRBA forgets the rotors (batches only)"),
     Fault("rnea-armature-times-velocity", "rnea", "manipdyn/dynamics/rnea.py",
-          "rotor(mdl.armature, A[s], tau[s])", "rotor(mdl.armature, V[s], tau[s])",
-          (_JD,), "the one-state RNEA adds armature ⊙ q̇ instead of armature ⊙ q̈"),
+          "B[src * L + l] + ak * Z[(ra + k) * L + l]", "B[src * L + l] + ak * Z[(mm[3] + k) * L + l]",
+          (_JD,), "the RNEA's multi-dof torque step adds armature ⊙ q̇ instead of armature ⊙ q̈ (free flyers, balls, "
+          "planar joints)"),
     Fault("registry-integrate-fall-through", "kinematics", "manipdyn/joints.py",
           "            if kind[j] == REVOLUTE or kind[j] == PRISMATIC or kind[j] == HELICAL:\n"
           "                out[s, a] = Q[s, a] + V[s, b]",
@@ -554,7 +554,7 @@ FAULTS = (
     Fault("aba-fext-world-rotation", "aba", "manipdyn/dynamics/lanes.py",
           "            fe, ne = mul3t(R, fe), mul3t(R, ne)",
           "            fe, ne = fe, mul3t(R, ne)",
-          (_ABA, _PROPS), "one state's world-axes external force (RNEA, ABA) left in world axes (its moment turned)"),
+          (_ABA, _PROPS, _TERMS), "one state's world-axes external force (RNEA, ABA) left in world axes (its moment turned)"),
     # ---------------------------------------------------------------- constraints (constraints/*)
     Fault("closure-orientation-bias-offset", "constraints", "manipdyn/constraints/closures.py",
           "bias[row] = gyro + acc",
@@ -1194,6 +1194,18 @@ FAULTS = (
           "                code = ABA.call(*model.kernel.lane_arrays, Q[a:b], V[a:b], Xs[a:b], *x, world, qdd[a:b])",
           ("tests/crosscheck/test_derivatives.py",), "aba_derivatives' q̈ takes local wrenches in the model's body "
           "axes, not the z-aligned ones of the lane steps"),
+    Fault("rnea-terms-origin-velocity-lever-dropped", "rnea", "manipdyn/dynamics/rnea.py",
+          "v = add(v, mul3t(R, add(vec(vel, j), cross(get3(W[j * RECORD:(j + 1) * RECORD], 12, 0, 1), p))))",
+          "v = add(v, mul3t(R, vec(vel, j)))",
+          (_RNEA, "tests/crosscheck/test_rnea_terms.py"), "rnea_terms' origin velocity v'_i without ω'_λ × p (Eq. 4)"),
+    Fault("rnea-terms-left-in-z-aligned-axes", "rnea", "manipdyn/dynamics/rnea.py",
+          "T[s, i, 3 * k], T[s, i, 3 * k + 1], T[s, i, 3 * k + 2] = mul3(Ci, x)",
+          "T[s, i, 3 * k], T[s, i, 3 * k + 1], T[s, i, 3 * k + 2] = x",
+          (_RNEA, "tests/crosscheck/test_rnea_terms.py"), "rnea_terms' vectors left in the lane steps' z-aligned axes, not turned into the link's"),
+    Fault("rnea-terms-link-orientation-turned-back", "rnea", "manipdyn/dynamics/rnea.py",
+          "Rw[i, r, 0] * C[i, c, 0] + Rw[i, r, 1] * C[i, c, 1] + Rw[i, r, 2] * C[i, c, 2]",
+          "Rw[i, r, 0] * C[i, 0, c] + Rw[i, r, 1] * C[i, 1, c] + Rw[i, r, 2] * C[i, 2, c]",
+          (_RNEA, "tests/crosscheck/test_rnea_terms.py"), "rnea_terms' link orientation Rw C instead of Rw Cᵀ"),
 )
 
 

@@ -92,7 +92,7 @@ def _count(model):
         m.np = _Numpy()
     out = {}
     try:
-        for name, run in (("rnea", lambda: rnea.rnea_lanes(I, F, Q, V, A, X, xb, xp, False, _objects(A), F[:0])),
+        for name, run in (("rnea", lambda: rnea.rnea_lanes(I, F, Q, V, A, X, xb, xp, False, _objects(A))),
                           ("aba", lambda: aba.aba_lanes(I, F, Q, V, A, X, xb, xp, False, _objects(A))),
                           ("mass_matrix", lambda: crba.crba_lanes(I, F, Q, _objects(np.zeros((L, model.nv,
                                                                                                model.nv)))))):

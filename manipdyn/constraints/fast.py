@@ -13,7 +13,7 @@ from ..dynamics.status import bad_input, bad_result, reading, singular_row
 from ..dynamics.model_arrays import kernel_arrays
 from ..spatial import cholesky, cholesky_solve, first_nonfinite
 from ..dynamics.crba import crba_steps_one
-from ..dynamics.rnea import rnea_steps_one
+from ..dynamics.rnea import rnea_steps_one, steps_scratch
 from ..errors import NumericalError, SingularError
 from .closures import CLOSURE_FORM, RANK_RTOL, closure_arrays, closure_rows, closure_scratch, n_rows
 
@@ -29,7 +29,7 @@ def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, 
     working precision)."""
     N, nv = Q.shape[0], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
-    W = closure_scratch(I.shape[1], nv)
+    W, Wr = closure_scratch(I.shape[1], nv), steps_scratch(I, Q[0], V[0])
     M, h, Z = np.empty((1, nv, nv))[:, :, :], np.empty((1, nv))[:, :], np.zeros((1, nv))[:, :]   # the kernels'
     X, xb, xp, world = no_wrenches(I, F)                                                   # layout (_jit: "A")
     for s in range(N):
@@ -37,7 +37,7 @@ def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, 
             return bad_input(s)
         closure_rows(I, F, CI, CF, Q[s], V[s], W, Phi[::1], Jc[:, :], bias[::1])   # (views: closure_kernel's layout)
         crba_steps_one(I, Fz, Q[s], M[0])                 # (q finite: checked above)
-        rnea_steps_one(I, Fz, Q[s], V[s], Z[0], X[0], xb, xp, world, h[0])   # h = C q̇ + g
+        rnea_steps_one(I, Fz, Q[s], V[s], Z[0], X[0], xb, xp, world, h[0], Wr)   # h = C q̇ + g
         c = -bias - 2.0 * alpha * (Jc @ V[s]) - beta * beta * Phi             # Baumgarte (α = β = 0: none)
         scale, phimax = 0.0, 0.0                              # Gram–Schmidt: keep rows that add rank
         for k in range(m):

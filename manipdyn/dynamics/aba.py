@@ -50,7 +50,7 @@ from .lanes import (LANES, add_sym3, external_lane, external_lanes, gather_lanes
                     scatter_lanes, screw_placement_one, selected, set3, set6, tree_depth, wrench_in_body)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
-from .rnea import rnea, rnea_lanes, rnea_steps_one
+from .rnea import rnea, rnea_lanes, rnea_steps_one, steps_scratch
 from .route import route
 from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
 
@@ -643,7 +643,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
     pivot of M not > 0 in joint i's rows (M is not positive definite); -2 - nb - k a non-finite q̈ at flat index k."""
     N, nv, nb = Q.shape[0], V.shape[1], I.shape[1]
     C = max(1, min(N, LANES))                                 # states per chunk: one block of the lane kernels
-    M, Z, T0 = np.empty((C, nv, nv)), np.zeros((C, nv)), F[:0, :, :]   # T0: no per-link terms
+    M, Z = np.empty((C, nv, nv)), np.zeros((C, nv))
     H = np.empty((C, nv))                                     # h of the chunk's states
     for s in range(N):
         if first_nonfinite(Tau, s) >= 0:
@@ -658,10 +658,10 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             return bad_result(nb, s * nv)
         if code == -1 and not lanes:                          # h (views: the one-state entry's layout)
             code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], X[s0 if X.shape[0] > 1 else 0], body, point, world,
-                                  H[0][::1])
+                                  H[0][::1], steps_scratch(I, Q[s0], H[0]))
         elif code == -1:                                      # (X: a row a state, or one row for every state)
             code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
-                              world, H[:n, :], T0)
+                              world, H[:n, :])
         if code != -1:                                        # a non-finite input, or h: in out, where the
             out[s0:s1, :] = H[:n, :]                          # error reads the entry at fault
             return shift(code, s0, nb, nv)
@@ -693,7 +693,7 @@ def cholesky_one(I, F, q, v, tau, out):
 @njit(cache=True)
 def cholesky_fext_one(I, F, q, v, tau, f, m, P, world, out):
     """One state with one external wrench in ``arguments.fast_wrenches``' form: cholesky_states with N = 1, (I, F) and
-    the wrench in z-aligned frames (M by ``crba.crba_steps_one``; h by ``rnea.rnea_kernel``)."""
+    the wrench in z-aligned frames (M by ``crba.crba_steps_one``; h by ``rnea.rnea_steps_one``)."""
     X, xb, xp = wrench_rows_of(f, m, P)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], np.bool_(False))

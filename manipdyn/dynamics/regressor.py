@@ -128,7 +128,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     for s in range(N):
         if not finite_state(Q, V, A, s):
             return bad_input(s)
-        outward(mdl, work, Q[s], V[s], A[s], False, False)     # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass
+        outward(mdl, work, Q[s], V[s], A[s])     # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass in link frames
         Y[s, :, :] = 0.0
         for i in range(nb):
             body_block(work, i, W)

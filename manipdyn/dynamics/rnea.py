@@ -1,10 +1,13 @@
 """Recursive Newton–Euler inverse dynamics (Luh, Walker & Paul 1980), in the chapter's vector form.
 
-One source: the kernel below is the chapter's recursion (Eqs. 3–18 with the errata of docs/design.md §6), compiled
-by numba, and the same text runs as plain Python under MANIPDYN_NOJIT=1. Every vector is a 3-vector in its own
-link frame (the chapter's primes): body i's frame is its URDF link frame. (R, p) = (Rl[i], pl[i]) is body i in
-its parent λ(i) (``joints.joint_placement``), so the chapter's R^i_{i−1} x is Rᵀ x (``rot_t``). A tree replaces
-"link i+1" by the children of link i; parent[i] < i, so one sweep each way suffices.
+One source: the steps below are the chapter's recursion (Eqs. 3–18 with the errata of docs/design.md §6) on a body's
+record — placement (lanes.py), ``motion_lane``, ``inertial_lane``, ``lanes.external_lane``, ``inward_lane`` and their
+multi-dof forms — driven across a block of states (``rnea_lanes``, the batch), for one state (``rnea_steps_one``) and
+by a GPU thread (gpu.py); compiled by numba, and the same text runs as plain Python under MANIPDYN_NOJIT=1. Every
+vector is a 3-vector in its own body frame (the chapter's primes), the frame turned so that a one-dof joint's axis is
+z (kernel_form.z_aligned; ``terms_kernel`` turns the per-link terms back into the URDF link frames). (R, p) is body
+i in its parent λ(i), so the chapter's R^i_{i−1} x is Rᵀ x (``mul3t``). A tree replaces "link i+1" by the children
+of link i; parent[i] < i, so one sweep each way suffices.
 
 The joint enters through its motion subspace S (``joints``: rows [linear; angular], constant in the body frame):
 with (vl, va) = S q̇ and (al, aa) = S q̈ of joint i, and w_in, dw_in, dv_in the parent's ω', ω̇', v̇' moved to
@@ -21,9 +24,9 @@ qx qy qz qw], v = [linear; angular] in the body frame) is the same recursion: it
 
 External wrenches (f_ext = {frame: (force, moment)}: what the environment applies on that body, about the
 frame's origin, in the frame's axes or in world axes) reach the kernel as rows (``arguments.wrench_rows``): the
-wrench (N, K, 6) = [force; moment] in body axes ("local") or world axes ("world": the kernel turns it into the
-body with the orientation it accumulates in the same outward pass), the body (K,) and the frame's origin in
-body axes (K, 3), about which the moment is taken.
+wrench (N, K, 6) = [force; moment] in body axes ("local") or world axes ("world": turned into the body with the
+placements of the outward pass, ``lanes.external_lanes``), the body (K,) and the frame's origin in body axes (K, 3),
+about which the moment is taken.
 """
 from __future__ import annotations
 
@@ -32,28 +35,27 @@ from collections import namedtuple
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import HELICAL, PLANAR, joint_force, joint_placement, joint_velocity
+from ..joints import HELICAL, PLANAR, joint_placement, joint_velocity
 from . import mimic
-from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot, rot_t, scale, sub, vec
+from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, get_rotation, inertial_model,
                     lane_record, motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes,
                     placement_model, quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane,
                     scatter_lanes, selected, screw_placement_one, set3, tree_depth, wrench_in_body)
-from .model_arrays import kernel_arrays, unpack
+from .model_arrays import unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
 from .status import OK, bad_input, bad_result, shift
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
-_NO_X, _NO_B, _NO_P, _NO_T = np.zeros((0, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 0, NT))
-# (no external wrench and no per-link terms, as a batch call from Python passes them)
 _QVA = ("q", "v", "a")
 
 
 def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
-    """Every per-link intermediate of the Newton–Euler recursion, in link frames, from the same kernel pass.
+    """Every per-link intermediate of the Newton–Euler recursion, in link frames, from the records of the passes that
+    give τ (``terms_kernel``).
 
     Returns a dict of arrays; per-link arrays have shape (N, nb, 3) (or (nb, 3) for one state), nb =
     model.njoints bodies in q order:
@@ -68,7 +70,7 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
       tau      (N, nv) joint torques/forces (Eqs. 17, 18); a free-flyer root's six entries are its f, n
     """
     (Q, V, A), single = as_batch(model, q=q, v=v, a=a)
-    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms", terms=True)
+    tau, T = _run(model, Q, V, A, f_ext, f_ext_frame, "rnea_terms")
     out = {k: T[:, :, 3 * m:3 * m + 3] for m, k in enumerate(TERMS)}
     out["R"] = T[:, :, 3 * len(TERMS):].reshape(T.shape[:2] + (3, 3))
     inputs = dict(q=Q, v=V, a=A)
@@ -79,15 +81,16 @@ def rnea_terms(model, q, v, a, *, f_ext=None, f_ext_frame="local"):
 
 
 @quiet
-def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
-    """The kernel on checked batches Q (N, nq), V, A (N, nv): τ (N, nv) and the per-link terms (N, nb, NT)
-    (or an empty array); f_ext checked and converted first."""
+def _run(model, Q, V, A, f_ext, f_ext_frame, call):
+    """``terms_kernel`` on checked batches Q (N, nq), V, A (N, nv): τ (N, nv) and the per-link terms (N, nb, NT);
+    f_ext checked and converted first (in the z-aligned frames the kernel reads)."""
     N, nb = Q.shape[0], model.njoints
-    X, body, point = wrench_rows(model, f_ext, f_ext_frame, N)
-    tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT) if terms else (0, nb, NT))
+    X, body, point = wrench_rows(model, f_ext, f_ext_frame, N, True)
+    tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT))
     if nb == 0:
         return tau, T
-    code = RNEA.call(*kernel_arrays(model), Q, V, A, X, body, point, f_ext_frame == "world", tau, T)
+    code = TERMS_ENTRY.call(*model.kernel.lane_arrays, Q, V, A, X, body, point, f_ext_frame == "world",
+                            model.kernel.lane_turns, tau, T)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (Q, V, A), call, "tau", tau)
     return tau, T
@@ -97,12 +100,19 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call, terms=False):
 # 3-vectors inside the recursion are 3-tuples (spatial.py's vec, put, add, cross, rot, rot_t).
 
 
+@njit(cache=True, inline="always")
+def steps_scratch(I, q, tau):
+    """The scratch of ``rnea_steps_one`` for a state q (nq,) and τ (nv,): the bodies' records (nb · RECORD), then
+    q, q̇, q̈ (nq + 2 nv), then the base (9)."""
+    return np.empty(I.shape[1] * RECORD + q.shape[0] + 2 * tau.shape[0] + 9)
+
+
 @njit(cache=True)
 def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: the lane kernel's steps driven for one
     state (``rnea_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau)
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau, steps_scratch(I, q, v))
 
 
 @njit(cache=True)
@@ -110,7 +120,7 @@ def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
     """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned
     frames, as (I, F)): ``rnea_steps_one``."""
     X, xb, xp = wrench_rows_of(f, m, P)
-    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau)
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau, steps_scratch(I, q, tau))
 
 
 @njit(cache=True)
@@ -119,7 +129,7 @@ def bias_kernel(I, F, Q, V, tau):
     into tau (N, nv): the batch kernel ``rnea_lanes`` with zero accelerations."""
     Z = np.zeros(tau.shape)[:, :]
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_lanes(I, F, Q, Z if V.shape[1] == 0 else V, Z, X, xb, xp, world, tau, F[:0, :, :])
+    return rnea_lanes(I, F, Q, Z if V.shape[1] == 0 else V, Z, X, xb, xp, world, tau)
 
 
 @njit(cache=True)
@@ -134,7 +144,7 @@ def bias_one(I, F, q, v, tau):
     accelerations ((I, F) in z-aligned frames)."""
     Z = np.zeros((1, tau.shape[0]))[:, :][0]         # (a view of any layout, as the entry's arrays: one signature)
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, X[0], xb, xp, world, tau)
+    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, X[0], xb, xp, world, tau, steps_scratch(I, q, tau))
 
 
 @njit(cache=True)
@@ -143,51 +153,8 @@ def gravity_one(I, F, q, tau):
     return bias_one(I, F, q, q[:0], tau)
 
 
-Work = namedtuple("Work", "Rl Rw pl w dw vel dv dvc fc nc f n sv")
-Work.__doc__ = """Scratch of one recursion (``rnea_workspace``), per body i (nb rows): Rl, pl its placement in its parent
-(3, 3), (3,); Rw its world orientation (3, 3); the 3-vectors of TERMS: w ω'_i, dw ω̇'_i, vel v'_i, dv v̇'_i,
-dvc v̇'_Ci, fc f'_Ci, nc n'_Ci, f f'_i, n n'_i; sv (4, 3) spare 3-vectors."""
-
-
-@njit(cache=True, inline="always")
-def rnea_workspace(nb):
-    """The ``Work`` of a model with nb bodies, cut from three allocations."""
-    RR, B, sv = np.empty((2, nb, 3, 3)), np.empty((10, nb, 3)), np.empty((4, 3))
-    return Work(RR[0], RR[1], B[0], B[1], B[2], B[3], B[4], B[5], B[6], B[7], B[8], B[9], sv)
-
-
 @njit(cache=True, fastmath=CONTRACT)
-def rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
-    """τ = Sᵀ [f'; n'] of every joint for every state (Eqs. 3–18): outward pass, external wrenches, inward pass.
-
-    I, F: the model in core form (``model_arrays.kernel_arrays``); Q (N, nq), V, A (N, nv); X (N, K, 6) external
-    wrenches [force; moment about xp[k]] on bodies xb (K,) int, in body axes (world=False) or world axes
-    (world=True), K = 0 for none; tau (N, nv) result; T (N, nb, NT) per-link terms (TERMS, then R), or an
-    array with no rows to skip them. The bodies' world orientations are accumulated only when world
-    wrenches or the terms need them. Returns its status (dynamics/status.py): a non-finite input, or −2 − nb − k
-    for a non-finite τ at flat index k of tau.
-    """
-    mdl = unpack(I, F)
-    N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
-    work = rnea_workspace(nb)
-    keep = T.shape[0] > 0
-    for s in range(N):
-        if not finite_state(Q, V, A, s):
-            return bad_input(s)
-        outward(mdl, work, Q[s], V[s], A[s], world or keep, keep)
-        external(work, X, s, xb, xp, world)
-        inward(mdl, work, tau[s])
-        rotor(mdl.armature, A[s], tau[s])
-        if keep:
-            store_terms(mdl, work, T[s])
-        k = first_nonfinite(tau, s)            # the result is finite (else an intermediate overflowed)
-        if k >= 0:
-            return bad_result(nb, s * nv + k)
-    return OK
-
-
-@njit(cache=True, fastmath=CONTRACT)
-def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau):
+def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau, W):
     """τ (nv,) of one state by the steps of the lane kernel (``rnea_lanes``), driven for one lane: records of one
     number a row (L = 1), the same placement, motion, inertial, wrench and torque steps, the same z-aligned frames
     ((I, F) = ``Model.kernel.lane_arrays``: another form raises) — one source for a batch and for one state.
@@ -195,14 +162,14 @@ def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau):
     External wrenches X (K, 6) on bodies xb about their points xp, in the bodies' z-aligned axes or (world) in world
     axes, between the passes (as ``external_lanes``; K = 0 for none: ``kernel_inputs.no_wrenches``). An angle beyond
     ``spatial.SINCOS_MAX`` is placed with libm's sin and cos (``lanes.screw_placement_one``). Returns its status
-    (dynamics/status.py): a non-finite q, q̇ or q̈, or τ's first non-finite entry."""
+    (dynamics/status.py): a non-finite q, q̇ or q̈, or τ's first non-finite entry. W: scratch of ``steps_scratch``
+    (its first nb · RECORD numbers, the bodies' records, are what ``terms_kernel`` reads after the passes)."""
     mdl = unpack(I, F)
     nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
     if not on_lanes(mdl, nq, True):
         raise ValueError("the RNEA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
     if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):
         return bad_input(0)
-    W = np.empty(nb * RECORD + nq + 2 * nv + 9)      # the bodies' records, then q, q̇, q̈ (Z), then the base
     Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
     for k in range(nq):
         Z[k] = q[k]
@@ -263,20 +230,20 @@ _W, _F = 12, 21             # the first rows of ω' (the motion a child reads) a
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
+def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau):
     """τ (N, nv) for every state, block by block across lanes: the batch entry of rnea (its status as
     ``rnea_steps_one``'s, the state shifted). X (N, K, 6): the wrenches of each state (``arguments.wrench_rows``), or
     one row for every state (K = 0: ``kernel_inputs.no_wrenches``).
 
-    External wrenches are taken from the bodies between the two passes (``external_lanes``). Runs ``rnea_kernel``
-    itself for the per-link terms (``rnea_terms``, in the model's own frames). A block with a non-finite input or
+    External wrenches are taken from the bodies between the two passes (``external_lanes``). (I, F): the model in
+    z-aligned frames (``Model.kernel.lane_arrays``: another form raises). A block with a non-finite input or
     result or an angle beyond ``spatial.SINCOS_MAX`` runs its states one by one as a one-state call does
     (``rnea_steps_one``): its status names the state or entry. Every lane is computed alone, so a state's τ does not
     depend on the batch around it; it agrees with the one-state call's to rounding (tests/batch/test_lanes.py).
     """
     N, nb, nq, nv = Q.shape[0], I.shape[1], Q.shape[1], V.shape[1]
-    if T.shape[0] > 0 or not on_lanes(unpack(I, F), nq, True):   # the terms, a joint they do not take
-        return rnea_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T)
+    if not on_lanes(unpack(I, F), nq, True):
+        raise ValueError("the RNEA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
     Im, Fm = I, F               # as given (read-only): the one-state steps' signature
     I, F = I.copy(), F.copy()   # the model for this call alone: its views, passed to the body functions, are counted
     mdl = unpack(I, F)          # references, and threads sharing one array contend for its count (measured: two
@@ -315,7 +282,8 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau, T):
             ok = scatter_lanes(TB, n, tau, s0)
         if not ok:                                  # each state as a one-state call computes it: its status
             for s in range(s0, s0 + n):             # names the culprit
-                code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s])
+                code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s],
+                                      steps_scratch(Im, Q[s], tau[s]))
                 if code != OK:
                     return shift(code, s, nb, nv)
     return OK
@@ -520,122 +488,104 @@ def wrench_up_lane(B, to, l, L):
     to[5 * L + l] += n_up[2]
 
 
+@njit(cache=True, fastmath=CONTRACT)
+def terms_kernel(I, F, Q, V, A, X, xb, xp, world, C, tau, T):
+    """τ (N, nv) and the per-link terms T (N, nb, NT) = [TERMS, then the link's world orientation R row by row] of every
+    state: the records of the one-lane driver's passes (``rnea_steps_one``, in z-aligned frames: (I, F) =
+    ``Model.kernel.lane_arrays``, the wrenches in those frames) turned into each link's own axes, x = C_i x'
+    (C (nb, 3, 3): ``Model.kernel.lane_turns``; the origin is the link's), with what no torque needs accumulated
+    outward from them: the origin's velocity v'_i = Rᵀ (v'_λ + ω'_λ × p) + S_l q̇ (Eqs. 4, 11), v̇'_C, f'_C and n'_C
+    (Eqs. 7, 13, 14), the world orientation Rw_i = Rw_λ R and v̇' without the −g of v̇'_0. Its status as
+    ``rnea_steps_one``'s, the state shifted."""
+    mdl = unpack(I, F)
+    N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
+    W, Rw, vel = steps_scratch(I, Q[0], tau[0]), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
+    for s in range(N):
+        code = rnea_steps_one(I, F, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s], W)
+        if code != OK:
+            return shift(code, s, nb, nv)
+        for i in range(nb):
+            j, B = mdl.parent[i], W[i * RECORD:(i + 1) * RECORD]
+            R, p, w, dw, dv = get_rotation(B, 0, 1), get3(B, 9, 0, 1), get3(B, 12, 0, 1), get3(B, 15, 0, 1), \
+                get3(B, 18, 0, 1)
+            v = (0.0, 0.0, 0.0)
+            for r in range(mdl.iv[i], mdl.iv[i] + mdl.nvj[i]):                       # S_l q̇
+                v = add(v, scale(V[s, r], (mdl.S[r, 0], mdl.S[r, 1], mdl.S[r, 2])))
+            if j >= 0:                                                              # Eq. 4
+                v = add(v, mul3t(R, add(vec(vel, j), cross(get3(W[j * RECORD:(j + 1) * RECORD], 12, 0, 1), p))))
+            put(vel, i, v)
+            for r in range(3):
+                for c in range(3):
+                    Rw[i, r, c] = R[r][c] if j < 0 else \
+                        Rw[j, r, 0] * R[0][c] + Rw[j, r, 1] * R[1][c] + Rw[j, r, 2] * R[2][c]
+            m, cm, J = inertial_model(i, mdl)
+            dvc = add(dv, add(cross(dw, cm), cross(w, cross(w, cm))))                # Eq. 7
+            fc = scale(m, dvc)                                                       # Eq. 13
+            nc = add(mul3(J, dw), cross(w, mul3(J, w)))                              # Eq. 14
+            acc = sub(dv, rot_t(Rw, i, mg))
+            Ci = ((C[i, 0, 0], C[i, 0, 1], C[i, 0, 2]), (C[i, 1, 0], C[i, 1, 1], C[i, 1, 2]),
+                  (C[i, 2, 0], C[i, 2, 1], C[i, 2, 2]))
+            for k, x in enumerate((w, dw, v, dv, acc, dvc, fc, nc, get3(B, _F, 0, 1), get3(B, _F + 3, 0, 1))):
+                T[s, i, 3 * k], T[s, i, 3 * k + 1], T[s, i, 3 * k + 2] = mul3(Ci, x)
+            for r in range(3):                                                       # Rw_i C_iᵀ: the link's
+                for c in range(3):
+                    T[s, i, 30 + 3 * r + c] = Rw[i, r, 0] * C[i, c, 0] + Rw[i, r, 1] * C[i, c, 1] + Rw[i, r, 2] * C[i, c, 2]
+    return OK
+
+
 # The compiled code every batch reaches (``_jit.entry``; arrays of any strides). The scalar batch kernel had a
 # second entry compiled for C-ordered arrays (4 % faster); the lane kernel reads its inputs once per block, and
 # its C-ordered twin measured 4–6 % slower (ur5 109 vs 113 ns a state), so it has one entry like every kernel.
-RNEA = entry(rnea_lanes, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
+RNEA = entry(rnea_lanes, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2)
+TERMS_ENTRY = entry(terms_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A3, A2, A3)
 
+
+
+# -- the outward pass in the links' own frames: the regressor's (regressor.py), which writes its parameters in them
+# (the lane steps' records are in z-aligned frames; the regressor on them is the next stage of docs/design.md §4c)
+
+Work = namedtuple("Work", "Rl pl w dw dv")
+Work.__doc__ = """Scratch of ``outward`` (``rnea_workspace``), per body i (nb rows): Rl, pl its placement in its parent
+(3, 3), (3,); w ω'_i, dw ω̇'_i, dv v̇'_i (3,)."""
 
 
 @njit(cache=True, inline="always")
-def outward(mdl, work, q, v, a, orient, terms):
-    """Outward pass i = 1 … nb (Eqs. 3–14): ω'_i, ω̇'_i, v̇'_i of every body, its inertial wrench
-    (``inertial``), if terms the origin velocity v'_i (Eqs. 4, 11: no torque needs it), and if orient its
-    world orientation Rw_i = Rw_λ R."""
+def rnea_workspace(nb):
+    """The ``Work`` of a model with nb bodies, cut from two allocations."""
+    RR, B = np.empty((nb, 3, 3)), np.empty((4, nb, 3))
+    return Work(RR, B[0], B[1], B[2], B[3])
+
+
+@njit(cache=True, inline="always")
+def outward(mdl, work, q, v, a):
+    """Outward pass i = 1 … nb (Eqs. 3–6, 9–12) in the links' own frames: ω'_i, ω̇'_i, v̇'_i of every body (the
+    lane steps' ``motion_lane`` for any joint and axis)."""
     parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
     axis, pitch, R0, p0, mg = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mg
-    Rl, Rw, pl, w, dw, vel, dv = work.Rl, work.Rw, work.pl, work.w, work.dw, work.vel, work.dv
+    Rl, pl, w, dw, dv = work.Rl, work.pl, work.w, work.dw, work.dv
     for i in range(parent.shape[0]):
         joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
         j = parent[i]
         if j < 0:                                          # the fixed base: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g
-            w_in, dw_in, v_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            w_in, dw_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
             dv_in = rot_t(Rl, i, (mg[0], mg[1], mg[2]))
         else:                                              # the parent's motion at body i's origin, in its axes
             p, w0 = vec(pl, i), vec(w, j)
             w_in = rot_t(Rl, i, w0)                        # R^i_{i−1} ω'_{i−1} (Eq. 3 uses ω'_{i−1})
             dw_in = rot_t(Rl, i, vec(dw, j))
-            v_in = rot_t(Rl, i, add(vec(vel, j), cross(w0, p))) if terms else (0.0, 0.0, 0.0)   # Eq. 4
             dv_in = rot_t(Rl, i, add(vec(dv, j), add(cross(vec(dw, j), p), cross(w0, cross(w0, p)))))
             #                                              Eq. 6 (32c: v̇'_{i−1}, in frame i−1)
         VL, VA = joint_velocity(S, iv[i], nvj[i], v)      # S q̇ = [vl; va]
         AL, AA = joint_velocity(S, iv[i], nvj[i], a)      # S q̈ = [al; aa]
         put(w, i, add(w_in, VA))                           # Eq. 3 (as corrected: ω'_{i−1}, θ̇_i); Eq. 9
         put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))   # Eq. 5 (32b: left side is ω̇'); Eq. 10
-        put(vel, i, add(v_in, VL))                         # Eq. 4; prismatic Eq. 11
         put(dv, i, add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL))))   # Eqs. 6, 12
-        inertial(i, mdl, work)
-        if orient:
-            for r in range(3):
-                for c in range(3):
-                    Rw[i, r, c] = Rl[i, r, c] if j < 0 else \
-                        Rw[j, r, 0] * Rl[i, 0, c] + Rw[j, r, 1] * Rl[i, 1, c] + Rw[j, r, 2] * Rl[i, 2, c]
-
-
-@njit(cache=True, inline="always")
-def inertial(i, mdl, work):
-    """Body i's inertial wrench about its origin: v̇'_C (Eq. 7, as 32d should read), f'_C (Eq. 13), n'_C
-    (Eq. 14), f'_i = f'_C, n'_i = n'_C + p'_C × f'_C (Eq. 16's CoM term)."""
-    mass, com, inertia = mdl.mass, mdl.com, mdl.inertia
-    w, dw, dv, dvc, fc, nc, f, n = work.w, work.dw, work.dv, work.dvc, work.fc, work.nc, work.f, work.n
-    c, wi, dwi = vec(com, i), vec(w, i), vec(dw, i)
-    dvc_i = add(vec(dv, i), add(cross(dwi, c), cross(wi, cross(wi, c))))   # Eq. 7 (32d as printed is wrong)
-    fc_i = scale(mass[i], dvc_i)                                          # Eq. 13: f'_Ci = m_i v̇'_Ci
-    nc_i = add(rot(inertia, i, dwi), cross(wi, rot(inertia, i, wi)))      # Eq. 14
-    put(dvc, i, dvc_i)
-    put(fc, i, fc_i)
-    put(nc, i, nc_i)
-    put(f, i, fc_i)
-    put(n, i, add(nc_i, cross(c, fc_i)))
-
-
-@njit(cache=True, inline="always")
-def external(work, X, s, xb, xp, world):
-    """f'_b −= f_e, n'_b −= n_e + p × f_e for each wrench (f_e, n_e) the environment applies on body b about
-    its point p (body axes); world-axes wrenches are first turned into the body: Rw_bᵀ f_e, Rw_bᵀ n_e."""
-    Rw, f, n = work.Rw, work.f, work.n
-    for k in range(xb.shape[0]):
-        b = xb[k]
-        fe, ne = (X[s, k, 0], X[s, k, 1], X[s, k, 2]), (X[s, k, 3], X[s, k, 4], X[s, k, 5])
-        if world:
-            fe, ne = rot_t(Rw, b, fe), rot_t(Rw, b, ne)
-        put(f, b, sub(vec(f, b), fe))
-        put(n, b, sub(vec(n, b), add(ne, cross(vec(xp, k), fe))))
-
-
-@njit(cache=True, inline="always")
-def inward(mdl, work, tau):
-    """Inward pass i = nb … 1 (Eqs. 15–18): τ_i = Sᵀ [f'_i; n'_i] (Eqs. 17, 18), then the parent takes
-    f'_λ += R f'_i (Eq. 15) and n'_λ += R n'_i + p × R f'_i (Eq. 16; 32h: p^{i−1}_i × R^{i−1}_i f'_i)."""
-    parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
-    Rl, pl, f, n = work.Rl, work.pl, work.f, work.n
-    for i in range(parent.shape[0] - 1, -1, -1):        # children come after parents: complete here
-        joint_force(S, iv[i], nvj[i], f[i], n[i], tau)
-        j = parent[i]
-        if j >= 0:
-            Rf = rot(Rl, i, vec(f, i))
-            put(f, j, add(vec(f, j), Rf))                                                  # Eq. 15
-            put(n, j, add(vec(n, j), add(rot(Rl, i, vec(n, i)), cross(vec(pl, i), Rf))))  # Eq. 16
-
-
-@njit(cache=True, inline="always")
-def rotor(armature, a, tau):
-    """τ += armature ⊙ q̈: the rotor inertia of each joint's drive (Pinocchio's rnea with model.armature; docs/design.md
-    §3, Joint dynamics), so that rnea = (M + diag(armature)) q̈ + h."""
-    for r in range(tau.shape[0]):
-        tau[r] += armature[r] * a[r]
-
-
-@njit(cache=True, inline="always")
-def store_terms(mdl, work, T):
-    """T (nb, NT) = [ω', ω̇', v', v̇', acc, v̇'_C, f'_C, n'_C, f', n', Rw] per body (TERMS order), with
-    acc = v̇' + Rwᵀ g: v̇' without the −g offset of v̇'_0."""
-    mg = mdl.mg
-    Rw, w, dw, vel, dv, dvc = work.Rw, work.w, work.dw, work.vel, work.dv, work.dvc
-    fc, nc, f, n = work.fc, work.nc, work.f, work.n
-    for i in range(T.shape[0]):
-        acc = sub(vec(dv, i), rot_t(Rw, i, (mg[0], mg[1], mg[2])))
-        for m, x in enumerate((vec(w, i), vec(dw, i), vec(vel, i), vec(dv, i), acc, vec(dvc, i), vec(fc, i),
-                               vec(nc, i), vec(f, i), vec(n, i))):
-            T[i, 3 * m], T[i, 3 * m + 1], T[i, 3 * m + 2] = x
-        for r in range(3):
-            for c in range(3):
-                T[i, 30 + 3 * r + c] = Rw[i, r, c]
 
 
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------
 
-@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA, tail=(_NO_T,),
+@route("rnea", _QVA, "tau", "v", entry(rnea_one, *MODEL, A1, A1, A1, A1), RNEA,
        wrenches=True, lanes=True, one_lanes=True,
        wrench_one=entry(rnea_fext_one, *MODEL, A1, A1, A1, A1, A1, A1, FLAG, A1),
        mimic=lambda mm, *x, **kw: mimic.generalized_force(mm, rnea, *x, **kw))

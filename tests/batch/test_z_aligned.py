@@ -1,8 +1,7 @@
 """The lane kernels' model: every 1-dof body frame turned so that its joint axis is z (kernel_form.z_aligned,
-Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the scalar Newton–Euler kernel, which
-takes any axis: the same τ and M (its columns M e_k = τ(q, 0, e_k) − τ(q, 0, 0)) from both forms on a tree with
-unaligned axes; the rotation C_i that turns e_z into the
-axis; the batch routes reaching the lane steps only with that form (any other falls back to the scalar kernel)."""
+Model.kernel.lane_arrays; docs/design.md §4c). Held to the model itself through the derivative kernel, which takes
+any axis: the same ∂τ/∂q, ∂τ/∂q̇ and M from both forms on a tree with unaligned axes; the rotation C_i that turns e_z into the
+axis; the batch routes reaching the lane steps only with that form (another raises)."""
 import numpy as np
 import pytest
 from conftest import AAU, assert_close
@@ -11,7 +10,7 @@ from test_lanes import _tree
 import manipdyn as md
 from manipdyn.dynamics.lanes import on_lanes
 from manipdyn.dynamics.model_arrays import unpack
-from manipdyn.dynamics.rnea import NT, rnea_kernel
+from manipdyn.dynamics.derivatives import rnea_derivatives_kernel
 from manipdyn.dynamics.arguments import wrench_rows
 from manipdyn.kernel_form import z_turn
 from manipdyn.validation import random_states
@@ -30,27 +29,23 @@ def test_z_turn_is_a_rotation_taking_z_to_the_axis(k):
 
 
 def _scalar(I, F, Q, V, A):
-    def tau_of(V, A):
-        tau = np.empty(V.shape)
-        rnea_kernel(I, F, Q, V, A, np.zeros((1, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), False, tau,
-                    np.zeros((0, I.shape[1], NT)))
-        return tau
-    zero, nv = np.zeros_like(V), V.shape[1]
-    h = tau_of(zero, zero)
-    M = np.stack([tau_of(zero, np.tile(e, (len(Q), 1))) - h for e in np.eye(nv)], axis=2)   # column k: M e_k
-    return tau_of(V, A), M
+    """(∂τ/∂q, ∂τ/∂q̇, M) by the derivative kernel, which takes any axis (the world-frame recursion)."""
+    D = np.empty((3,) + V.shape + V.shape[1:])
+    code = rnea_derivatives_kernel(I, F, Q, V, A, np.zeros((1, 0, 6)), np.zeros(0, np.int64), np.zeros((0, 3)), False,
+                                   D[0], D[1], D[2])
+    assert code == -1
+    return D
 
 
 @pytest.mark.parametrize("name", ["aau_arm", "tree"])
 def test_the_lane_form_is_the_same_model(name):
-    """The scalar kernels on both forms: τ and M agree to rounding (the turn changes only what is written in a
-    body's own axes), and the lane form's joint axes are exactly z."""
+    """The derivative kernel on both forms: ∂τ/∂q, ∂τ/∂q̇ and M agree to rounding (the turn changes only what is
+    written in a body's own axes), and the lane form's joint axes are exactly z."""
     model = md.load_urdf(AAU) if name == "aau_arm" else md.load_urdf_string(_tree())
     Q, V, A = random_states(model, 200, np.random.default_rng(4))
-    tau, M = _scalar(*model.kernel.arrays, Q, V, A)
-    tau_z, M_z = _scalar(*model.kernel.lane_arrays, Q, V, A)
-    assert_close(tau_z, tau, 1e-14, f"{name} τ")                     # measured ≤ 1.2e-15 (0 on the AAU arm)
-    assert_close(M_z, M, 1e-14, f"{name} M")                         # measured ≤ 5.7e-16
+    D, Dz = _scalar(*model.kernel.arrays, Q, V, A), _scalar(*model.kernel.lane_arrays, Q, V, A)
+    for k, what in enumerate(("∂τ/∂q", "∂τ/∂q̇", "M")):
+        assert_close(Dz[k], D[k], 1e-13, f"{name} {what}")          # measured ≤ 1.9e-15 (0 on the AAU arm)
     mdl = unpack(*model.kernel.lane_arrays)
     assert np.array_equal(mdl.axis, np.tile([0.0, 0.0, 1.0], (model.njoints, 1)))
     assert on_lanes(mdl, model.nq)

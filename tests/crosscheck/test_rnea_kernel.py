@@ -196,7 +196,7 @@ sys.path[:0] = [{tests!r}, {tests!r} + "/crosscheck"]
 import manipdyn as md
 from manipdyn import _jit
 from manipdyn.dynamics import rnea as R
-assert _jit.NOJIT and not hasattr(R.rnea_kernel, "py_func"), "the kernel is compiled"
+assert _jit.NOJIT and not hasattr(R.terms_kernel, "py_func"), "the kernel is compiled"
 import test_rnea_kernel as T
 out = {{}}
 for name in {names!r}:

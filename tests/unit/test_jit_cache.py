@@ -20,10 +20,9 @@ from conftest import ROOT, assert_close
 
 from manipdyn import _jit
 
-# frame_kernel (dynamics/kinematics.py), closure_kernel (constraints/closures.py) and rnea_kernel
-# (dynamics/rnea.py, reached by rnea_terms: one-state rnea drives the lane steps, which place a joint in lanes.py),
-# all inlining joints.joint_placement through forward_kinematics.fk_pass, on one fixed state of the spherical
-# parallel manipulator.
+# frame_kernel (dynamics/kinematics.py), closure_kernel (constraints/closures.py) and rnea_derivatives_kernel
+# (dynamics/derivatives.py; rnea and rnea_terms drive the lane steps, which place a joint in lanes.py), all inlining
+# joints.joint_placement, on one fixed state of the spherical parallel manipulator.
 PROBE = f"""
 import json, numpy as np, manipdyn as md
 from manipdyn.constraints import closure_terms
@@ -33,7 +32,7 @@ q, v, a = rng.uniform(-3, 3, m.nq), rng.normal(0, 2, m.nv), rng.normal(0, 2, m.n
 phi, jac, bias = closure_terms(m, q, v)
 import os; assert md.__file__.startswith(os.getcwd()), md.__file__    # the copy, not the checkout
 print(json.dumps(dict(J=md.frame_jacobian(m, q, "platform").tolist(), phi=phi.tolist(), jac=jac.tolist(),
-                      bias=bias.tolist(), tau=md.rnea_terms(m, q, v, a)["tau"].tolist())))
+                      bias=bias.tolist(), dtau_dq=md.rnea_derivatives(m, q, v, a)[0].tolist())))
 """
 
 

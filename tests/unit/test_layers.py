@@ -198,7 +198,8 @@ ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "ener
 # CRBA and the Newton–Euler kernel, one state through their one-lane drivers; the derivatives differentiate the
 # ABA, the regressor reuses the outward pass, the Lagrange M sums the frame Jacobians) — never a helper of the
 # algebra, which lives in spatial.py.
-BORROWED = {"rnea": {"NT", "rnea", "rnea_kernel", "rnea_lanes", "rnea_one", "rnea_steps_one", "outward", "rnea_workspace"},
+BORROWED = {"rnea": {"NT", "rnea", "rnea_lanes", "rnea_one", "rnea_steps_one", "steps_scratch", "outward",
+                     "rnea_workspace"},
             "crba": {"crba", "crba_lanes", "crba_steps_one", "mass_matrix"},
             "aba": {"ABA", "aba_steps_one"},
             "lagrange": {"lagrange_mass_matrix"},

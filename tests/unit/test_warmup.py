@@ -12,7 +12,7 @@ from manipdyn.cli import main
 NOT_PUBLIC = {"com_jacobians_kernel", "fk_kernel", "joint_placements_kernel"}
 # kernels only other kernels call: their machine code is part of their callers', loaded from the cache with them
 # (their own dispatcher then lists no signature)
-CALLED_BY_KERNELS = {"closure_rows", "frame_one", "rnea_kernel", "cholesky_states", "outward_lanes", "external_lanes",
+CALLED_BY_KERNELS = {"closure_rows", "frame_one", "cholesky_states", "outward_lanes", "external_lanes",
                      "inward_lanes", "merge_lanes", "aba_steps_one", "slide_lanes",
                      "column_lanes", "velocity_lanes", "articulated_lanes", "inertia_up_lanes", "acceleration_lanes",
                      "articulated_multi_lanes", "acceleration_multi_lanes",
