@@ -65,7 +65,7 @@ class KernelForm:
         I = np.zeros((5, nb), np.int64)
         if nb:
             I[:] = np.vstack([model.parent, model.kind, model.idx_q, model.idx_v, model.nvs])
-        F = _floats(model, model.R0, model.inertia, model.axis, model.p0, model.com)
+        F = _floats(model, model.R0, model.inertia, model.axis, model.p0, model.com, np.tile(np.eye(3), (nb, 1, 1)))
         config = (np.array(model.kind, np.int64), np.array(model.continuous, np.bool_),
                   np.array(model.idx_q, np.int64), np.array(model.idx_v, np.int64))
         frame_rows, one_state, wrench = {}, {}, {}
@@ -81,7 +81,7 @@ class KernelForm:
             for axes in ("local", "world"):
                 R, p = wrench_axes(turn[fr.body] if fr.body >= 0 else np.eye(3), fr, axes)
                 wrench[name, axes] = np.concatenate([R.ravel(), p, [float(fr.body)]])
-        Fz = _floats(model, *turned)
+        Fz = _floats(model, *turned, turn)
         lane_frames = {}
         for name, (b, X) in frame_rows.items():
             C = turn[b] if b >= 0 else np.eye(3)             # the frame in the body's z-aligned frame: Cᵀ R, Cᵀ p
@@ -108,21 +108,24 @@ def wrench_axes(C, fr, axes):
     return (Ct @ np.asarray(fr.R, float) if axes == "local" else np.eye(3)), Ct @ np.asarray(fr.p, float)
 
 
-def _floats(model, R0, inertia, axis, p0, com):
+def _floats(model, R0, inertia, axis, p0, com, turn):
     """F, the kernels' float array (KernelForm's layout), of the model with these joint frames, inertias, axes,
-    origins and centres of mass (the model's own, or ``z_aligned``'s)."""
+    origins, centres of mass and turns of the body frames from the links' (the model's own, with the identity, or
+    ``z_aligned``'s)."""
     nb = model.njoints
     S = np.concatenate([motion_subspace(int(k), a, h) for k, a, h in zip(model.kind, axis, model.pitch)]) if nb \
         else np.zeros((0, 6))
     m = max(2, 2 * ((model.nv + 2) // 3))             # even: 9 m numbers reshape into (3 m / 2, 6) ⊇ S
-    F = np.zeros((4 * nb + 1 + m + (model.nv + 8) // 9, 3, 3))     # then armature (nv,) in whole blocks
+    a = (model.nv + 8) // 9
+    F = np.zeros((4 * nb + 1 + m + a + nb, 3, 3))     # then armature (nv,) in whole blocks, then the turns
     F[:nb], F[nb:2 * nb] = R0, inertia
     F[2 * nb:3 * nb, 0], F[2 * nb:3 * nb, 1], F[2 * nb:3 * nb, 2] = axis, p0, com
     F[3 * nb:4 * nb, 0, 0] = model.mass
     F[3 * nb:4 * nb, 0, 1] = model.pitch
     F[4 * nb, 0] = -np.asarray(model.gravity, float)
     F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:model.nv] = S
-    F[4 * nb + 1 + m:].reshape(-1)[:model.nv] = model.armature
+    F[4 * nb + 1 + m:4 * nb + 1 + m + a].reshape(-1)[:model.nv] = model.armature
+    F[4 * nb + 1 + m + a:] = turn
     return F
 
 

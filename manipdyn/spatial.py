@@ -9,7 +9,7 @@ algebra of its own). Two parts:
    - 6-vectors, order [linear; angular] (the order of the motion subspace S and of Pinocchio), in a body's
      own frame about its origin — motion m = [v_O; ω], force f = [f; n_O]: ``row6``, ``dot6``,
      ``motion_cross`` (v ×), ``force_cross`` (v ×*), their array forms ``cross_motion`` / ``cross_force``,
-     the transforms ``motion_down`` / ``motion_to_child`` (ⁱX_λ), ``force_up`` (^λX*_i),
+     the transforms ``motion_down`` (ⁱX_λ), ``force_up`` (^λX*_i),
      ``compose`` (a placement in a placed frame), ``world_motion``
      (⁰X_i), ``rotate6`` (R on both halves);
    - spatial inertias: ``rigid_inertia`` (RBDA Eq. 2.63), ``world_inertia``, ``inertia_up``, ``block3``, ``congruence3``,
@@ -286,13 +286,6 @@ def motion_down(R, p, l, w):
     origin and in its axes (RBDA Table 2.2), R a tuple of rows (``block3``), two 3-tuples back."""
     u = (l[0] + w[1] * p[2] - w[2] * p[1], l[1] + w[2] * p[0] - w[0] * p[2], l[2] + w[0] * p[1] - w[1] * p[0])
     return mul3t(R, u), mul3t(R, w)
-
-
-@njit(cache=True, inline="always")
-def motion_to_child(R, p, m, out):
-    """out = ⁱX_λ m (``motion_down`` of the arrays R (3, 3), m (6,); out must not alias m)."""
-    lo, wo = motion_down(block3(R, 0, 0), p, (m[0], m[1], m[2]), (m[3], m[4], m[5]))
-    out[0], out[1], out[2], out[3], out[4], out[5] = lo[0], lo[1], lo[2], wo[0], wo[1], wo[2]
 
 
 @njit(cache=True, inline="always")

@@ -914,7 +914,7 @@ FAULTS = (
           "inertia_column(W, 5, (ax, ay, 0.0), (wx, wy, 0.0), (wx, wy, wz))",
           (_REGRESSOR,), "I_xy's column built from the wrong unit inertia (I ω with the xy entries on the diagonal)"),
     Fault("regressor-lever-arm-dropped", "regressor", "manipdyn/dynamics/regressor.py",
-          "motion_to_child(Rl[i], pl[i], Sx[lam, r], Sx[i, r])", "motion_to_child(Rl[i], pl[i] * 0.0, Sx[lam, r], Sx[i, r])",
+          "l, w = motion_down(R, p, (Sx[lam, r, 0]", "l, w = motion_down(R, (0.0, 0.0, 0.0), (Sx[lam, r, 0]",
           (_REGRESSOR,), "ancestors' motion subspaces carried to the child without the ω × p lever arm (Eq. 4)"),
     Fault("regressor-own-joint-only", "regressor", "manipdyn/dynamics/regressor.py",
           "        j = parent[j]\n", "        j = -1\n",
@@ -1176,10 +1176,11 @@ FAULTS = (
           ("tests/robustness/test_api_outputs.py", "tests/batch/test_lanes.py"),
           "one state's RNEA returns an overflowed τ as if it were finite"),
     Fault("rnea-one-state-input-unchecked", "rnea", "manipdyn/dynamics/rnea.py",
-          "    if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):\n        return bad_input(0)\n",
-          "    if False:\n        return bad_input(0)\n",
+          "    if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):\n        return False\n",
+          "    if False:\n        return False\n",
           ("tests/batch/test_lanes.py", "tests/unit/test_status.py"),
-          "one state's RNEA lets a NaN input through, to be reported as a non-finite result"),
+          "one state's RNEA (and the regressor: their outward pass) lets a NaN input through, to be reported as a "
+          "non-finite result"),
     Fault("aba-lanes-wrench-into-velocity-rows", "aba", "manipdyn/dynamics/aba.py",
           "external_lanes(parent, even, odd, depth, ARTICULATED, _PA, X,",
           "external_lanes(parent, even, odd, depth, ARTICULATED, _C, X,",
@@ -1203,9 +1204,17 @@ FAULTS = (
           "T[s, i, 3 * k], T[s, i, 3 * k + 1], T[s, i, 3 * k + 2] = x",
           (_RNEA, "tests/crosscheck/test_rnea_terms.py"), "rnea_terms' vectors left in the lane steps' z-aligned axes, not turned into the link's"),
     Fault("rnea-terms-link-orientation-turned-back", "rnea", "manipdyn/dynamics/rnea.py",
-          "Rw[i, r, 0] * C[i, c, 0] + Rw[i, r, 1] * C[i, c, 1] + Rw[i, r, 2] * C[i, c, 2]",
-          "Rw[i, r, 0] * C[i, 0, c] + Rw[i, r, 1] * C[i, 1, c] + Rw[i, r, 2] * C[i, 2, c]",
+          "Rw[i, r, 0] * C[c, 0] + Rw[i, r, 1] * C[c, 1] + Rw[i, r, 2] * C[c, 2]",
+          "Rw[i, r, 0] * C[0, c] + Rw[i, r, 1] * C[1, c] + Rw[i, r, 2] * C[2, c]",
           (_RNEA, "tests/crosscheck/test_rnea_terms.py"), "rnea_terms' link orientation Rw C instead of Rw Cᵀ"),
+    Fault("regressor-wrench-left-in-link-axes", "regressor", "manipdyn/dynamics/regressor.py",
+          "                        n = mul3t(C, (W[k, 3], W[k, 4], W[k, 5]))\n",
+          "                        n = (W[k, 3], W[k, 4], W[k, 5])\n",
+          (_REGRESSOR,), "the regressor's inertial moments left in the link's axes, projected on motion subspaces in "
+          "the z-aligned ones"),
+    Fault("model-arrays-turn-offset", "rnea", "manipdyn/dynamics/model_arrays.py",
+          "F[3 * nb:4 * nb, 0, 1], F[e:e + nb])", "F[3 * nb:4 * nb, 0, 1], F[e - 1:e - 1 + nb])",
+          (_REGRESSOR, _RNEA), "the kernels read each body's turn C_i one block early (the armature's last block)"),
 )
 
 

@@ -8,7 +8,8 @@ again):
   F (4 nb + 1 + m, 3, 3) = blocks of 3×3 numbers:  F[0:nb] R0,  F[nb:2nb] inertia (about the CoM, body axes),
                            F[2nb:3nb] rows [axis; p0; com],  F[3nb:4nb, 0, 0] mass,  F[3nb:4nb, 0, 1] pitch,  F[4nb, 0] −g,
                            F[4nb+1:4nb+1+m] S (nv, 6), padded to m = max(2, 2⌈nv/3⌉) blocks,
-                           F[4nb+1+m:] the armature (nv,), padded to whole blocks,
+                           F[4nb+1+m:4nb+1+m+a] the armature (nv,), padded to a = ⌈nv/9⌉ whole blocks,
+                           F[4nb+1+m+a:] the turn C_i of each body frame from its link's (x_link = C_i x),
 viewed again by ``unpack`` inside the kernels (slices, one reshape).
 S holds one row per joint velocity, [linear; angular] in the body frame (``joints.motion_subspace``).
 
@@ -27,7 +28,7 @@ def kernel_arrays(model):
     return model.kernel.arrays
 
 
-ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature pitch")
+ModelArrays = namedtuple("ModelArrays", "parent kind iq iv nvj S axis R0 p0 mass com inertia mg armature pitch turn")
 ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views of Model.kernel's (I, F):
     parent (nb,) int   λ(i), −1 for the fixed base (parent[i] < i)
     kind (nb,) int     the joint's code in the registry (joints.KINDS, joints.IN_MODEL)
@@ -39,7 +40,9 @@ ModelArrays.__doc__ = """The model as every kernel reads it (``unpack``), views 
     mass (nb,)         body mass;   com (nb, 3) centre of mass (body frame);   inertia (nb, 3, 3) about the CoM
     mg (3,)            −g, the base acceleration that stands for gravity
     armature (nv,)     rotor inertia per velocity (Model.armature): M + diag(armature), τ += armature ⊙ q̈
-    pitch (nb,)        a helical joint's pitch, m/rad (0 for every other kind)"""
+    pitch (nb,)        a helical joint's pitch, m/rad (0 for every other kind)
+    turn (nb, 3, 3)    C_i, body i's frame in its link's (x_link = C_i x): the identity in the model's own form, the
+                       turn onto the joint axis in the lane steps' z-aligned form (kernel_form.z_aligned)"""
 
 
 @njit(cache=True, inline="always")
@@ -48,7 +51,8 @@ def unpack(I, F):
     nb = I.shape[1]
     nv = I[3, nb - 1] + I[4, nb - 1] if nb else 0        # velocities in body order: the last body's end
     m = max(2, 2 * ((nv + 2) // 3))                      # S's blocks (KernelForm.of)
+    e = 4 * nb + 1 + m + (nv + 8) // 9                   # the armature's end
     B = F[2 * nb:3 * nb]
     return ModelArrays(I[0], I[1], I[2], I[3], I[4], F[4 * nb + 1:4 * nb + 1 + m].reshape(-1, 6)[:nv],
                        B[:, 0], F[:nb], B[:, 1], F[3 * nb:4 * nb, 0, 0], B[:, 2], F[nb:2 * nb], F[4 * nb, 0],
-                       F[4 * nb + 1 + m:].reshape(-1)[:nv], F[3 * nb:4 * nb, 0, 1])
+                       F[4 * nb + 1 + m:e].reshape(-1)[:nv], F[3 * nb:4 * nb, 0, 1], F[e:e + nb])

@@ -16,8 +16,9 @@ to the origin, h = m c)
     f'_i = m v̇'_i + ω̇'_i × h + ω'_i × (ω'_i × h)
     n'_i = I ω̇'_i + ω'_i × I ω'_i + h × v̇'_i
 
-with ω'_i, ω̇'_i, v̇'_i (gravity included: v̇'_0 = −g) from the Newton–Euler outward pass (``rnea.outward``,
-the same pass, not a copy). So [f'_i; n'_i] = A_i π_i with the 6 × 10 block (rows [force; moment])
+with ω'_i, ω̇'_i, v̇'_i (gravity included: v̇'_0 = −g) from the Newton–Euler passes (the records of
+``rnea.outward_one``, the RNEA's outward pass, not a copy; turned from their z-aligned axes into the link's, where the
+parameters are written). So [f'_i; n'_i] = A_i π_i with the 6 × 10 block (rows [force; moment])
 
     A_i = [[v̇', [ω̇']× + [ω']×[ω']×, 0        ],
            [0,  −[v̇']×,              L(ω̇') + [ω']× L(ω')]],   I ω = L(ω) (I_xx, I_xy, I_yy, I_xz, I_yz, I_zz).
@@ -30,7 +31,7 @@ and joint j feels its motion-subspace component: the column block of body i in j
 
 The kernel takes the right-hand form: instead of carrying ten wrench columns inward once per ancestor, it
 carries each ancestor's motion subspace outward once per body, ⁱX_j S_j = ⁱX_λ (^λX_j S_j)
-(``spatial.motion_to_child``), and projects A_i onto it — one 6-vector moved per ancestor velocity instead of ten.
+(``spatial.motion_down``), and projects A_i onto it — one 6-vector moved per ancestor velocity instead of ten.
 
 Single states (nv,), batches (N, nv); the kernel is compiled by numba and runs as plain Python under
 MANIPDYN_NOJIT=1.
@@ -41,12 +42,12 @@ import dataclasses
 
 import numpy as np
 
-from .._jit import A1, A2, A3, MODEL, entry, njit
+from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
-from ..spatial import first_nonfinite_entry, motion_to_child
-from .kernel_inputs import finite_state
+from ..spatial import first_nonfinite_entry, motion_down, mul3, mul3t
+from .lanes import get3, get_rotation
 from .model_arrays import unpack
-from .rnea import outward, rnea_workspace
+from .rnea import RECORD, outward_one, steps_scratch
 from .route import route
 from .arguments import as_real, check_finite, check_model
 from .status import bad_input, bad_result
@@ -112,43 +113,59 @@ def regressor_one(I, F, q, v, a, Y):
     return regressor_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], Y[np.newaxis, :, :])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=CONTRACT)
 def regressor_kernel(I, F, Q, V, A, Y):
     """Y[s] = [(ⁱX_j S_j)ᵀ A_i]_{j, i} for every state s: the outward pass, then each body's block A_i
     projected onto its own and its ancestors' motion subspaces (module docstring).
 
-    I, F: the model in core form (``model_arrays.kernel_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb) result.
-    Returns its status (dynamics/status.py): a non-finite input, or −2 − nb − k for a non-finite entry at flat
-    index k of Y.
+    I, F: the model in z-aligned frames (``Model.kernel.lane_arrays``); Q (N, nq), V, A (N, nv); Y (N, nv, 10 nb)
+    result. ω'_i, ω̇'_i, v̇'_i and the placements are the records of the RNEA's outward pass (``rnea.outward_one``,
+    the one-lane driver's); A_i is built in the link's own axes, where its parameters are written (x = C_i x', ``turn``),
+    and its wrenches turned back into the z-aligned axes of the records. Returns its status (dynamics/status.py): a
+    non-finite input, or −2 − nb − k for a non-finite entry at flat index k of Y.
     """
     mdl = unpack(I, F)
     N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
-    work = rnea_workspace(nb)
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
+    Rec, turned = steps_scratch(I, Q[0], V[0]), np.empty(nb, np.bool_)
+    for i in range(nb):
+        turned[i] = False
+        for a in range(3):
+            for b in range(3):
+                turned[i] |= mdl.turn[i, a, b] != (1.0 if a == b else 0.0)
     for s in range(N):
-        if not finite_state(Q, V, A, s):
-            return bad_input(s)
-        outward(mdl, work, Q[s], V[s], A[s])     # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): rnea's pass in link frames
+        if not outward_one(mdl, Q[s], V[s], A[s], Rec):   # ω'_i, ω̇'_i, v̇'_i (v̇'_0 = −g): the RNEA's outward
+            return bad_input(s)                           # pass, its records in Rec
         Y[s, :, :] = 0.0
         for i in range(nb):
-            body_block(work, i, W)
-            to_ancestors(mdl, work, i, W, Sx, Y[s])
+            B, T = Rec[i * RECORD:(i + 1) * RECORD], mdl.turn[i]
+            if turned[i]:
+                C = ((T[0, 0], T[0, 1], T[0, 2]), (T[1, 0], T[1, 1], T[1, 2]), (T[2, 0], T[2, 1], T[2, 2]))
+                body_block(mul3(C, get3(B, 12, 0, 1)), mul3(C, get3(B, 15, 0, 1)), mul3(C, get3(B, 18, 0, 1)), W)
+                for k in range(NP):                        # [f; n] from the link's axes into the record's (f = 0
+                    if k < 4:                              # for the inertias, n = 0 for the mass)
+                        f = mul3t(C, (W[k, 0], W[k, 1], W[k, 2]))
+                        W[k, 0], W[k, 1], W[k, 2] = f[0], f[1], f[2]
+                    if k > 0:
+                        n = mul3t(C, (W[k, 3], W[k, 4], W[k, 5]))
+                        W[k, 3], W[k, 4], W[k, 5] = n[0], n[1], n[2]
+            else:                                          # (a body whose frame is its link's: no turn)
+                body_block(get3(B, 12, 0, 1), get3(B, 15, 0, 1), get3(B, 18, 0, 1), W)
+            to_ancestors(mdl, Rec, i, W, Sx, Y[s])
         k = first_nonfinite_entry(Y[s])                   # finite result (else an intermediate overflowed)
         if k >= 0:
             return bad_result(nb, s * nv * NP * nb + k)
     return -1
 
 
-
-
 @njit(cache=True, inline="always")
-def body_block(work, i, W):
+def body_block(w, dw, dv, W):
     """W (10, 6): column k of A_i as a wrench [f; n] about body i's origin, in its axes — the inertial
-    wrench of a unit parameter k (module docstring; Atkeson et al. 1986, Eq. 9)."""
-    w, dw, dv = work.w, work.dw, work.dv                  # ω'_i, ω̇'_i, v̇'_i of rnea.outward
-    wx, wy, wz = w[i, 0], w[i, 1], w[i, 2]
-    ax, ay, az = dw[i, 0], dw[i, 1], dw[i, 2]
-    gx, gy, gz = dv[i, 0], dv[i, 1], dv[i, 2]              # v̇'_i, with −g
+    wrench of a unit parameter k (module docstring; Atkeson et al. 1986, Eq. 9); w, dw, dv: ω'_i, ω̇'_i, v̇'_i
+    (v̇' with −g) in the same axes."""
+    wx, wy, wz = w
+    ax, ay, az = dw
+    gx, gy, gz = dv                                        # v̇'_i, with −g
     W[:, :] = 0.0
     W[0, 0], W[0, 1], W[0, 2] = gx, gy, gz                 # m: f = m v̇'
     for k in range(3):                                     # h = m c along e_k: f = ω̇ × e_k + ω × (ω × e_k)
@@ -178,12 +195,14 @@ def inertia_column(W, k, Ia, Iw, w):
 
 
 @njit(cache=True, inline="always")
-def to_ancestors(mdl, work, i, W, Sx, Y):
+def to_ancestors(mdl, Rec, i, W, Sx, Y):
     """Y[r, columns of i] = (ⁱX_j S_j)ᵀ A_i = S_jᵀ ʲX*_i A_i for every velocity r of joint i and of each
     ancestor j: the ancestors' motion subspaces carried out to body i, Sx[i, r] = ⁱX_λ Sx[λ, r] (RBDA
-    Table 2.2, ``spatial.motion_to_child``; Sx[λ] is complete since λ < i), rather than ten wrenches carried in."""
+    Table 2.2, ``spatial.motion_down`` with body i's placement from its record), rather than ten wrenches carried
+    in."""
     parent, iv, nvj, S = mdl.parent, mdl.iv, mdl.nvj, mdl.S
-    Rl, pl = work.Rl, work.pl
+    B = Rec[i * RECORD:(i + 1) * RECORD]
+    R, p = get_rotation(B, 0, 1), get3(B, 9, 0, 1)
     lam = parent[i]
     for r in range(iv[i], iv[i] + nvj[i]):                # joint i's own S, in its body frame
         Sx[i, r, :] = S[r]
@@ -191,7 +210,9 @@ def to_ancestors(mdl, work, i, W, Sx, Y):
     j = lam
     while j >= 0:
         for r in range(iv[j], iv[j] + nvj[j]):
-            motion_to_child(Rl[i], pl[i], Sx[lam, r], Sx[i, r])
+            l, w = motion_down(R, p, (Sx[lam, r, 0], Sx[lam, r, 1], Sx[lam, r, 2]),
+                               (Sx[lam, r, 3], Sx[lam, r, 4], Sx[lam, r, 5]))
+            Sx[i, r, 0], Sx[i, r, 1], Sx[i, r, 2], Sx[i, r, 3], Sx[i, r, 4], Sx[i, r, 5] = l[0], l[1], l[2], w[0], w[1], w[2]
             project(Sx[i, r], W, Y, r, NP * i)
         j = parent[j]
 
@@ -207,7 +228,7 @@ def project(s, W, Y, r, c0):
 # -- the public call: its route (dynamics/route.py) -------------------------------------------------------------
 
 @route("joint_torque_regressor", _QVA, "Y", "regressor", entry(regressor_one, *MODEL, A1, A1, A1, A2),
-       entry(regressor_kernel, *MODEL, A2, A2, A2, A3))
+       entry(regressor_kernel, *MODEL, A2, A2, A2, A3), lanes=True, one_lanes=True)
 def joint_torque_regressor(model, q, v, a, *, threads=None, out=None):
     """Y (nv, 10 nb) with τ = Y π = rnea(q, q̇, q̈) (gravity included), π = dynamic_parameters(model).
 

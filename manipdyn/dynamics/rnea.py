@@ -30,12 +30,11 @@ about which the moment is taken.
 """
 from __future__ import annotations
 
-from collections import namedtuple
 
 import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
-from ..joints import HELICAL, PLANAR, joint_placement, joint_velocity
+from ..joints import HELICAL, PLANAR
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
@@ -89,8 +88,7 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call):
     tau, T = np.zeros((N, model.nv)), np.zeros((N, nb, NT))
     if nb == 0:
         return tau, T
-    code = TERMS_ENTRY.call(*model.kernel.lane_arrays, Q, V, A, X, body, point, f_ext_frame == "world",
-                            model.kernel.lane_turns, tau, T)
+    code = TERMS_ENTRY.call(*model.kernel.lane_arrays, Q, V, A, X, body, point, f_ext_frame == "world", tau, T)
     if code != -1:
         raise_kernel_error(model, code, _QVA, (Q, V, A), call, "tau", tau)
     return tau, T
@@ -153,23 +151,17 @@ def gravity_one(I, F, q, tau):
     return bias_one(I, F, q, q[:0], tau)
 
 
-@njit(cache=True, fastmath=CONTRACT)
-def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau, W):
-    """τ (nv,) of one state by the steps of the lane kernel (``rnea_lanes``), driven for one lane: records of one
-    number a row (L = 1), the same placement, motion, inertial, wrench and torque steps, the same z-aligned frames
-    ((I, F) = ``Model.kernel.lane_arrays``: another form raises) — one source for a batch and for one state.
-    Measured: AAU arm 411 against 905 ns a state for the scalar kernel in a compiled loop (docs/bench/measurements.md).
-    External wrenches X (K, 6) on bodies xb about their points xp, in the bodies' z-aligned axes or (world) in world
-    axes, between the passes (as ``external_lanes``; K = 0 for none: ``kernel_inputs.no_wrenches``). An angle beyond
-    ``spatial.SINCOS_MAX`` is placed with libm's sin and cos (``lanes.screw_placement_one``). Returns its status
-    (dynamics/status.py): a non-finite q, q̇ or q̈, or τ's first non-finite entry. W: scratch of ``steps_scratch``
-    (its first nb · RECORD numbers, the bodies' records, are what ``terms_kernel`` reads after the passes)."""
-    mdl = unpack(I, F)
-    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
+@njit(cache=True, inline="always")
+def outward_one(mdl, q, v, a, W):
+    """The outward pass of one state (Eqs. 3–14) on one-lane records in W (``steps_scratch``: the bodies' records,
+    then q, q̇, q̈, then the base): placement, ω'_i, ω̇'_i, v̇'_i and the inertial wrench of every body, in z-aligned
+    frames (a model in another form raises). False for a non-finite q, q̇ or q̈. ``rnea_steps_one``'s first pass, and
+    what the regressor reads (regressor.py)."""
+    nb, nq, nv = mdl.parent.shape[0], q.shape[0], v.shape[0]
     if not on_lanes(mdl, nq, True):
         raise ValueError("the RNEA's steps take a model in z-aligned frames (Model.kernel.lane_arrays)")
     if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):
-        return bad_input(0)
+        return False
     Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
     for k in range(nq):
         Z[k] = q[k]
@@ -196,6 +188,25 @@ def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau, W):
             else:
                 motion_lane(mm, B, par, Z, 0, 1)
         inertial_lane(inertial_model(i, mdl), B, 0, 1)
+    return True
+
+
+@njit(cache=True, fastmath=CONTRACT)
+def rnea_steps_one(I, F, q, v, a, X, xb, xp, world, tau, W):
+    """τ (nv,) of one state by the steps of the lane kernel (``rnea_lanes``), driven for one lane: records of one
+    number a row (L = 1), the same placement, motion, inertial, wrench and torque steps, the same z-aligned frames
+    ((I, F) = ``Model.kernel.lane_arrays``: another form raises) — one source for a batch and for one state.
+    Measured: AAU arm 411 against 905 ns a state for the scalar kernel in a compiled loop (docs/bench/measurements.md).
+    External wrenches X (K, 6) on bodies xb about their points xp, in the bodies' z-aligned axes or (world) in world
+    axes, between the passes (as ``external_lanes``; K = 0 for none: ``kernel_inputs.no_wrenches``). An angle beyond
+    ``spatial.SINCOS_MAX`` is placed with libm's sin and cos (``lanes.screw_placement_one``). Returns its status
+    (dynamics/status.py): a non-finite q, q̇ or q̈, or τ's first non-finite entry. W: scratch of ``steps_scratch``
+    (its first nb · RECORD numbers, the bodies' records, are what ``terms_kernel`` reads after the passes)."""
+    mdl = unpack(I, F)
+    nb, nq, nv = I.shape[1], q.shape[0], v.shape[0]
+    if not outward_one(mdl, q, v, a, W):                            # outward, Eqs. 3–14
+        return bad_input(0)
+    Rec, Z = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv]
     for k in range(xb.shape[0]):                                    # external wrenches (as external_lanes)
         fe, ne = wrench_in_body(mdl.parent, Rec, RECORD, X, k, xb[k], world)
         external_lane(Rec[xb[k] * RECORD:(xb[k] + 1) * RECORD], _F, fe, ne, (xp[k, 0], xp[k, 1], xp[k, 2]), 0, 1)
@@ -489,11 +500,11 @@ def wrench_up_lane(B, to, l, L):
 
 
 @njit(cache=True, fastmath=CONTRACT)
-def terms_kernel(I, F, Q, V, A, X, xb, xp, world, C, tau, T):
+def terms_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     """τ (N, nv) and the per-link terms T (N, nb, NT) = [TERMS, then the link's world orientation R row by row] of every
     state: the records of the one-lane driver's passes (``rnea_steps_one``, in z-aligned frames: (I, F) =
     ``Model.kernel.lane_arrays``, the wrenches in those frames) turned into each link's own axes, x = C_i x'
-    (C (nb, 3, 3): ``Model.kernel.lane_turns``; the origin is the link's), with what no torque needs accumulated
+    (C_i: the model's ``turn``, ``model_arrays``; the origin is the link's), with what no torque needs accumulated
     outward from them: the origin's velocity v'_i = Rᵀ (v'_λ + ω'_λ × p) + S_l q̇ (Eqs. 4, 11), v̇'_C, f'_C and n'_C
     (Eqs. 7, 13, 14), the world orientation Rw_i = Rw_λ R and v̇' without the −g of v̇'_0. Its status as
     ``rnea_steps_one``'s, the state shifted."""
@@ -524,13 +535,13 @@ def terms_kernel(I, F, Q, V, A, X, xb, xp, world, C, tau, T):
             fc = scale(m, dvc)                                                       # Eq. 13
             nc = add(mul3(J, dw), cross(w, mul3(J, w)))                              # Eq. 14
             acc = sub(dv, rot_t(Rw, i, mg))
-            Ci = ((C[i, 0, 0], C[i, 0, 1], C[i, 0, 2]), (C[i, 1, 0], C[i, 1, 1], C[i, 1, 2]),
-                  (C[i, 2, 0], C[i, 2, 1], C[i, 2, 2]))
+            C = mdl.turn[i]
+            Ci = ((C[0, 0], C[0, 1], C[0, 2]), (C[1, 0], C[1, 1], C[1, 2]), (C[2, 0], C[2, 1], C[2, 2]))
             for k, x in enumerate((w, dw, v, dv, acc, dvc, fc, nc, get3(B, _F, 0, 1), get3(B, _F + 3, 0, 1))):
                 T[s, i, 3 * k], T[s, i, 3 * k + 1], T[s, i, 3 * k + 2] = mul3(Ci, x)
             for r in range(3):                                                       # Rw_i C_iᵀ: the link's
                 for c in range(3):
-                    T[s, i, 30 + 3 * r + c] = Rw[i, r, 0] * C[i, c, 0] + Rw[i, r, 1] * C[i, c, 1] + Rw[i, r, 2] * C[i, c, 2]
+                    T[s, i, 30 + 3 * r + c] = Rw[i, r, 0] * C[c, 0] + Rw[i, r, 1] * C[c, 1] + Rw[i, r, 2] * C[c, 2]
     return OK
 
 
@@ -538,49 +549,8 @@ def terms_kernel(I, F, Q, V, A, X, xb, xp, world, C, tau, T):
 # second entry compiled for C-ordered arrays (4 % faster); the lane kernel reads its inputs once per block, and
 # its C-ordered twin measured 4–6 % slower (ur5 109 vs 113 ns a state), so it has one entry like every kernel.
 RNEA = entry(rnea_lanes, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2)
-TERMS_ENTRY = entry(terms_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A3, A2, A3)
+TERMS_ENTRY = entry(terms_kernel, *MODEL, A2, A2, A2, A3, I1, A2, FLAG, A2, A3)
 
-
-
-# -- the outward pass in the links' own frames: the regressor's (regressor.py), which writes its parameters in them
-# (the lane steps' records are in z-aligned frames; the regressor on them is the next stage of docs/design.md §4c)
-
-Work = namedtuple("Work", "Rl pl w dw dv")
-Work.__doc__ = """Scratch of ``outward`` (``rnea_workspace``), per body i (nb rows): Rl, pl its placement in its parent
-(3, 3), (3,); w ω'_i, dw ω̇'_i, dv v̇'_i (3,)."""
-
-
-@njit(cache=True, inline="always")
-def rnea_workspace(nb):
-    """The ``Work`` of a model with nb bodies, cut from two allocations."""
-    RR, B = np.empty((nb, 3, 3)), np.empty((4, nb, 3))
-    return Work(RR, B[0], B[1], B[2], B[3])
-
-
-@njit(cache=True, inline="always")
-def outward(mdl, work, q, v, a):
-    """Outward pass i = 1 … nb (Eqs. 3–6, 9–12) in the links' own frames: ω'_i, ω̇'_i, v̇'_i of every body (the
-    lane steps' ``motion_lane`` for any joint and axis)."""
-    parent, kind, iq, iv, nvj, S = mdl.parent, mdl.kind, mdl.iq, mdl.iv, mdl.nvj, mdl.S
-    axis, pitch, R0, p0, mg = mdl.axis, mdl.pitch, mdl.R0, mdl.p0, mdl.mg
-    Rl, pl, w, dw, dv = work.Rl, work.pl, work.w, work.dw, work.dv
-    for i in range(parent.shape[0]):
-        joint_placement(i, kind, iq, axis, pitch, R0, p0, q, Rl, pl)           # R^{i−1}_i, p^{i−1}_i
-        j = parent[i]
-        if j < 0:                                          # the fixed base: ω'_0 = ω̇'_0 = 0, v̇'_0 = −g
-            w_in, dw_in = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-            dv_in = rot_t(Rl, i, (mg[0], mg[1], mg[2]))
-        else:                                              # the parent's motion at body i's origin, in its axes
-            p, w0 = vec(pl, i), vec(w, j)
-            w_in = rot_t(Rl, i, w0)                        # R^i_{i−1} ω'_{i−1} (Eq. 3 uses ω'_{i−1})
-            dw_in = rot_t(Rl, i, vec(dw, j))
-            dv_in = rot_t(Rl, i, add(vec(dv, j), add(cross(vec(dw, j), p), cross(w0, cross(w0, p)))))
-            #                                              Eq. 6 (32c: v̇'_{i−1}, in frame i−1)
-        VL, VA = joint_velocity(S, iv[i], nvj[i], v)      # S q̇ = [vl; va]
-        AL, AA = joint_velocity(S, iv[i], nvj[i], a)      # S q̈ = [al; aa]
-        put(w, i, add(w_in, VA))                           # Eq. 3 (as corrected: ω'_{i−1}, θ̇_i); Eq. 9
-        put(dw, i, add(add(dw_in, AA), cross(w_in, VA)))   # Eq. 5 (32b: left side is ω̇'); Eq. 10
-        put(dv, i, add(add(dv_in, AL), add(scale(2.0, cross(w_in, VL)), cross(VA, VL))))   # Eqs. 6, 12
 
 
 # -- the public calls: each is its route (dynamics/route.py) ---------------------------------------------------

@@ -196,10 +196,10 @@ def test_other_engines_are_imported_only_by_the_referee_and_lazily():
 ALGORITHMS = ("rnea", "crba", "aba", "lagrange", "coriolis", "kinematics", "energy", "derivatives", "regressor")
 # What one algorithm module may take from another: an algorithm built on another one (the M⁻¹ route runs the
 # CRBA and the Newton–Euler kernel, one state through their one-lane drivers; the derivatives differentiate the
-# ABA, the regressor reuses the outward pass, the Lagrange M sums the frame Jacobians) — never a helper of the
+# ABA, the regressor reads the RNEA's records, the Lagrange M sums the frame Jacobians) — never a helper of the
 # algebra, which lives in spatial.py.
-BORROWED = {"rnea": {"NT", "rnea", "rnea_lanes", "rnea_one", "rnea_steps_one", "steps_scratch", "outward",
-                     "rnea_workspace"},
+BORROWED = {"rnea": {"NT", "RECORD", "rnea", "rnea_lanes", "rnea_one", "rnea_steps_one", "steps_scratch",
+                     "outward_one"},
             "crba": {"crba", "crba_lanes", "crba_steps_one", "mass_matrix"},
             "aba": {"ABA", "aba_steps_one"},
             "lagrange": {"lagrange_mass_matrix"},
