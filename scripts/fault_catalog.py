@@ -530,10 +530,10 @@ FAULTS = (
           "set6(B, _PA, l, L, force_cross(v, inertia_motion(m, cm, J, (v[0], v[1], v[2]), (v[3], v[4], v[5]))))",
           "set6(B, _PA, l, L, force_cross(v, inertia_motion(m, cm, J, (v[0], v[1], v[2]), (0.0, 0.0, 0.0))))",
           (_PROPS, _FLOATBASE), "ABA bias force v ×* I [v_O; 0] instead of v ×* I v (Table 7.1, pass 1; every driver of the lane steps)"),
-    Fault("aba-gravity-sign", "aba", "manipdyn/dynamics/aba.py",
-          "base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]     # a_0",
-          "base[6], base[7], base[8] = -mdl.mg[0], -mdl.mg[1], -mdl.mg[2]     # a_0",
-          (_PROPS, _FLOATBASE, _FAST), "the one-state ABA's base acceleration +g"),
+    Fault("aba-gravity-sign", "aba", "manipdyn/dynamics/lanes.py",
+          "    base[6], base[7], base[8] = mg[0], mg[1], mg[2]\n",
+          "    base[6], base[7], base[8] = -mg[0], -mg[1], -mg[2]\n",
+          (_PROPS, _FLOATBASE, _FAST), "the one-state drivers' base (lanes.one_lane): the ABA's a_0 and a free-flyer root's v̇'_0 are +g"),
     Fault("aba-fext-sign", "aba", "manipdyn/dynamics/lanes.py",
           "set3(B, row, l, L, sub(get3(B, row, l, L), fe))",
           "set3(B, row, l, L, add(get3(B, row, l, L), fe))",
@@ -1059,9 +1059,9 @@ FAULTS = (
           ("tests/unit/test_status.py",), "the CRBA reports a bad input by a flat index where every other kernel "
                                           "gives the state's row"),
 
-    Fault("rnea-one-state-rates-swapped", "rnea", "manipdyn/dynamics/rnea.py",
-          "        Z[nq + k], Z[nq + nv + k] = v[k], a[k]\n", "        Z[nq + k], Z[nq + nv + k] = a[k], v[k]\n",
-          (_RNEA, _FAST), "the one-state driver of the lane steps reads q̈ for q̇ and q̇ for q̈"),
+    Fault("rnea-one-state-rates-swapped", "rnea", "manipdyn/dynamics/lanes.py",
+          "        Z[nq + k], Z[nq + nv + k] = v[k], x[k]\n", "        Z[nq + k], Z[nq + nv + k] = x[k], v[k]\n",
+          (_RNEA, _FAST), "the one-state drivers of the lane steps (lanes.one_lane) read q̈ (or τ) for q̇ and q̇ for q̈"),
 
     Fault("rnea-lanes-wrench-fallback-code-not-shifted", "rnea", "manipdyn/dynamics/rnea.py",
           "                    return shift(code, s, nb, nv)", "                    return code",

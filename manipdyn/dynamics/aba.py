@@ -45,9 +45,10 @@ from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, first_nonfinit
                        inertia_motion, inertia_up, motion_cross, motion_down, mul3, mul3t, scale)
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
 from .lanes import (LANES, add_sym3, external_lane, external_lanes, gather_lanes, get3, get6, get_rotation, get_sym3,
-                    inertial_model, lane_record, motion_model, multi_model, multi_rates, on_lanes, placement_lanes,
-                    placement_model, planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes,
-                    scatter_lanes, screw_placement_one, selected, set3, set6, tree_depth, wrench_in_body)
+                    inertial_model, lane_record, motion_model, multi_model, multi_rates, on_lanes, one_lane,
+                    placement_lanes, placement_model, planar_placement_lane, quat_model, quat_placement_lane,
+                    quat_placement_lanes, scatter_lanes, screw_placement_one, selected, set3, set6, tree_depth,
+                    wrench_in_body)
 from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_lanes, rnea_steps_one, steps_scratch
@@ -558,13 +559,7 @@ def aba_steps_one(I, F, q, v, tau, X, xb, xp, world, out):
     Rec, base = W[:nb * ARTICULATED], W[nb * ARTICULATED:nb * ARTICULATED + 12]
     Z = W[nb * ARTICULATED + 12:nb * ARTICULATED + 12 + nq + 2 * nv]
     G = W[nb * ARTICULATED + 12 + nq + 2 * nv:]
-    for k in range(nq):
-        Z[k] = q[k]
-    for k in range(nv):
-        Z[nq + k], Z[nq + nv + k] = v[k], tau[k]
-    for k in range(12):
-        base[k] = 0.0
-    base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]     # a_0 = [−g; 0]
+    one_lane(q, v, tau, Z, base, mdl.mg)                            # a_0 = [−g; 0]
     dmin = singular_threshold(mdl.inertia, mdl.mass)
     for i in range(nb):                                             # pass 1 (outward)
         j, B = parent[i], Rec[i * ARTICULATED:(i + 1) * ARTICULATED]

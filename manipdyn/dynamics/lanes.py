@@ -123,6 +123,20 @@ def get_rotation(B, l, L):
 
 
 @njit(cache=True, inline="always")
+def one_lane(q, v, x, Z, base, mg):
+    """One state as a block of one lane (the one-state drivers): Z ← [q; q̇; x] (x: q̈ or τ), and the base's record
+    zero but for rows 6–8, −g (the RNEA's v̇'_0, the linear part of the ABA's a_0: docs/design.md §6)."""
+    nq, nv = q.shape[0], v.shape[0]
+    for k in range(nq):
+        Z[k] = q[k]
+    for k in range(nv):
+        Z[nq + k], Z[nq + nv + k] = v[k], x[k]
+    for k in range(base.shape[0]):
+        base[k] = 0.0
+    base[6], base[7], base[8] = mg[0], mg[1], mg[2]
+
+
+@njit(cache=True, inline="always")
 def external_lane(B, row, fe, ne, p, l, L):
     """Rows row … row + 5 of a lane record, a wrench [f; n] about the body's origin (the RNEA's f'_i, n'_i, the ABA's
     p^A_i), at lane l −= the wrench (f_e, n_e) the environment applies on the body about its point p, all in body

@@ -38,10 +38,10 @@ from ..joints import HELICAL, PLANAR
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot_t, scale, sub, vec
 from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
-from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, get_rotation, inertial_model,
-                    lane_record, motion_model, multi_model, multi_rates, on_lanes, placement_lane, placement_lanes,
-                    placement_model, quat_model, quat_placement_lane, quat_placement_lanes, planar_placement_lane,
-                    scatter_lanes, selected, screw_placement_one, set3, tree_depth, wrench_in_body)
+from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, get_rotation, inertial_model, lane_record,
+                    motion_model, multi_model, multi_rates, on_lanes, one_lane, placement_lane, placement_lanes,
+                    placement_model, planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes,
+                    scatter_lanes, screw_placement_one, selected, set3, tree_depth, wrench_in_body)
 from .model_arrays import unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
@@ -163,13 +163,7 @@ def outward_one(mdl, q, v, a, W):
     if not finite_state(q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], 0):
         return False
     Rec, Z, base = W[:nb * RECORD], W[nb * RECORD:nb * RECORD + nq + 2 * nv], W[nb * RECORD + nq + 2 * nv:]
-    for k in range(nq):
-        Z[k] = q[k]
-    for k in range(nv):
-        Z[nq + k], Z[nq + nv + k] = v[k], a[k]
-    for k in range(6):
-        base[k] = 0.0
-    base[6], base[7], base[8] = mdl.mg[0], mdl.mg[1], mdl.mg[2]
+    one_lane(q, v, a, Z, base, mdl.mg)
     mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
     for i in range(nb):                                             # outward, Eqs. 3–14
         j, B = mdl.parent[i], Rec[i * RECORD:(i + 1) * RECORD]
