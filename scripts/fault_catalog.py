@@ -1215,6 +1215,11 @@ FAULTS = (
     Fault("model-arrays-turn-offset", "rnea", "manipdyn/dynamics/model_arrays.py",
           "F[3 * nb:4 * nb, 0, 1], F[e:e + nb])", "F[3 * nb:4 * nb, 0, 1], F[e - 1:e - 1 + nb])",
           (_REGRESSOR, _RNEA), "the kernels read each body's turn C_i one block early (the armature's last block)"),
+    Fault("aba-one-state-nan-pivot-called-singular", "aba", "manipdyn/dynamics/aba.py",
+          "                    out[r] = np.nan\n                    return bad_result(nb, r)\n",
+          "                    return singular_joint(i)\n",
+          ("tests/robustness/test_api_outputs.py",), "the ABA reports a NaN pivot of D_i (an overflow in I^A) as a "
+          "singular joint"),
 )
 
 

@@ -29,7 +29,7 @@ def constrained_fd_kernel(I, F, Fz, CI, CF, m, Q, V, T, alpha, beta, rtol, QDD, 
     working precision)."""
     N, nv = Q.shape[0], V.shape[1]
     Phi, Jc, bias = np.empty(m), np.empty((m, nv)), np.empty(m)
-    W, Wr = closure_scratch(I.shape[1], nv), steps_scratch(I, Q[0], V[0])
+    W, Wr = closure_scratch(I.shape[1], nv), steps_scratch(I.shape[1], Q.shape[1], nv)
     M, h, Z = np.empty((1, nv, nv))[:, :, :], np.empty((1, nv))[:, :], np.zeros((1, nv))[:, :]   # the kernels'
     X, xb, xp, world = no_wrenches(I, F)                                                   # layout (_jit: "A")
     for s in range(N):

@@ -653,7 +653,7 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
             return bad_result(nb, s * nv)
         if code == -1 and not lanes:                          # h (views: the one-state entry's layout)
             code = rnea_steps_one(I, F, Q[s0], V[s0], Z[0][::1], X[s0 if X.shape[0] > 1 else 0], body, point, world,
-                                  H[0][::1], steps_scratch(I, Q[s0], H[0]))
+                                  H[0][::1], steps_scratch(nb, Q.shape[1], nv))
         elif code == -1:                                      # (X: a row a state, or one row for every state)
             code = rnea_lanes(I, F, Q[s0:s1], V[s0:s1], Z[:n, :], X[s0:s1] if X.shape[0] > 1 else X, body, point,
                               world, H[:n, :])

@@ -127,7 +127,7 @@ def regressor_kernel(I, F, Q, V, A, Y):
     mdl = unpack(I, F)
     N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
     W, Sx = np.empty((NP, 6)), np.empty((nb, nv, 6))   # A_i's columns as wrenches [f; n]; S_j seen from i
-    Rec, turned = steps_scratch(I, Q[0], V[0]), np.empty(nb, np.bool_)
+    Rec, turned = steps_scratch(nb, Q.shape[1], nv), np.empty(nb, np.bool_)
     for i in range(nb):
         turned[i] = False
         for a in range(3):

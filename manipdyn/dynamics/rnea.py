@@ -99,10 +99,10 @@ def _run(model, Q, V, A, f_ext, f_ext_frame, call):
 
 
 @njit(cache=True, inline="always")
-def steps_scratch(I, q, tau):
-    """The scratch of ``rnea_steps_one`` for a state q (nq,) and τ (nv,): the bodies' records (nb · RECORD), then
-    q, q̇, q̈ (nq + 2 nv), then the base (9)."""
-    return np.empty(I.shape[1] * RECORD + q.shape[0] + 2 * tau.shape[0] + 9)
+def steps_scratch(nb, nq, nv):
+    """The scratch of ``rnea_steps_one`` for nb bodies, nq coordinates and nv velocities: the bodies' records
+    (nb · RECORD), then q, q̇, q̈ (nq + 2 nv), then the base (9). (Sizes, not a state's rows: a batch may have none.)"""
+    return np.empty(nb * RECORD + nq + 2 * nv + 9)
 
 
 @njit(cache=True)
@@ -110,7 +110,8 @@ def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: the lane kernel's steps driven for one
     state (``rnea_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau, steps_scratch(I, q, v))
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau,
+                          steps_scratch(I.shape[1], q.shape[0], v.shape[0]))
 
 
 @njit(cache=True)
@@ -118,7 +119,8 @@ def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
     """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned
     frames, as (I, F)): ``rnea_steps_one``."""
     X, xb, xp = wrench_rows_of(f, m, P)
-    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau, steps_scratch(I, q, tau))
+    return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau,
+                          steps_scratch(I.shape[1], q.shape[0], tau.shape[0]))
 
 
 @njit(cache=True)
@@ -142,7 +144,8 @@ def bias_one(I, F, q, v, tau):
     accelerations ((I, F) in z-aligned frames)."""
     Z = np.zeros((1, tau.shape[0]))[:, :][0]         # (a view of any layout, as the entry's arrays: one signature)
     X, xb, xp, world = no_wrenches(I, F)
-    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, X[0], xb, xp, world, tau, steps_scratch(I, q, tau))
+    return rnea_steps_one(I, F, q, Z if v.shape[0] == 0 else v, Z, X[0], xb, xp, world, tau,
+                          steps_scratch(I.shape[1], q.shape[0], tau.shape[0]))
 
 
 @njit(cache=True)
@@ -288,7 +291,7 @@ def rnea_lanes(I, F, Q, V, A, X, xb, xp, world, tau):
         if not ok:                                  # each state as a one-state call computes it: its status
             for s in range(s0, s0 + n):             # names the culprit
                 code = rnea_steps_one(Im, Fm, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s],
-                                      steps_scratch(Im, Q[s], tau[s]))
+                                      steps_scratch(nb, nq, nv))
                 if code != OK:
                     return shift(code, s, nb, nv)
     return OK
@@ -504,7 +507,7 @@ def terms_kernel(I, F, Q, V, A, X, xb, xp, world, tau, T):
     ``rnea_steps_one``'s, the state shifted."""
     mdl = unpack(I, F)
     N, nb, nv = Q.shape[0], I.shape[1], V.shape[1]
-    W, Rw, vel = steps_scratch(I, Q[0], tau[0]), np.empty((nb, 3, 3)), np.empty((nb, 3))
+    W, Rw, vel = steps_scratch(nb, Q.shape[1], nv), np.empty((nb, 3, 3)), np.empty((nb, 3))
     mg = (mdl.mg[0], mdl.mg[1], mdl.mg[2])
     for s in range(N):
         code = rnea_steps_one(I, F, Q[s], V[s], A[s], X[s if X.shape[0] > 1 else 0], xb, xp, world, tau[s], W)

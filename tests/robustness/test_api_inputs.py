@@ -3,6 +3,7 @@ models without moving joints (nv = 0) work and return empty arrays of the docume
 import numpy as np
 import pytest
 from conftest import AAU, ROOT, inertial_xml, urdf
+from nojit import run_probe
 
 import manipdyn as md
 from manipdyn import constraints as mc
@@ -116,6 +117,27 @@ def test_empty_batch_gives_empty_result_of_the_batch_shape(fn):
     one = np.asarray(EMPTY[fn](np.zeros(N5)))
     out = np.asarray(EMPTY[fn](np.zeros((0, N5))))
     assert out.shape == (0,) + one.shape
+
+
+PROBE_EMPTY = """
+import json, sys, numpy as np
+sys.path[:0] = [{tests!r}, {here!r}]
+from manipdyn import _jit
+import test_api_inputs as T
+out = {{"nojit": _jit.NOJIT}}
+for name in {names!r}:
+    out[name] = list(np.asarray(T.EMPTY[name](np.zeros((0, T.N5)))).shape)
+print(json.dumps(out))
+"""
+
+
+def test_empty_batch_runs_uncompiled_too():
+    # the kernels' source run as plain Python (MANIPDYN_NOJIT=1) sizes its scratch from the arrays' shapes, never
+    # from a first row an empty batch does not have
+    plain = run_probe(PROBE_EMPTY, __file__, list(EMPTY), True)
+    assert plain["nojit"]
+    for fn, call in EMPTY.items():
+        assert tuple(plain[fn]) == np.asarray(call(np.zeros((0, N5)))).shape, fn
 
 
 def test_empty_batch_of_guesses_in_the_iterative_solvers():

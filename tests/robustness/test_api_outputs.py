@@ -23,6 +23,8 @@ OVERFLOW = {
     "rnea_terms": lambda: md.rnea_terms(ARM, Z, BIG, Z),
     "aba": lambda: md.aba(ARM, Z, BIG, Z),
     "aba_f_ext": lambda: md.aba(ARM, Z, Z, np.full(N5, 1e308), f_ext=TOOL_BIG),
+    "aba_huge_inertia": lambda: md.aba(HUGE_I, Z, Z, Z),       # a NaN pivot of D_i: not a singular joint
+    "aba_huge_inertia_batch": lambda: md.aba(HUGE_I, np.zeros((3, N5)), np.zeros((3, N5)), np.zeros((3, N5))),
     "forward_dynamics": lambda: md.forward_dynamics(ARM, Z, BIG, Z, method="cholesky"),
     "mass_matrix": lambda: md.mass_matrix(HUGE_I, Z),
     "mass_matrix_batch": lambda: md.mass_matrix(HUGE_I, np.zeros((3, N5))),
@@ -32,7 +34,8 @@ OVERFLOW = {
     "constrained_forward_dynamics": lambda: md.constrained_forward_dynamics(FOURBAR, np.zeros(3), np.full(3, 1e200),
                                                                             np.zeros(3)),
 }
-CALL_NAME = {"rnea_f_ext": "rnea", "aba_f_ext": "aba", "mass_matrix_batch": "mass_matrix"}
+CALL_NAME = {"rnea_f_ext": "rnea", "aba_f_ext": "aba", "mass_matrix_batch": "mass_matrix", "aba_huge_inertia": "aba",
+             "aba_huge_inertia_batch": "aba"}
 
 
 @pytest.mark.parametrize("fn", list(OVERFLOW))
