@@ -10,6 +10,7 @@ Pinocchio is never imported here.
 """
 from __future__ import annotations
 
+from . import compile_notice  # noqa: F401  (a call that compiles says so once)
 from .configuration import difference, integrate, neutral, normalize, random_configuration
 from .dynamics.aba import aba, forward_dynamics
 from .dynamics.derivatives import aba_derivatives, rnea_derivatives

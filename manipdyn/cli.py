@@ -419,9 +419,27 @@ def _play(args) -> int:
 MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 
 
+def _progress_bar(stream, width=30):
+    """progress(done, total, seconds) drawing a bar on ``stream``: redrawn in place on a terminal, else a line at
+    each quarter."""
+    tty = getattr(stream, "isatty", lambda: False)()
+
+    def progress(done, total, seconds):
+        if not total:                          # (until every worker has said how many calls it makes)
+            return
+        full = width * done // total
+        text = f"[{'#' * full}{'.' * (width - full)}] {done}/{total} calls compiled, {seconds:.0f} s"
+        if tty:
+            stream.write("\r" + text + ("\n" if done == total else ""))
+        elif 4 * done // total != 4 * (done - 1) // total:
+            stream.write(text + "\n")
+        stream.flush()
+    return progress
+
+
 def _warmup(args) -> int:
     from .warmup import GROUPS, warmup
-    seconds, workers = warmup(args.jobs), min(args.jobs, len(GROUPS))
+    seconds, workers = warmup(args.jobs, progress=_progress_bar(sys.stderr)), min(args.jobs, len(GROUPS))
     print(f"compiled and cached every kernel in {seconds:.1f} s ({workers} worker process"
           f"{'es' if workers > 1 else ''}); later processes load them from the cache")
     return 0

@@ -18,6 +18,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import warnings
 
@@ -98,47 +99,80 @@ def _calls(arm, closed):
     )
 
 
-def first_calls(group=None):
-    """Make every public call once (group None: all; else the groups of GROUPS[group]); {name: seconds}."""
+def first_calls(group=None, progress=None):
+    """Make every public call once (group None: all; else the groups of GROUPS[group]); {name: seconds}.
+    ``progress(name, total)`` is told of each call made (total: how many there are)."""
     keys = [k for g in (GROUPS if group is None else (GROUPS[group],)) for k in g]
     arm, closed = _models("closed" in keys)
     calls = _calls(arm, closed)
-    out = {}
+    out, total = {}, sum(len(calls[k]) for k in keys)
     for k in keys:
         for name, f in calls[k]:
             t0 = time.perf_counter()
             f()
             out[name] = time.perf_counter() - t0
+            if progress is not None:
+                progress(name, total)
     return out
 
 
-def _run_python(code, env=None, timeout=900):
-    """Run ``python -c code`` in a fresh process; its last stdout line as JSON."""
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout,
-                       env={**os.environ, **(env or {})})
-    if r.returncode != 0:
-        tail = (r.stderr.strip().splitlines() or [f"exit code {r.returncode}, no message"])[-1]
-        raise RuntimeError(f"a fresh Python process failed: {tail}")
-    return json.loads(r.stdout.strip().splitlines()[-1])
+def _run_python(code, env=None, timeout=900, on_line=None):
+    """Run ``python -c code`` in a fresh process; its last stdout line as JSON. ``on_line(total)`` is called for
+    each line "call <total>" (a worker's progress) as it comes."""
+    with tempfile.TemporaryFile("w+") as err:
+        p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=err, text=True,
+                             env={**os.environ, **(env or {})})
+        timer = threading.Timer(timeout, p.kill)    # (a kernel that never finishes compiling)
+        timer.start()
+        try:
+            lines = []
+            for line in p.stdout:
+                if line.startswith("call "):
+                    if on_line is not None:
+                        on_line(int(line.split()[1]))
+                elif line.strip():
+                    lines.append(line)
+            code = p.wait()
+        finally:
+            timer.cancel()
+        if code != 0:
+            err.seek(0)
+            tail = (err.read().strip().splitlines() or [f"exit code {code}, no message"])[-1]
+            tail = f"killed after {timeout} s" if timer.finished.is_set() and code < 0 else tail
+            raise RuntimeError(f"a fresh Python process failed: {tail}")
+    return json.loads(lines[-1])
 
 
-_GROUP_CODE = ("import json, time; t0 = time.perf_counter(); from manipdyn.warmup import first_calls; "
-               "t1 = time.perf_counter(); c = first_calls({group}); "
+_GROUP_CODE = ("import json, sys, time; t0 = time.perf_counter(); from manipdyn.warmup import first_calls; "
+               "t1 = time.perf_counter(); c = first_calls({group}, {progress}); "
                "print(json.dumps(dict(import_s=t1 - t0, first_calls_s=sum(c.values()), calls=c)))")
+_TICK = "lambda name, total: print('call', total, flush=True)"    # a worker's line per call (warmup's progress)
 
 
-def warmup(jobs=2, env=None):
+def warmup(jobs=2, env=None, progress=None):
     """Compile every kernel into the disk cache: ``first_calls`` of each group in its own process, ``jobs`` at a
-    time. Returns the wall-clock seconds."""
+    time; the workers' compile notices are silenced (compile_notice.py). ``progress(done, total, seconds)`` is
+    told of each call a worker has made (total: 0 until every worker has said how many it makes). Returns the
+    wall-clock seconds."""
     from concurrent.futures import ThreadPoolExecutor
 
     from ._jit import prune_stale
     t0 = time.perf_counter()
     if env is None:
         prune_stale()                               # the package's own cache: drop earlier sources' folders
-    groups = range(len(GROUPS))
+    env = {**(env or {}), "MANIPDYN_COMPILE_NOTICE": "0"}
+    done, totals, lock = [0], {}, threading.Lock()
+
+    def ticker(g):                                  # worker g made a call (of its ``total``)
+        def tick(total):
+            with lock:
+                done[0], totals[g] = done[0] + 1, total
+                progress(done[0], sum(totals.values()) if len(totals) == len(GROUPS) else 0,
+                         time.perf_counter() - t0)
+        return tick if progress is not None else None
     with ThreadPoolExecutor(max(1, min(int(jobs), len(GROUPS)))) as pool:
-        list(pool.map(lambda g: _run_python(_GROUP_CODE.format(group=g), env), groups))
+        list(pool.map(lambda g: _run_python(_GROUP_CODE.format(group=g, progress=_TICK if progress else None), env,
+                                            on_line=ticker(g)), range(len(GROUPS))))
     return time.perf_counter() - t0
 
 

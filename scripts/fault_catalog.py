@@ -1220,6 +1220,13 @@ FAULTS = (
           "                    return singular_joint(i)\n",
           ("tests/robustness/test_api_outputs.py",), "the ABA reports a NaN pivot of D_i (an overflow in I^A) as a "
           "singular joint"),
+    Fault("dask-scheduler-not-probed", "validation", "manipdyn/validation/referee_zoo.py",
+          "    probe_scheduler(address)\n    with _bounded_reads(address):\n", "    with _bounded_reads(address):\n",
+          ("tests/crosscheck/test_referee_sweep.py",), "--scheduler sends Dask's handshake to whatever answers, "
+          "without reading the service's first message by hand"),
+    Fault("dask-reply-bound-inverted", "validation", "manipdyn/validation/referee_zoo.py",
+          "        if n > REPLY_BYTES:\n", "        if n < 0:\n",
+          ("tests/crosscheck/test_referee_sweep.py",), "Dask's reads on a cluster left unbounded"),
 )
 
 

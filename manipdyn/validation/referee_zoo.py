@@ -13,6 +13,7 @@ import re
 import tempfile
 import warnings
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import InputError, ManipdynError
@@ -143,21 +144,114 @@ def sweep(engines, *, n_states=20, seed=0, paths=None, progress=None, jobs=1, ro
     return rows
 
 
-SCHEDULER_TIMEOUT = 10    # seconds to reach a Dask scheduler
+SCHEDULER_TIMEOUT = 10    # seconds to reach a Dask scheduler, and for its first message
+HANDSHAKE_BYTES = 1 << 16     # the most a scheduler's first message may announce (its handshake: ~100 bytes)
+REPLY_BYTES = 1 << 28         # the most any later message from the cluster may announce (a row: a few kB)
+
+
+def _size(n):
+    """n bytes in words: '3.07 EiB'."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if n < 1024 or unit == "EiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{n} B"
+        n /= 1024
+
+
+def probe_scheduler(address, timeout=None):
+    """Raise InputError (one line) unless a Dask scheduler answers at ``address`` — before anything is sent there.
+
+    A Dask scheduler writes its handshake as soon as a client connects: 8 bytes giving the length of what follows,
+    then a msgpack map naming the pickle protocol. Dask's own client first writes its handshake and then trusts
+    the length it reads, so another service (an HTTP server answers "HTTP/1.1 400…", read as 3.07 EiB) ends in a
+    MemoryError, and a hostile one could announce a few gigabytes that Dask then allocates. Here the first message
+    is read by hand, its length bounded (``HANDSHAKE_BYTES``), its content checked. Addresses of another scheme
+    than tcp:// (tls://, ws://, inproc://, ucx://) are not probed; every TCP or TLS read then stays bounded by
+    ``_bounded_reads``."""
+    import socket
+    import struct
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
+    try:
+        scheme, loc = parse_address(address)
+        if scheme != "tcp":
+            return
+        host, port = parse_host_port(loc)
+    except (ValueError, TypeError) as exc:
+        raise InputError(f"--scheduler {address}: not a Dask address ({_one_line(exc)})") from None
+    head = f"--scheduler {address}:"
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+            sock.settimeout(timeout)
+            header = _read_exactly(sock, 8)
+            (n,) = struct.unpack("<Q", header)
+            if n > HANDSHAKE_BYTES:
+                raise InputError(f"{head} the service there announced a first message of {_size(n)}, not a Dask "
+                                 f"handshake (at most {_size(HANDSHAKE_BYTES)}): nothing was sent to it")
+            body = _read_exactly(sock, n)
+    except TimeoutError:
+        raise InputError(f"{head} no Dask scheduler answered there (no Dask handshake came back in {timeout:g} s: "
+                         f"a service that is not a Dask scheduler, or none)") from None
+    except OSError as exc:
+        raise InputError(f"{head} no Dask scheduler answered there ({_one_line(exc)})") from None
+    if b"pickle-protocol" not in body:
+        raise InputError(f"{head} the service there sent something other than a Dask handshake: nothing was sent "
+                         f"to it")
+
+
+def _read_exactly(sock, n):
+    """n bytes from the socket (OSError if it closes first)."""
+    out = bytearray()
+    while len(out) < n:
+        chunk = sock.recv(min(n - len(out), 1 << 16))
+        if not chunk:
+            raise OSError(f"the connection closed after {len(out)} of {n} bytes")
+        out += chunk
+    return bytes(out)
+
+
+@contextmanager
+def _bounded_reads(address):
+    """While it lasts, a message of more than ``REPLY_BYTES`` read by Dask's TCP (and TLS) comms raises OSError
+    before anything is allocated: Dask allocates whatever length a peer announces (distributed.comm.tcp reads
+    through its module's ``read_bytes_rw``, which this wraps)."""
+    try:
+        from distributed.comm import tcp
+        unbounded = tcp.read_bytes_rw
+    except (ImportError, AttributeError):      # another layout of distributed: the probe alone
+        yield
+        return
+
+    async def bounded(stream, n):
+        if n > REPLY_BYTES:
+            raise OSError(f"a message from {address} announced {_size(n)}, more than the {_size(REPLY_BYTES)} "
+                          f"allowed")
+        return await unbounded(stream, n)
+    tcp.read_bytes_rw = bounded
+    try:
+        yield
+    finally:
+        tcp.read_bytes_rw = unbounded
 
 
 def _on_cluster(address, work):
-    """The rows of ``work`` computed by the workers of the Dask scheduler at ``address``, in order."""
+    """The rows of ``work`` computed by the workers of the Dask scheduler at ``address``, in order: the scheduler
+    probed first (``probe_scheduler``), every message from the cluster bounded (``_bounded_reads``)."""
     distributed = require("distributed", "dask", "manipdyn validate --scheduler")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            client = distributed.Client(address, timeout=SCHEDULER_TIMEOUT)
-    except (OSError, TimeoutError, ValueError, TypeError) as exc:
-        raise InputError(f"--scheduler {address}: no Dask scheduler answered there ({_one_line(exc)})") from None
-    with client:
-        for future in client.map(_row_of, work, pure=False):
-            yield future.result()
+    probe_scheduler(address)
+    with _bounded_reads(address):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                client = distributed.Client(address, timeout=SCHEDULER_TIMEOUT)
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise InputError(f"--scheduler {address}: no Dask scheduler answered there ({_one_line(exc)})") from None
+        with client:
+            try:
+                for future in client.map(_row_of, work, pure=False):
+                    yield future.result()
+            except OSError as exc:             # a bounded read refused, a connection lost (CommClosedError)
+                raise InputError(f"--scheduler {address}: {_one_line(exc)}") from None
 
 
 def _row_of(item) -> dict:

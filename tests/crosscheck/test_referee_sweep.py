@@ -89,3 +89,96 @@ def test_sweep_bad_input_exit_2(folder, capsys, argv, fragment):
     assert main([a.format(d=folder) for a in argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert fragment in err[-1] and err[-1].startswith("manipdyn validate: error:"), err
+
+
+# -- a --scheduler address where something else answers: probed before anything is sent, bounded reads ---------
+
+def _serve(reply, seen):
+    """A loopback TCP server on 127.0.0.1 (a thread) that sends ``reply`` to each client as it connects and records
+    in ``seen`` what the client sends; its port."""
+    import socket
+    import threading
+    srv = socket.create_server(("127.0.0.1", 0))
+    srv.settimeout(10)
+
+    def run():
+        try:
+            conn, _ = srv.accept()
+        except OSError:
+            return
+        with conn:
+            conn.sendall(reply)
+            conn.settimeout(2)
+            try:
+                seen.append(conn.recv(1 << 16))
+            except OSError:
+                seen.append(b"")
+        srv.close()
+    threading.Thread(target=run, daemon=True).start()
+    return srv.getsockname()[1]
+
+
+def _one_line_exit_2(argv, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "Traceback" not in "\n".join(err) and "MemoryError" not in "\n".join(err)
+    return err[-1]
+
+
+def test_an_http_server_is_not_taken_for_a_scheduler(folder, capsys, monkeypatch):
+    """An HTTP server waits for a request: nothing comes back, nothing is sent to it (Dask's client would send its
+    handshake and read the "HTTP/1.1 400" reply as a 3.07 EiB frame)."""
+    pytest.importorskip("distributed")
+    import http.server
+    import threading
+    from manipdyn.validation import referee_zoo
+    monkeypatch.setattr(referee_zoo, "SCHEDULER_TIMEOUT", 1)
+    requests = []
+
+    class Handler(http.server.BaseHTTPRequestHandler):
+        def handle_one_request(self):
+            requests.append(self.rfile.read(1))
+            super().handle_one_request()
+    srv = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=srv.serve_forever, daemon=True).start()
+    try:
+        address = f"tcp://127.0.0.1:{srv.server_address[1]}"
+        line = _one_line_exit_2(["validate", str(folder), "--against", "pinocchio", "--scheduler", address], capsys)
+    finally:
+        srv.shutdown()
+        srv.server_close()
+    assert line == (f"manipdyn validate: error: --scheduler {address}: no Dask scheduler answered there (no Dask "
+                    f"handshake came back in 1 s: a service that is not a Dask scheduler, or none)")
+    assert requests in ([], [b""])                        # the server never read a byte from us
+
+
+@pytest.mark.parametrize("reply, fragment", [
+    ((3 << 30).to_bytes(8, "little"), "announced a first message of 3 GiB, not a Dask handshake (at most 64 KiB)"),
+    (b"HTTP/1.1 400 Bad Request\r\n\r\n", "announced a first message of 3.07 EiB"),
+    ((5).to_bytes(8, "little") + b"hello", "sent something other than a Dask handshake"),
+    ((50).to_bytes(8, "little") + b"short", "no Dask scheduler answered there (no Dask handshake came back in 1 s"),
+])
+def test_a_hostile_first_message_is_refused_unread(folder, capsys, monkeypatch, reply, fragment):
+    pytest.importorskip("distributed")
+    from manipdyn.validation import referee_zoo
+    monkeypatch.setattr(referee_zoo, "SCHEDULER_TIMEOUT", 1)
+    seen = []
+    port = _serve(reply, seen)
+    line = _one_line_exit_2(["validate", str(folder), "--against", "pinocchio", "--scheduler",
+                             f"tcp://127.0.0.1:{port}"], capsys)
+    assert line.startswith(f"manipdyn validate: error: --scheduler tcp://127.0.0.1:{port}: ") and fragment in line
+    assert seen in ([], [b""])                            # nothing was sent to the service
+
+
+def test_dask_reads_are_bounded_while_the_cluster_is_used():
+    """Past the probe, a message announced longer than REPLY_BYTES raises OSError before Dask allocates it; the
+    bound is lifted afterwards."""
+    import asyncio
+    tcp = pytest.importorskip("distributed.comm.tcp")
+    from manipdyn.validation import referee_zoo
+    original = tcp.read_bytes_rw
+    with referee_zoo._bounded_reads("tcp://x:1"):
+        assert tcp.read_bytes_rw is not original
+        with pytest.raises(OSError, match=r"a message from tcp://x:1 announced 3.07 EiB, more than the 256 MiB"):
+            asyncio.run(tcp.read_bytes_rw(None, int.from_bytes(b"HTTP/1.1", "little")))
+    assert tcp.read_bytes_rw is original

@@ -55,3 +55,39 @@ def test_groups_cover_every_call_once():
 def test_cli_refuses_bad_jobs(argv, capsys):
     assert main(argv) == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_workers_report_each_call_and_a_stuck_one_is_killed():
+    seen = []
+    out = warmup._run_python("print('call 3', flush=True); print('call 3'); print('{\"x\": 1}')", on_line=seen.append)
+    assert out == {"x": 1} and seen == [3, 3]
+    with pytest.raises(RuntimeError, match="a fresh Python process failed: killed after 1 s"):
+        warmup._run_python("import time; time.sleep(30)", timeout=1)
+
+
+class _Stream:
+    def __init__(self, tty):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+def test_progress_bar_in_place_on_a_terminal_and_by_quarters_in_a_log():
+    from manipdyn.cli import _progress_bar
+    term, log = _Stream(True), _Stream(False)
+    for stream in (term, log):
+        bar = _progress_bar(stream, width=8)
+        bar(1, 0, 0.4)                                   # the total not known yet: nothing drawn
+        for done in range(2, 9):
+            bar(done, 8, done * 10.0)
+    assert term.text.startswith("\r[##......] 2/8 calls compiled, 20 s\r[###.....] 3/8")
+    assert term.text.endswith("\r[########] 8/8 calls compiled, 80 s\n")
+    assert log.text.splitlines() == ["[##......] 2/8 calls compiled, 20 s", "[####....] 4/8 calls compiled, 40 s",
+                                     "[######..] 6/8 calls compiled, 60 s", "[########] 8/8 calls compiled, 80 s"]
