@@ -1227,6 +1227,13 @@ FAULTS = (
     Fault("dask-reply-bound-inverted", "validation", "manipdyn/validation/referee_zoo.py",
           "        if n > REPLY_BYTES:\n", "        if n < 0:\n",
           ("tests/crosscheck/test_referee_sweep.py",), "Dask's reads on a cluster left unbounded"),
+    Fault("compiled-arrays-in-link-frames", "route", "manipdyn/compiled.py",
+          "    I, F = model.kernel.lane_arrays\n", "    I, F = model.kernel.arrays\n",
+          ("tests/batch/test_compiled.py",), "compiled.arrays hands users' njit code the model in its link frames, "
+          "not the lane steps' z-aligned ones"),
+    Fault("compiled-integrate-drops-velocity", "route", "manipdyn/compiled.py",
+          "q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])", "q[np.newaxis, :], 0.0 * v[np.newaxis, :], out[np.newaxis, :])",
+          ("tests/batch/test_compiled.py",), "compiled.integrate returns q without the step"),
 )
 
 

@@ -1,0 +1,148 @@
+"""The dynamics from inside your own ``numba.njit`` code: a simulation loop, a sampling-MPC rollout, an estimator
+run at kernel speed with no Python between the steps.
+
+    import numba, numpy as np, manipdyn as md
+    from manipdyn import compiled
+
+    model = md.load_urdf("urdf/aau_arm.urdf")
+    I, F = compiled.arrays(model)                     # the model as the kernels read it
+
+    @numba.njit
+    def rollout(I, F, q, v, tau, dt, steps, Q):       # semi-implicit Euler, Q (steps, nq) the trajectory
+        qdd, dq, nxt = np.empty(v.shape[0]), np.empty(v.shape[0]), np.empty(q.shape[0])
+        for k in range(steps):
+            status = compiled.aba(I, F, q, v, tau, qdd)
+            if status != compiled.OK:
+                return k, status                      # the step that failed, and why (``check``)
+            for i in range(v.shape[0]):
+                v[i] += dt * qdd[i]
+                dq[i] = dt * v[i]
+            compiled.integrate(I, q, dq, nxt)         # q ⊕ dt v (quaternions of free and ball joints stay unit)
+            q[:] = nxt
+            Q[k] = q
+        return steps, compiled.OK
+
+Each function takes the arrays of ``arrays(model)`` and one state, writes its result into the array given last,
+and returns a status: ``OK`` when the result is computed, anything else when an input is not finite, a joint
+moves no mass or the result overflowed (dynamics/status.py). These are the kernels of the public calls (a Python
+call of ``manipdyn.aba`` runs the same machine code), so the numbers are the public calls' to the last bit.
+``check(model, name, status, *state)`` turns a status into the typed error the public call raises on that state.
+
+    rnea(I, F, q, v, a, tau)               τ = M q̈ + C q̇ + g                       (``manipdyn.rnea``)
+    nonlinear_effects(I, F, q, v, h)       h = C q̇ + g                              (``manipdyn.nonlinear_effects``)
+    gravity_torques(I, F, q, g)            g(q)                                     (``manipdyn.gravity_torques``)
+    mass_matrix(I, F, q, M)                M(q), (nv, nv), by the CRBA              (``manipdyn.mass_matrix``)
+    aba(I, F, q, v, tau, qdd)              q̈ by the articulated-body algorithm      (``manipdyn.aba``)
+    integrate(I, q, v, out)                q ⊕ v (unit time; returns OK)            (``manipdyn.integrate``)
+
+q is (nq,) in Pinocchio's order, v, a, τ (nv,); arrays of any strides. The shapes are not checked inside
+compiled code: give arrays of the model's sizes (``check_shapes`` checks them once, in Python). Models with mimic
+joints (``MimicModel``) are refused by ``arrays``; a closed chain's arrays give its spanning tree's dynamics
+(its closures are ``manipdyn.constrained_forward_dynamics``'). External wrenches are not offered here yet.
+
+Compiling: the kernels come from manipdyn's disk cache (``manipdyn warmup``); your function compiles once with
+them inlined or linked. numba caches a function (``cache=True``) by its own source file only: after upgrading
+manipdyn, clear your functions' caches (their ``__pycache__/*.nbi``, ``*.nbc``) so that they link the new kernels.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import njit
+from .dynamics.aba import aba_one
+from .dynamics.crba import crba_one
+from .dynamics.rnea import bias_one, gravity_one, rnea_one
+from .dynamics.status import OK
+from .errors import InputError, NumericalError
+from .joints import integrate_kernel
+from .model import MimicModel, Model
+
+__all__ = ["OK", "arrays", "check", "check_shapes", "rnea", "nonlinear_effects", "gravity_torques", "mass_matrix",
+           "aba", "integrate"]
+
+# Each function hands the kernel full slices of its arrays (x[::1], M[:, :]): a view of layout "any strides",
+# the type the kernels are compiled and cached for (_jit's A1, A2), so that a caller's C-ordered arrays reach the
+# cached machine code instead of compiling the kernels again for another layout.
+
+
+@njit(inline="always")
+def rnea(I, F, q, v, a, tau):
+    """τ (nv,) into tau for one state (the public ``rnea``'s kernel); its status."""
+    return rnea_one(I, F, q[::1], v[::1], a[::1], tau[::1])
+
+
+@njit(inline="always")
+def nonlinear_effects(I, F, q, v, h):
+    """h = C q̇ + g (nv,) into h; its status."""
+    return bias_one(I, F, q[::1], v[::1], h[::1])
+
+
+@njit(inline="always")
+def gravity_torques(I, F, q, g):
+    """g(q) (nv,) into g; its status."""
+    return gravity_one(I, F, q[::1], g[::1])
+
+
+@njit(inline="always")
+def mass_matrix(I, F, q, M):
+    """M(q) (nv, nv) into M, both triangles; its status."""
+    return crba_one(I, F, q[::1], M[:, :])
+
+
+@njit(inline="always")
+def aba(I, F, q, v, tau, qdd):
+    """q̈ (nv,) into qdd by the articulated-body algorithm; its status."""
+    return aba_one(I, F, q[::1], v[::1], tau[::1], qdd[::1])
+
+
+@njit(inline="always")
+def integrate(I, q, v, out):
+    """out (nq,) = q ⊕ v (Pinocchio's integrate, unit time: pass dt · v for a step); OK."""
+    integrate_kernel(I[1], I[2], I[3], q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])
+    return OK
+
+
+def arrays(model):
+    """(I, F): the model's arrays as the compiled calls take them — an int64 (5, nb) and a float64 (·, 3, 3) array,
+    C-ordered and writable (copies: the kernels never write them), laid out as ``dynamics/model_arrays.py``
+    describes, in the z-aligned body frames of the lane steps. A new model (``with_joint_dynamics``, another
+    file) has arrays of its own: take them again."""
+    if isinstance(model, MimicModel):
+        raise InputError("compiled.arrays: a model with mimic joints has no compiled form of its own; use its "
+                         "public calls (or manipdyn.reduce's model without the mimic joints)")
+    if not isinstance(model, Model):
+        raise InputError(f"compiled.arrays: expected a manipdyn Model, got {type(model).__name__}")
+    I, F = model.kernel.lane_arrays
+    return np.array(I, np.int64, order="C"), np.array(F, np.float64, order="C")
+
+
+_SHAPES = {"rnea": ("q", "v", "a", "tau"), "nonlinear_effects": ("q", "v", "h"), "gravity_torques": ("q", "g"),
+           "mass_matrix": ("q", "M"), "aba": ("q", "v", "tau", "qdd"), "integrate": ("q", "v", "out")}
+
+
+def check_shapes(model, name, *state):
+    """InputError unless the arrays of a compiled call ``name`` (in its order, the result last) have the model's
+    shapes and dtype float64 — the check the compiled code does not make. Returns None."""
+    if name not in _SHAPES:
+        raise InputError(f"compiled.check_shapes: no compiled call {name!r} (one of {', '.join(_SHAPES)})")
+    names = _SHAPES[name]
+    if len(state) != len(names):
+        raise InputError(f"compiled.{name} takes {', '.join(names)}: {len(names)} arrays, not {len(state)}")
+    for label, x in zip(names, state):
+        want = (model.nv, model.nv) if label == "M" else (model.nq,) if label in ("q", "out") else (model.nv,)
+        if not isinstance(x, np.ndarray) or x.dtype != np.float64 or x.shape != want:
+            got = f"{x.dtype} {x.shape}" if isinstance(x, np.ndarray) else type(x).__name__
+            raise InputError(f"compiled.{name}: {label} must be a float64 array of shape {want}, not {got}")
+
+
+def check(model, name, status, *state):
+    """Nothing if ``status`` is ``OK``; else the typed error that the public call ``name`` raises on the same state
+    (the inputs, without the result array): it is made again, in Python, and names the array, entry, joint or
+    result at fault."""
+    if int(status) == OK:
+        return
+    import manipdyn as md
+    if name not in _SHAPES or name == "integrate":
+        raise InputError(f"compiled.check: no compiled call {name!r} that returns a failing status")
+    getattr(md, name)(model, *state)
+    raise NumericalError(f"compiled.{name} returned status {int(status)} where manipdyn.{name} computes the state")

@@ -1,0 +1,135 @@
+"""manipdyn.compiled: the dynamics called from inside a user's own numba.njit code. Each compiled call gives the
+public one-state call's numbers to the last bit (the same kernels), a rollout of 10⁴ steps in compiled code gives
+the trajectory of the same loop of public calls, and a failing status turns into the public call's typed error."""
+import dataclasses
+import warnings
+
+import numba
+import numpy as np
+import pytest
+
+from conftest import AAU, ROOT, free_flyer_model
+
+import manipdyn as md
+from manipdyn import compiled
+from manipdyn.errors import InputError, NumericalError, SingularError
+from manipdyn.validation import random_states
+from manipdyn.validation.zoo import robots_dir
+
+SOLO12 = "solo_description/robots/solo12.urdf"
+
+pytestmark = pytest.mark.skipif(md._jit.NOJIT, reason="numba.njit callers need the compiled kernels")
+
+
+def _models():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {"aau_arm": md.load_urdf(AAU), "solo12_free_flyer": free_flyer_model((robots_dir() / SOLO12).read_text()),
+                "humanoid_ball": md.load_mjcf(ROOT / "tests" / "data" / "humanoid_ball.xml")}
+
+
+MODELS = _models()
+
+
+@numba.njit
+def every_call(I, F, Q, V, A, tau, h, g, M, qdd, nxt):
+    """Each compiled call on each state (rows of Q, V, A); the worst status."""
+    worst = compiled.OK
+    for s in range(Q.shape[0]):
+        for status in (compiled.rnea(I, F, Q[s], V[s], A[s], tau[s]),
+                       compiled.nonlinear_effects(I, F, Q[s], V[s], h[s]),
+                       compiled.gravity_torques(I, F, Q[s], g[s]), compiled.mass_matrix(I, F, Q[s], M[s]),
+                       compiled.aba(I, F, Q[s], V[s], A[s], qdd[s]), compiled.integrate(I, Q[s], V[s], nxt[s])):
+            worst = max(worst, status)
+    return worst
+
+
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_compiled_calls_give_the_public_calls_numbers(name):
+    model = MODELS[name]
+    Q, V, A = random_states(model, 20, np.random.default_rng(3))
+    n, nv = Q.shape[0], model.nv
+    tau, h, g, qdd, M, nxt = *(np.empty((n, nv)) for _ in range(4)), np.empty((n, nv, nv)), np.empty_like(Q)
+    assert every_call(*compiled.arrays(model), Q, V[:, ::1], A, tau, h, g, M, qdd, nxt) == compiled.OK
+    for s in range(n):                                   # the public one-state calls, bit for bit
+        q, v, a = Q[s], V[s], A[s]
+        assert np.array_equal(tau[s], md.rnea(model, q, v, a))
+        assert np.array_equal(h[s], md.nonlinear_effects(model, q, v))
+        assert np.array_equal(g[s], md.gravity_torques(model, q))
+        assert np.array_equal(M[s], md.mass_matrix(model, q))
+        assert np.array_equal(qdd[s], md.aba(model, q, v, a))
+        assert np.array_equal(nxt[s], md.integrate(model, q, v))
+
+
+@numba.njit
+def rollout(I, F, q, v, tau, dt, steps, Q):
+    """The docs' example: semi-implicit Euler, q̈ by the ABA, q ⊕ dt v; (steps done, status)."""
+    qdd, dq, nxt = np.empty(v.shape[0]), np.empty(v.shape[0]), np.empty(q.shape[0])
+    for k in range(steps):
+        status = compiled.aba(I, F, q, v, tau, qdd)
+        if status != compiled.OK:
+            return k, status
+        for i in range(v.shape[0]):
+            v[i] += dt * qdd[i]
+            dq[i] = dt * v[i]
+        compiled.integrate(I, q, dq, nxt)
+        q[:] = nxt
+        Q[k] = q
+    return steps, compiled.OK
+
+
+@pytest.mark.parametrize("name", ["aau_arm", "solo12_free_flyer"])
+def test_a_rollout_of_ten_thousand_steps_is_the_public_loops(name):
+    """Ten seconds of a passive fall (τ = 0) from a random state, in compiled code and as a loop of public calls."""
+    model, steps, dt = MODELS[name], 10_000, 1e-3
+    Q0, V0, _ = random_states(model, 1, np.random.default_rng(4))
+    tau, Q = np.zeros(model.nv), np.empty((steps, model.nq))
+    assert rollout(*compiled.arrays(model), Q0[0].copy(), V0[0].copy(), tau, dt, steps, Q) == (steps, compiled.OK)
+    q, v = Q0[0], V0[0]
+    for k in range(0, steps):                            # the same loop of public calls
+        v = v + dt * md.aba(model, q, v, tau)
+        q = md.integrate(model, q, dt * v)
+        if k % 997 == 0 or k == steps - 1:
+            assert np.array_equal(Q[k], q), k
+    if name == "solo12_free_flyer":                      # the base's quaternion stays a unit one
+        assert abs(np.linalg.norm(Q[-1, 3:7]) - 1.0) < 1e-12
+
+
+def test_a_failing_status_is_the_public_calls_error():
+    model = MODELS["aau_arm"]
+    I, F = compiled.arrays(model)
+    q, v, tau = md.neutral(model), np.zeros(model.nv), np.zeros(model.nv)
+    q[2] = np.nan
+    k, status = rollout(I, F, q, v, tau, 1e-3, 3, np.empty((3, model.nq)))
+    assert k == 0 and status != compiled.OK
+    with pytest.raises(InputError, match=r"q\[2\] \(joint 'joint3'\) is nan"):
+        compiled.check(model, "aba", status, q, v, tau)
+    compiled.check(model, "aba", compiled.OK, q, v, tau)          # OK: nothing to raise
+    Q0, V0, T = random_states(model, 1, np.random.default_rng(4))  # random torques: explicit Euler diverges
+    q, v = Q0[0].copy(), V0[0].copy()
+    k, status = rollout(I, F, q, v, T[0], 1e-3, 10_000, np.empty((10_000, model.nq)))
+    assert 0 < k < 10_000 and status != compiled.OK                # (q, v: the state of the failing step)
+    with pytest.raises(NumericalError, match=r"aba: the result q̈\[\d\] \(joint 'joint\d'\) is (nan|-?inf)"):
+        compiled.check(model, "aba", status, q, v, T[0])
+    massless = dataclasses.replace(model, mass=np.zeros(model.njoints), inertia=np.zeros((model.njoints, 3, 3)))
+    qdd, q0, v = np.empty(model.nv), md.neutral(model), np.zeros(model.nv)
+    status = compiled.aba(*compiled.arrays(massless), q0, v, v, qdd)
+    assert status != compiled.OK
+    with pytest.raises(SingularError, match="moves a subtree without mass"):
+        compiled.check(massless, "aba", status, q0, v, v)
+
+
+def test_arrays_and_shapes_are_checked_in_python():
+    model = MODELS["aau_arm"]
+    I, F = compiled.arrays(model)
+    assert I.flags.writeable and F.flags.writeable and I.flags.c_contiguous and I.dtype == np.int64
+    assert not np.shares_memory(I, model.kernel.lane_arrays[0])
+    compiled.check_shapes(model, "aba", md.neutral(model), np.zeros(model.nv), np.zeros(model.nv), np.zeros(model.nv))
+    with pytest.raises(InputError, match=r"compiled.aba: qdd must be a float64 array of shape \(5,\), not float64 \(4,\)"):
+        compiled.check_shapes(model, "aba", md.neutral(model), np.zeros(5), np.zeros(5), np.zeros(4))
+    with pytest.raises(InputError, match="takes q, M: 2 arrays, not 1"):
+        compiled.check_shapes(model, "mass_matrix", md.neutral(model))
+    with pytest.raises(InputError, match="no compiled call 'crba'"):
+        compiled.check_shapes(model, "crba", md.neutral(model))
+    with pytest.raises(InputError, match="expected a manipdyn Model, got str"):
+        compiled.arrays("aau_arm.urdf")
