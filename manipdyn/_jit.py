@@ -33,7 +33,8 @@ KERNEL_SOURCES = ("_jit.py", "spatial.py", "joints.py", "dynamics/model_arrays.p
                   "dynamics/kernel_inputs.py", "dynamics/lanes.py", "dynamics/status.py",
                   "dynamics/rnea.py", "dynamics/crba.py", "dynamics/aba.py",
                   "dynamics/derivatives.py", "dynamics/regressor.py", "dynamics/coriolis.py", "dynamics/energy.py",
-                  "dynamics/kinematics.py", "dynamics/lagrange.py", "constraints/closures.py", "constraints/fast.py")   # every file a kernel's code lives in
+                  "dynamics/kinematics.py", "dynamics/lagrange.py", "constraints/closures.py", "constraints/fast.py",
+                  "compiled.py")   # every file a kernel's code lives in
 NOJIT = os.environ.get("MANIPDYN_NOJIT", "") not in ("", "0")
 _FOLDER = re.compile(r"numba-[0-9a-f]{16}")
 

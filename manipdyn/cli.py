@@ -86,6 +86,7 @@ def _validate(args) -> int:
 
 class _NoBar:
     """Stands in for tqdm's bar when tqdm (the validate extra) is not installed: no bar, messages printed."""
+    total = None
 
     def __init__(self, *args, **kw):
         pass
@@ -97,6 +98,9 @@ class _NoBar:
         return False
 
     def update(self, n=1):
+        pass
+
+    def refresh(self):
         pass
 
     @staticmethod
@@ -419,27 +423,23 @@ def _play(args) -> int:
 MAX_REPORT_BYTES = 16 * 2**20   # bench --from: a report.json is ~100 kB
 
 
-def _progress_bar(stream, width=30):
-    """progress(done, total, seconds) drawing a bar on ``stream``: redrawn in place on a terminal, else a line at
-    each quarter."""
-    tty = getattr(stream, "isatty", lambda: False)()
-
+def _warmup_progress(bar):
+    """warmup's progress(done, total, seconds) moving a tqdm bar (``_progress_bar``), its total set once every
+    worker has said how many calls it makes."""
     def progress(done, total, seconds):
-        if not total:                          # (until every worker has said how many calls it makes)
-            return
-        full = width * done // total
-        text = f"[{'#' * full}{'.' * (width - full)}] {done}/{total} calls compiled, {seconds:.0f} s"
-        if tty:
-            stream.write("\r" + text + ("\n" if done == total else ""))
-        elif 4 * done // total != 4 * (done - 1) // total:
-            stream.write(text + "\n")
-        stream.flush()
+        if total and bar.total != total:
+            bar.total = total
+            bar.refresh()
+        bar.update(1)
     return progress
 
 
 def _warmup(args) -> int:
     from .warmup import GROUPS, warmup
-    seconds, workers = warmup(args.jobs, progress=_progress_bar(sys.stderr)), min(args.jobs, len(GROUPS))
+    with _progress_bar()(total=None, unit="call", desc="compiling the kernels", disable=None, file=sys.stderr,
+                         leave=False) as bar:      # (on a terminal; none in a log)
+        seconds = warmup(args.jobs, progress=_warmup_progress(bar))
+    workers = min(args.jobs, len(GROUPS))
     print(f"compiled and cached every kernel in {seconds:.1f} s ({workers} worker process"
           f"{'es' if workers > 1 else ''}); later processes load them from the cache")
     return 0

@@ -20,11 +20,14 @@ from __future__ import annotations
 
 import numpy as np
 
+import numba
+
 from .errors import InputError
-from .joints import (BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, difference_kernel, integrate_kernel,
-                     neutral_q)
+from ._jit import A1, A2, entry
+from .joints import (BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, difference_kernel, difference_one,
+                     integrate_kernel, integrate_one, normalize_kernel)
 from .dynamics.arguments import as_batch, check_model, check_scalar, unbatch
-from .model import QUAT_TOL
+from .model import QUAT_TOL, Model
 
 __all__ = ["neutral", "integrate", "difference", "random_configuration", "normalize", "QUAT_TOL"]
 
@@ -36,6 +39,16 @@ FREE_RANGE = 1.0         # ... a free flyer's position in [−1, 1]³ m
 def _arrays(model):
     """(kind, continuous, idx_q, idx_v) as contiguous arrays (``model.kernel.config``)."""
     return model.kernel.config
+
+
+# One state: float64 arrays of the model's shapes go straight to a compiled kernel that checks finiteness and the
+# unit norms itself (``joints.state_ok``); anything else, or a state it refuses, takes the checked path below,
+# which converts, or names the fault.
+_F64, _ND = np.dtype(np.float64), np.ndarray
+C1 = numba.types.Array(numba.int64, 1, "C")              # KernelForm.config_one
+INTEGRATE_ONE = entry(integrate_one, C1, A1, A1, A1)
+DIFFERENCE_ONE = entry(difference_one, C1, A1, A1, A1)
+NORMALIZE = entry(normalize_kernel, C1, A2, A2)
 
 
 def _unit_name(model, k, n):
@@ -61,8 +74,9 @@ def check_quaternions(model, Q, name="q"):
 def neutral(model) -> np.ndarray:
     """q_neutral (nq,): every joint at 0, a free flyer at the origin, every quaternion the identity (0 0 0 1), a planar
     joint at the origin with (cos θ, sin θ) = (1, 0)."""
-    check_model(model)
-    return np.concatenate([neutral_q(k) for k in model.kind]) if model.njoints else np.zeros(0)
+    if type(model) is not Model:
+        check_model(model)
+    return model.kernel.neutral.copy()
 
 
 def integrate(model, q, v) -> np.ndarray:
@@ -72,6 +86,12 @@ def integrate(model, q, v) -> np.ndarray:
     v = [linear; angular] in the body frame (SE(3) exponential, Lie group integration as Pinocchio's integrate).
     q (nq,) or (N, nq), v (nv,) or (N, nv).
     """
+    if type(model) is Model and type(q) is _ND and type(v) is _ND and q.dtype is _F64 and v.dtype is _F64:
+        k = model.kernel
+        if q.shape == k.q_shape and v.shape == k.v_shape:
+            out = np.empty(k.q_shape)
+            if INTEGRATE_ONE.call(k.config_one, q, v, out):
+                return out
     (Q, V), single = as_batch(model, q=q, v=v)
     check_quaternions(model, Q)
     kind, _, iq, iv = _arrays(model)
@@ -86,6 +106,12 @@ def difference(model, q0, q1) -> np.ndarray:
     1-dof joints q1 − q0 (continuous joints wrapped into [−π, π]); a ball joint log(quat0⁻¹ quat1); a free flyer
     log6(M(q0)⁻¹ M(q1)); rotations of angle ≤ π (at exactly π either direction is a solution).
     """
+    if type(model) is Model and type(q0) is _ND and type(q1) is _ND and q0.dtype is _F64 and q1.dtype is _F64:
+        k = model.kernel
+        if q0.shape == k.q_shape and q1.shape == k.q_shape:
+            out = np.empty(k.v_shape)
+            if DIFFERENCE_ONE.call(k.config_one, q0, q1, out):
+                return out
     (Q0, Q1), single = as_batch(model, q0=q0, q1=q1)
     check_quaternions(model, Q0, "q0")
     check_quaternions(model, Q1, "q1")
@@ -145,9 +171,17 @@ def normalize(model, q) -> np.ndarray:
     by its norm (the rest unchanged).
 
     InputError for a block of norm 0 (it names no rotation)."""
+    if type(model) is Model and type(q) is _ND and q.dtype is _F64 and q.shape == model.kernel.q_shape:
+        out = np.empty(q.shape)
+        if NORMALIZE.call(model.kernel.config_one, q[None], out[None]) < 0:
+            return out
     (Q,), single = as_batch(model, q=q)
+    if type(model) is Model:
+        out = np.empty(Q.shape)
+        if NORMALIZE.call(model.kernel.config_one, Q, out) < 0:
+            return unbatch(out, single)
     Q = Q.copy()
-    for k, m in model.unit_q:
+    for k, m in model.unit_q:                   # (a MimicModel, or a row the kernel refused: the named error)
         n = np.linalg.norm(Q[:, k:k + m], axis=1, keepdims=True)
         if np.any(n == 0.0):
             r = int(np.flatnonzero(n[:, 0] == 0.0)[0])

@@ -46,7 +46,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ._jit import njit
-from .spatial import cross3
+from .spatial import cross
 
 
 class JointKind(NamedTuple):
@@ -362,9 +362,7 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
     """out = Q ⊕ V for every row (N, nq) ⊕ (N, nv): 1-dof joints q + v; a ball joint quat ⊗ exp(ω); a free flyer
     M(q) exp6(v) with v = [linear; angular] in the body frame; a planar joint M(q) exp(v) in SE(2) (Pinocchio's
     integrate)."""
-    t1, t2, w = np.empty(3), np.empty(3), np.empty(3)
-    R = np.empty((3, 3))
-    for s in range(Q.shape[0]):
+    for s in range(Q.shape[0]):                # (tuples, not scratch arrays: one state allocates nothing)
         for j in range(kind.shape[0]):
             a, b = iq[j], iv[j]
             if kind[j] == BALL:
@@ -378,17 +376,14 @@ def integrate_kernel(kind, iq, iv, Q, V, out):
                 continue
             if kind[j] != FREEFLYER:               # a code outside the registry
                 raise ValueError("integrate: unknown joint kind (manipdyn.joints.KINDS)")
-            w[0], w[1], w[2] = V[s, b + 3], V[s, b + 4], V[s, b + 5]
-            th2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-            ca, cb = _V_coeffs(th2)            # exp6 translation: V(ω) v
-            cross3(w, V[s, b:b + 3], t1)
-            cross3(w, t1, t2)
-            x0, y0, z0, w0 = Q[s, a + 3], Q[s, a + 4], Q[s, a + 5], Q[s, a + 6]
-            quat_to_matrix(x0, y0, z0, w0, R)
-            for k in range(3):
-                t1[k] = V[s, b + k] + ca * t1[k] + cb * t2[k]
+            w, vl = (V[s, b + 3], V[s, b + 4], V[s, b + 5]), (V[s, b], V[s, b + 1], V[s, b + 2])
+            ca, cb = _V_coeffs(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])    # exp6 translation: V(ω) v
+            t1 = cross(w, vl)
+            t2 = cross(w, t1)
+            u = (vl[0] + ca * t1[0] + cb * t2[0], vl[1] + ca * t1[1] + cb * t2[1], vl[2] + ca * t1[2] + cb * t2[2])
+            R = quat_rotation(Q[s, a + 3], Q[s, a + 4], Q[s, a + 5], Q[s, a + 6])
             for k in range(3):                 # p ← p + R V(ω) v
-                out[s, a + k] = Q[s, a + k] + R[k, 0] * t1[0] + R[k, 1] * t1[1] + R[k, 2] * t1[2]
+                out[s, a + k] = Q[s, a + k] + R[3 * k] * u[0] + R[3 * k + 1] * u[1] + R[3 * k + 2] * u[2]
             _turn_quat(Q, s, a + 3, w[0], w[1], w[2], out)   # quat ← quat ⊗ exp(ω)
 
 
@@ -397,8 +392,6 @@ def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
     """out (N, nv) = Q1 ⊖ Q0, the velocity that integrate turns Q0 into Q1 in unit time: q1 − q0
     (continuous joints: the shortest angle); ball log(quat0⁻¹ quat1); free flyer log6(M(q0)⁻¹ M(q1)); planar
     the SE(2) log of M(q0)⁻¹ M(q1)."""
-    R = np.empty((3, 3))
-    d, w, t1, t2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for s in range(Q0.shape[0]):
         for j in range(kind.shape[0]):
             a, b = iq[j], iv[j]
@@ -416,16 +409,100 @@ def difference_kernel(kind, continuous, iq, iv, Q0, Q1, out):
                 continue
             if kind[j] != FREEFLYER:               # a code outside the registry
                 raise ValueError("difference: unknown joint kind (manipdyn.joints.KINDS)")
-            w[0], w[1], w[2] = _log_quat(Q0, Q1, s, a + 3)
+            w = _log_quat(Q0, Q1, s, a + 3)
             x0, y0, z0, w0 = Q0[s, a + 3], Q0[s, a + 4], Q0[s, a + 5], Q0[s, a + 6]
             n0 = x0 * x0 + y0 * y0 + z0 * z0 + w0 * w0
-            quat_to_matrix(x0 / np.sqrt(n0), y0 / np.sqrt(n0), z0 / np.sqrt(n0), w0 / np.sqrt(n0), R)
-            for c in range(3):                 # d = R0ᵀ (p1 − p0)
-                d[c] = (R[0, c] * (Q1[s, a] - Q0[s, a]) + R[1, c] * (Q1[s, a + 1] - Q0[s, a + 1])
-                        + R[2, c] * (Q1[s, a + 2] - Q0[s, a + 2]))
+            R = quat_rotation(x0 / np.sqrt(n0), y0 / np.sqrt(n0), z0 / np.sqrt(n0), w0 / np.sqrt(n0))
+            dp = (Q1[s, a] - Q0[s, a], Q1[s, a + 1] - Q0[s, a + 1], Q1[s, a + 2] - Q0[s, a + 2])
+            d = (R[0] * dp[0] + R[3] * dp[1] + R[6] * dp[2], R[1] * dp[0] + R[4] * dp[1] + R[7] * dp[2],
+                 R[2] * dp[0] + R[5] * dp[1] + R[8] * dp[2])          # d = R0ᵀ (p1 − p0)
             cc = _Vinv_coeff(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-            cross3(w, d, t1)
-            cross3(w, t1, t2)
+            t1 = cross(w, d)
+            t2 = cross(w, t1)
             for c in range(3):                 # log6: linear part V(ω)⁻¹ d
                 out[s, b + c] = d[c] - 0.5 * t1[c] + cc * t2[c]
                 out[s, b + 3 + c] = w[c]
+
+
+# -- one state, checked in compiled code (the public calls' fast path: configuration.py) ---------------------------
+
+QUAT_TOL = 1e-8      # | ‖quat‖ − 1 | accepted in a free flyer's or ball joint's q, and for a planar joint's
+#                     (cos θ, sin θ) (integrate's output: ~1e-16); the checked path's (model.py) and the one-state
+#                     kernels' below
+
+
+@njit(cache=True, inline="always")
+def config_views(C):
+    """(kind, continuous, iq, iv, units) of the one-state configuration kernels' packed ints C = [nb, u, kind (nb),
+    continuous (nb), idx_q (nb), idx_v (nb), units (u, 2) row by row] (``kernel_form.KernelForm.config_one``: one
+    array for one argument, ~30 ns of dispatch each)."""
+    nb, u = C[0], C[1]
+    return (C[2:2 + nb], C[2 + nb:2 + 2 * nb], C[2 + 2 * nb:2 + 3 * nb], C[2 + 3 * nb:2 + 4 * nb],
+            C[2 + 4 * nb:2 + 4 * nb + 2 * u])
+
+
+@njit(cache=True, inline="always")
+def state_ok(q, units, v):
+    """True when every entry of q and v is finite (Σ|x| ≤ the largest float: NaN and ±inf fail) and every block of
+    q of unit norm (units: [start, length] pairs, flat: a quaternion, a planar joint's (cos θ, sin θ)) has norm 1
+    within QUAT_TOL."""
+    total = 0.0
+    for k in range(q.shape[0]):
+        total += abs(q[k])
+    for k in range(v.shape[0]):
+        total += abs(v[k])
+    if not total <= 1.7976931348623157e308:
+        return False
+    for u in range(0, units.shape[0], 2):
+        n2 = 0.0
+        for k in range(units[u], units[u] + units[u + 1]):
+            n2 += q[k] * q[k]
+        if not abs(np.sqrt(n2) - 1.0) <= QUAT_TOL:
+            return False
+    return True
+
+
+@njit(cache=True)
+def integrate_one(C, q, v, out):
+    """One state: out (nq,) = q ⊕ v (``integrate_kernel``) if ``state_ok(q, units, v)`` (C: ``config_views``);
+    whether it did (else the checked path names the fault)."""
+    kind, _, iq, iv, units = config_views(C)
+    if not state_ok(q, units, v):
+        return False
+    integrate_kernel(kind, iq, iv, q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])
+    return True
+
+
+@njit(cache=True)
+def difference_one(C, q0, q1, out):
+    """One state: out (nv,) = q1 ⊖ q0 (``difference_kernel``) if both pass ``state_ok``; whether it did."""
+    kind, continuous, iq, iv, units = config_views(C)
+    if not (state_ok(q0, units, q1) and state_ok(q1, units, q0[:0])):
+        return False
+    difference_kernel(kind, continuous, iq, iv, q0[np.newaxis, :], q1[np.newaxis, :], out[np.newaxis, :])
+    return True
+
+
+@njit(cache=True)
+def normalize_kernel(C, Q, out):
+    """out = Q with every block of unit norm (C: ``config_views``) divided by its norm, row by row; the first row
+    with a block of norm 0 (no rotation) or a non-finite entry, or −1."""
+    units = config_views(C)[4]
+    for s in range(Q.shape[0]):
+        total = 0.0
+        for k in range(Q.shape[1]):
+            out[s, k] = Q[s, k]
+            total += abs(Q[s, k])
+        if not total <= 1.7976931348623157e308:
+            return s
+        for u in range(0, units.shape[0], 2):
+            a, b = units[u], units[u] + units[u + 1]
+            n2 = 0.0
+            for k in range(a, b):
+                n2 += Q[s, k] * Q[s, k]
+            if n2 == 0.0:
+                return s
+            n = np.sqrt(n2)
+            for k in range(a, b):
+                out[s, k] = Q[s, k] / n
+    return -1

@@ -14,7 +14,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .joints import PLANAR, motion_subspace, plane_axes
+from .joints import PLANAR, motion_subspace, neutral_q, plane_axes
 from .spatial import skew
 
 __all__ = ["KernelForm", "z_turn", "z_aligned", "orientation_pairs", "perpendicular_pair"]
@@ -57,6 +57,9 @@ class KernelForm:
     lane_turns: np.ndarray     # (nb, 3, 3) C_i: body i's z-aligned frame in its own (x_body = C_i x_lane); a
     #                            wrench's rows are turned with it as they are laid out (arguments.wrench_rows(lanes=True))
     lane_frame_rows: MappingProxyType   # frame_rows in those frames
+    config_one: np.ndarray     # config and Model.unit_q packed in one int64 array for the one-state configuration
+    #                            kernels (joints.config_views)
+    neutral: np.ndarray        # (nq,) the neutral configuration (configuration.neutral returns a copy)
 
     @classmethod
     def of(cls, model) -> "KernelForm":
@@ -86,7 +89,10 @@ class KernelForm:
         for name, (b, X) in frame_rows.items():
             C = turn[b] if b >= 0 else np.eye(3)             # the frame in the body's z-aligned frame: Cᵀ R, Cᵀ p
             lane_frames[name] = (b, np.ascontiguousarray(np.vstack([C.T @ X[:3], C.T @ X[3]])))
-        arrays = [I, F, Fz, *config, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
+        units = np.asarray(model.unit_q, np.int64).reshape(-1)
+        config_one = np.concatenate([[nb, units.size // 2], *config, units]).astype(np.int64)
+        neutral = np.concatenate([neutral_q(k) for k in model.kind]) if nb else np.zeros(0)
+        arrays = [I, F, Fz, *config, config_one, neutral, ints, floats, *(x for _, x in frame_rows.values()), *one_state.values(),
                   *wrench.values(), turn, *(x for _, x in lane_frames.values())]
         for a in arrays:
             a.setflags(write=False)
@@ -95,7 +101,7 @@ class KernelForm:
                    MappingProxyType(frame_rows), MappingProxyType(one_state), MappingProxyType(wrench),
                    ints, floats, labels,
                    ((model.nv,), (model.nv, model.nv), (model.nv, 10 * nb)),
-                   (I, Fz), turn, MappingProxyType(lane_frames))
+                   (I, Fz), turn, MappingProxyType(lane_frames), config_one, neutral)
 
 
 def wrench_axes(C, fr, axes):

@@ -21,7 +21,7 @@ from types import MappingProxyType
 
 from .errors import InputError
 from .joints import (BALL, COORDS, FREEFLYER, HELICAL, IN_MODEL, NQ, NV, OMEGA_AT, PLANAR, QUAT_AT, RATES, TYPE_NAMES,
-                     UNIT_AT, UNIT_LEN)
+                     QUAT_TOL, UNIT_AT, UNIT_LEN)
 from .kernel_form import KernelForm
 from .quirks import QUIRK_KINDS
 
@@ -30,8 +30,6 @@ __all__ = ["Model", "Frame", "Constraint", "MimicModel", "check_gravity", "QUAT_
 
 JOINT_DYNAMICS = ("armature", "damping", "friction")   # the per-velocity joint parameters of a Model
 FRICTION_EPS = 1e-3      # rad/s (m/s): the Coulomb friction's regularisation, friction ⊙ tanh(q̇ / FRICTION_EPS)
-QUAT_TOL = 1e-8          # | ‖quat‖ − 1 | accepted in a free flyer's or ball joint's q, and for a planar joint's
-#                          (cos θ, sin θ) (integrate's output: ~1e-16)
 
 
 def check_joint_dynamics(x, key, nv, where, names=None) -> np.ndarray:

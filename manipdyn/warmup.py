@@ -95,7 +95,9 @@ def _calls(arm, closed):
                 ("kinetic_energy batch", lambda: md.kinetic_energy(arm, Q, V)),
                 ("potential_energy", lambda: md.potential_energy(arm, q)),
                 ("potential_energy batch", lambda: md.potential_energy(arm, Q))],
-        config=[("integrate", lambda: md.integrate(arm, Q, V)), ("difference", lambda: md.difference(arm, Q, Q))],
+        config=[("integrate batch", lambda: md.integrate(arm, Q, V)), ("difference batch", lambda: md.difference(arm, Q, Q)),
+                ("integrate", lambda: md.integrate(arm, q, v)), ("difference", lambda: md.difference(arm, q, q)),
+                ("normalize", lambda: md.normalize(arm, q)), ("normalize batch", lambda: md.normalize(arm, Q))],
     )
 
 

@@ -1234,6 +1234,17 @@ FAULTS = (
     Fault("compiled-integrate-drops-velocity", "route", "manipdyn/compiled.py",
           "q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])", "q[np.newaxis, :], 0.0 * v[np.newaxis, :], out[np.newaxis, :])",
           ("tests/batch/test_compiled.py",), "compiled.integrate returns q without the step"),
+    Fault("config-one-state-norm-unchecked", "loader", "manipdyn/joints.py",
+          "        if not abs(np.sqrt(n2) - 1.0) <= QUAT_TOL:\n", "        if not abs(np.sqrt(n2) - 1.0) <= 1e300:\n",
+          ("tests/crosscheck/test_floating_base.py",), "the one-state integrate and difference take a quaternion of "
+          "any norm"),
+    Fault("config-difference-one-checks-q0-only", "loader", "manipdyn/joints.py",
+          "    if not (state_ok(q0, units, q1) and state_ok(q1, units, q0[:0])):\n",
+          "    if not state_ok(q0, units, q1):\n",
+          ("tests/crosscheck/test_floating_base.py",), "the one-state difference checks q1's quaternion norm not at all"),
+    Fault("config-normalize-kernel-divides-not", "loader", "manipdyn/joints.py",
+          "                out[s, k] = Q[s, k] / n\n", "                out[s, k] = Q[s, k]\n",
+          ("tests/crosscheck/test_floating_base.py",), "normalize leaves quaternions as they are"),
 )
 
 

@@ -356,6 +356,16 @@ def test_configuration_inputs_are_checked():
         difference(model, q, bad)
     with pytest.raises(InputError, match=r"q\[1\]: the quaternion"):
         integrate(model, np.array([q, bad]), np.zeros((2, model.nv)))
+    with pytest.raises(InputError, match=r"q: the quaternion root_joint.*norm 1.001"):     # one state: the
+        integrate(model, bad, np.zeros(model.nv))                                          # compiled path's check
+    with pytest.raises(InputError, match=r"q0: the quaternion root_joint.*norm 1.001"):
+        difference(model, bad, q)
+    nan = q.copy()
+    nan[2] = np.nan
+    with pytest.raises(InputError, match=r"q\[2\] \(joint 'root_joint.z'\) is nan"):
+        normalize(model, nan)
+    with pytest.raises(InputError, match=r"q0\[2\] \(joint 'root_joint.z'\) is nan"):
+        difference(model, nan, q)
     v[4] = np.nan
     with pytest.raises(InputError, match="root_joint.wy"):
         integrate(model, q, v)

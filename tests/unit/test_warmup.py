@@ -65,29 +65,23 @@ def test_workers_report_each_call_and_a_stuck_one_is_killed():
         warmup._run_python("import time; time.sleep(30)", timeout=1)
 
 
-class _Stream:
-    def __init__(self, tty):
-        self.tty, self.text = tty, ""
+class _Bar:
+    total, n, refreshed = None, 0, 0
 
-    def isatty(self):
-        return self.tty
+    def update(self, k=1):
+        self.n += k
 
-    def write(self, s):
-        self.text += s
-
-    def flush(self):
-        pass
+    def refresh(self):
+        self.refreshed += 1
 
 
-def test_progress_bar_in_place_on_a_terminal_and_by_quarters_in_a_log():
-    from manipdyn.cli import _progress_bar
-    term, log = _Stream(True), _Stream(False)
-    for stream in (term, log):
-        bar = _progress_bar(stream, width=8)
-        bar(1, 0, 0.4)                                   # the total not known yet: nothing drawn
-        for done in range(2, 9):
-            bar(done, 8, done * 10.0)
-    assert term.text.startswith("\r[##......] 2/8 calls compiled, 20 s\r[###.....] 3/8")
-    assert term.text.endswith("\r[########] 8/8 calls compiled, 80 s\n")
-    assert log.text.splitlines() == ["[##......] 2/8 calls compiled, 20 s", "[####....] 4/8 calls compiled, 40 s",
-                                     "[######..] 6/8 calls compiled, 60 s", "[########] 8/8 calls compiled, 80 s"]
+def test_warmup_moves_a_bar_whose_total_comes_from_the_workers():
+    from manipdyn.cli import _NoBar, _warmup_progress
+    bar = _Bar()
+    progress = _warmup_progress(bar)
+    progress(1, 0, 0.5)                                  # one worker has reported: no total yet
+    assert (bar.n, bar.total) == (1, None)
+    for done in range(2, 9):
+        progress(done, 8, done * 10.0)
+    assert (bar.n, bar.total, bar.refreshed) == (8, 8, 1)
+    _warmup_progress(_NoBar())(3, 8, 1.0)                # without tqdm: no bar, no error
