@@ -155,10 +155,14 @@ def markdown(d) -> str:
          "\n## What to use when\n\n", advice(d),
          "\n## a. Single-state latency (public, input-checked calls)\n\nPinocchio's cheapest Python route to the "
          "same numbers (pin_route), its conversions (q order, per-joint fext) made outside the timing; err is "
-         "the worst over the states (a solve's error is divided by cond(M): note).\n\n",
+         "the worst over the states (a solve's error is divided by cond(M): note). Both sides are timed as calls "
+         "on prepared arrays; for rnea, aba and crba Pinocchio's figure is checked against a plain `timeit` of its "
+         "call as a user writes it (`pin.rnea(model, data, q, v, a)`): pin_plain_us, and pin_deviation = "
+         "|pin_us ÷ pin_plain_us − 1| (a target: ≤ 0.1).\n\n",
          _table(d["latency"] + d["closed_latency"],
-                ["robot", "call", "ours_us", "pin_us", "ratio", "err", "note", "pin_route"],
-                dict(ours_us=us, pin_us=us, ratio=x, err=e)),
+                ["robot", "call", "ours_us", "pin_us", "ratio", "err", "note", "pin_route", "pin_plain_us",
+                 "pin_deviation"],
+                dict(ours_us=us, pin_us=us, ratio=x, err=e, pin_plain_us=us, pin_deviation="{:.3f}")),
          "\n## b. Batched calls: every public call on (N, nv), µs per state\n\nPinocchio's C++ batch "
          "(`*InParallel`, 1 thread) where it exists, else its Python loop over the same states (pin_route); err "
          "is the worst over 20 states spread through the batch. Both sides write into memory they were given or "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import functools
 import time
+import timeit
 import warnings
 from pathlib import Path
 from typing import Callable, NamedTuple
@@ -125,6 +126,7 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
     fid = pm.getFrameId(frame)
     fx = {frame: (np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.4]))}
     PQ = [st.to_pin(q) for q in Q]
+    V, A = list(V), list(A)    # rows made once: a call indexes a list, as a user's loop over prepared states would
     LWA, nv, nb = P.LOCAL_WORLD_ALIGNED, model.nv, pm.njoints - 1
 
     def placement(s):
@@ -209,7 +211,7 @@ def latency(sts, quick=False):
     P, rows = pin(), []
     for st in sts:
         Q, V, A = random_states(st.model, 20 if quick else 100, np.random.default_rng(0))
-        table, _, cond = cases(P, st, Q, V, A)
+        table, PQ, cond = cases(P, st, Q, V, A)
         conds = [cond(s) for s in range(len(Q))]
         for name, c in table.items():
             err = max(_err(c, c.ours(Q[s], V[s], A[s]), c.theirs(s), conds[s]) for s in range(len(Q)))
@@ -217,7 +219,25 @@ def latency(sts, quick=False):
             t_ours, t_pin = per_call_pair(lambda: c.ours(q, v, a), lambda: c.theirs(0), repeat=3 if quick else 7)
             rows.append(dict(robot=st.label, call=name, pin_route=c.route, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                              ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
+            if name in PLAIN:                    # Pinocchio's figure against a plain timeit of its call, as written
+                t_plain = plain_timeit(PLAIN[name], P, st, PQ[0], V[0], A[0], repeat=3 if quick else 7)
+                rows[-1].update(pin_plain_us=t_plain * 1e6, pin_deviation=abs(t_pin / t_plain - 1.0))
     return rows
+
+
+# the calls whose Pinocchio figure is checked against a plain timeit of the call as a user writes it
+PLAIN = {"rnea": "pin.rnea(model, data, q, v, a)", "aba": "pin.aba(model, data, q, v, a)",
+         "mass_matrix (crba)": "pin.crba(model, data, q)"}
+
+
+def plain_timeit(statement, P, st, q, v, a, repeat=7):
+    """Seconds per call of ``statement`` (Pinocchio's call as a user writes it: ``pin``, ``model``, ``data``, q,
+    v, a as plain names), by ``timeit``: the best of ``repeat`` runs of a loop calibrated to ~0.05 s."""
+    g = dict(pin=P, model=st.pm, data=st.pm.createData(), q=np.array(q), v=np.array(v), a=np.array(a))
+    timer = timeit.Timer(statement, globals=g)
+    number, _ = timer.autorange()
+    number = max(1, int(number * 0.25))          # autorange: ≥ 0.2 s; a quarter of it a run
+    return min(timer.repeat(repeat, number)) / number
 
 
 LANE_CALLS = ("rnea", "aba", "mass_matrix (crba)")      # the lane kernels' calls: timed at N = big too

@@ -24,6 +24,7 @@ import numpy as np
 
 from .._jit import A1, A2, A3, CONTRACT, MODEL, entry, njit
 from ..errors import InputError
+from ..model import Model
 from ..spatial import (SINCOS_MAX, add, compose, cross, first_nonfinite, first_nonfinite_entry, mul3, mul3t, rotate6,
                        sandwich3, sub)
 from .forward_kinematics import fk_pass, fk_path
@@ -448,6 +449,9 @@ def _frame_terms(model, call, frame, Q, V, want, reference):
 def frame_placement(model, q, frame):
     """Pose of a link or frame in the world: (R (3, 3) or (N, 3, 3), p (3,) or (N, 3)), x_world = R x + p."""
     k = fast(model, q)
+    if k is None and type(model) is Model:              # another dtype, a list: converted (or named), then
+        (Q,), single = as_batch(model, q=q)             # one state takes the same kernel as a float64 one
+        q, k = (Q[0], fast(model, Q[0])) if single else (q, None)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
             X = model.kernel.one_state_rows[frame, "local_world_aligned"]
@@ -471,6 +475,9 @@ def frame_jacobian(model, q, frame, reference="local_world_aligned"):
     """J (6, nv) or (N, 6, nv), rows [linear; angular]: the frame's velocity and angular velocity = J q̇
     (Eqs. 29–30), world-aligned at the frame's origin or in the frame's axes (``reference="local"``)."""
     k = fast(model, q)
+    if k is None and type(model) is Model:              # another dtype, a list: converted (or named), then
+        (Q,), single = as_batch(model, q=q)             # one state takes the same kernel as a float64 one
+        q, k = (Q[0], fast(model, Q[0])) if single else (q, None)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
             X = model.kernel.one_state_rows[frame, reference]
@@ -494,6 +501,9 @@ def frame_jacobian_dot(model, q, v, frame, reference="local_world_aligned"):
     """J̇ (6, nv) or (N, 6, nv): the exact time derivative of frame_jacobian along q̇ (the module
     docstring gives the columns)."""
     k = fast(model, q, v)
+    if k is None and type(model) is Model:              # another dtype, a list: converted (or named), then
+        (Q, V), single = as_batch(model, q=q, v=v)      # one state takes the same kernel as a float64 one
+        q, v, k = (Q[0], V[0], fast(model, Q[0], V[0])) if single else (q, v, None)
     if k is not None:                                   # one float64 state: straight into the kernel
         try:
             X = model.kernel.one_state_rows[frame, reference]

@@ -1,0 +1,64 @@
+"""The one-state fast paths (arguments.fast_shape, configuration's, check_out) hand a kernel only what it reads as
+declared — float64 arrays of the model's shapes — and everything else goes through the checked path with the same
+numbers: other dtypes, strided views, a model changed after an earlier call (its own kernel arrays, never a stale
+one)."""
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+from conftest import AAU
+
+import manipdyn as md
+from manipdyn.validation import random_states
+
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    MODEL = md.load_urdf(AAU)
+TIP = MODEL.body_names[-1]
+CALLS = {
+    "rnea": lambda m, q, v, a: md.rnea(m, q, v, a),
+    "aba": lambda m, q, v, a: md.aba(m, q, v, a),
+    "mass_matrix": lambda m, q, v, a: md.mass_matrix(m, q),
+    "gravity_torques": lambda m, q, v, a: md.gravity_torques(m, q),
+    "nonlinear_effects": lambda m, q, v, a: md.nonlinear_effects(m, q, v),
+    "frame_placement": lambda m, q, v, a: np.concatenate([x.ravel() for x in md.frame_placement(m, q, TIP)]),
+    "frame_jacobian": lambda m, q, v, a: md.frame_jacobian(m, q, TIP),
+    "integrate": lambda m, q, v, a: md.integrate(m, q, v),
+    "difference": lambda m, q, v, a: md.difference(m, q, a),
+    "normalize": lambda m, q, v, a: md.normalize(m, q),
+}
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.int64])
+@pytest.mark.parametrize("name", sorted(CALLS))
+def test_another_dtype_gives_the_float64_numbers(name, dtype):
+    Q, V, A = random_states(MODEL, 1, np.random.default_rng(5))
+    q, v, a = (3 * Q[0]).astype(dtype), (3 * V[0]).astype(dtype), (3 * A[0]).astype(dtype)
+    want = CALLS[name](MODEL, *(x.astype(np.float64) for x in (q, v, a)))
+    assert np.array_equal(CALLS[name](MODEL, q, v, a), want)
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+def test_strided_and_read_only_views_give_the_numbers_of_contiguous_arrays(name):
+    Q, V, A = random_states(MODEL, 2, np.random.default_rng(6))
+    wide = [np.repeat(x[0], 2) for x in (Q, V, A)]                      # every other entry: a strided view
+    views = [x[::2] for x in wide]
+    for x in views:
+        x.flags.writeable = False
+    assert np.array_equal(CALLS[name](MODEL, *views), CALLS[name](MODEL, Q[0], V[0], A[0]))
+
+
+def test_a_changed_model_is_computed_with_its_own_arrays():
+    """A model made from another after calls on it (dataclasses.replace: heavier links) gives its own numbers in
+    one-state calls, not the first model's."""
+    Q, V, A = random_states(MODEL, 1, np.random.default_rng(7))
+    q, v, a = Q[0], V[0], A[0]
+    before = md.rnea(MODEL, q, v, a)
+    heavy = dataclasses.replace(MODEL, mass=2 * MODEL.mass, inertia=2 * MODEL.inertia)
+    assert np.allclose(md.rnea(heavy, q, v, a), 2 * before, rtol=1e-13, atol=0)   # τ is linear in the inertias
+    assert np.array_equal(md.rnea(heavy, q, v, a), md.rnea(heavy, Q, V, A)[0]) or \
+        np.allclose(md.rnea(heavy, q, v, a), md.rnea(heavy, Q, V, A)[0], rtol=1e-14, atol=0)
+    assert np.allclose(md.mass_matrix(heavy, q), 2 * md.mass_matrix(MODEL, q), rtol=1e-13, atol=0)
+    assert np.array_equal(md.rnea(MODEL, q, v, a), before)                   # the first model unchanged
