@@ -48,6 +48,7 @@ def run(out_dir, quick=False, progress=print) -> dict:
     steps = [
         ("latency", lambda: sections.latency(sts("arms", "chain", "spm"), quick)),
         ("closed_latency", lambda: sections.closed_latency(spm, quick)),
+        ("one_state", lambda: sections.one_state(sts("arms", "floating"), quick)),
         ("batched", lambda: sections.batched(sts("arms", "chain"), quick)),
         ("floating", lambda: sections.floating(sts("floating"), quick)),
         ("floors", lambda: sections.floors(data["batched"], {"ur5": ur5, "aau_arm": ROOT / "urdf" / "aau_arm.urdf",
@@ -163,6 +164,12 @@ def markdown(d) -> str:
                 ["robot", "call", "ours_us", "pin_us", "ratio", "err", "note", "pin_route", "pin_plain_us",
                  "pin_deviation"],
                 dict(ours_us=us, pin_us=us, ratio=x, err=e, pin_plain_us=us, pin_deviation="{:.3f}")),
+         "\n### Configuration operations, and a step of a user's own compiled loop\n\nEach side a plain `timeit` "
+         "of the call as a user writes it (`md.integrate(model, q0, v)` against `pin.integrate(pm, p0, v)`); the "
+         "compiled loop's row: one `compiled.rnea` step of a `numba.njit` loop over 10⁴ states (docs/api/compiled.md) "
+         "against one `pin.rnea(model, data, q, v, a)` from Python.\n\n",
+         _table(d.get("one_state", []), ["robot", "call", "ours_us", "pin_us", "ratio", "err"],
+                dict(ours_us=us, pin_us=us, ratio=x, err=e)),
          "\n## b. Batched calls: every public call on (N, nv), µs per state\n\nPinocchio's C++ batch "
          "(`*InParallel`, 1 thread) where it exists, else its Python loop over the same states (pin_route); err "
          "is the worst over 20 states spread through the batch. Both sides write into memory they were given or "

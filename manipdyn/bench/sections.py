@@ -240,6 +240,77 @@ def plain_timeit(statement, P, st, q, v, a, repeat=7):
     return min(timer.repeat(repeat, number)) / number
 
 
+
+def _plain(statement, g, repeat):
+    """Seconds per run of ``statement`` (names from g) by a plain ``timeit``: the best of ``repeat`` runs of a loop
+    of ~0.05 s."""
+    timer = timeit.Timer(statement, globals=g)
+    number, _ = timer.autorange()
+    number = max(1, int(number * 0.25))
+    return min(timer.repeat(repeat, number)) / number
+
+
+# configuration operations: (ours, Pinocchio's), each as a user writes it
+CONFIG_CALLS = {"integrate": ("md.integrate(model, q0, v)", "pin.integrate(pm, p0, v)"),
+                "difference": ("md.difference(model, q0, q1)", "pin.difference(pm, p0, p1)"),
+                "neutral": ("md.neutral(model)", "pin.neutral(pm)"),
+                "normalize": ("md.normalize(model, q0)", "pin.normalize(pm, p0)")}
+NJIT_CALL = "rnea, one step of a user's numba.njit loop"
+
+
+def _njit_rnea_loop():
+    """A user's own compiled loop (docs/api/compiled.md): compiled.rnea over the rows of a batch; the worst status."""
+    import numba
+
+    from .. import compiled
+
+    @numba.njit
+    def loop(I, F, Q, V, A, T):
+        worst = compiled.OK
+        for s in range(Q.shape[0]):
+            worst = max(worst, compiled.rnea(I, F, Q[s], V[s], A[s], T[s]))
+        return worst
+    return loop
+
+
+def one_state(sts, quick=False):
+    """a'. The configuration operations of one state against Pinocchio's, and one rnea step inside a user's own
+    numba.njit loop (``manipdyn.compiled``, 10⁴ states) against Pinocchio's plain Python call; every figure a
+    plain ``timeit`` of the call as written (CONFIG_CALLS), err against Pinocchio's result."""
+    import manipdyn as md
+    from .. import compiled
+    P, rows, repeat = pin(), [], 3 if quick else 7
+    loop = _njit_rnea_loop()
+    for st in sts:
+        model, pm = st.model, st.pm
+        rng = np.random.default_rng(0)
+        q0, q1 = md.random_configuration(model, rng), md.random_configuration(model, rng)
+        v = rng.normal(0.0, 1.0, model.nv)
+        p0, p1 = st.to_pin(q0), st.to_pin(q1)
+        g = dict(md=md, pin=P, model=model, pm=pm, q0=q0, q1=q1, v=v, p0=p0, p1=p1)
+        results = {"integrate": (st.to_pin(md.integrate(model, q0, v)), P.integrate(pm, p0, v)),
+                   "difference": (md.difference(model, q0, q1), P.difference(pm, p0, p1)),
+                   "neutral": (st.to_pin(md.neutral(model)), P.neutral(pm)),
+                   "normalize": (st.to_pin(md.normalize(model, q0)), P.normalize(pm, p0))}
+        for call, (ours, theirs) in CONFIG_CALLS.items():
+            t_ours, t_pin = _plain(ours, g, repeat), _plain(theirs, g, repeat)
+            rows.append(dict(robot=st.label, call=call, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                             ratio=t_ours / t_pin, err=error(*(np.asarray(x, float) for x in results[call]))))
+        if model.nv:
+            N = 1000 if quick else 10_000
+            Q, V, A = random_states(model, N, np.random.default_rng(1))
+            T, (I, F) = np.empty((N, model.nv)), compiled.arrays(model)
+            loop(I, F, Q, V, A, T)                                   # (compiles once)
+            t_ours = _plain("loop(I, F, Q, V, A, T)", dict(loop=loop, I=I, F=F, Q=Q, V=V, A=A, T=T), repeat) / N
+            g.update(data=pm.createData(), pq=st.to_pin(Q[0]), v0=V[0].copy(), a0=A[0].copy())
+            t_pin = _plain("pin.rnea(pm, data, pq, v0, a0)", g, repeat)
+            err = max(error(T[s], P.rnea(pm, pm.createData(), st.to_pin(Q[s]), V[s], A[s]))
+                      for s in range(0, N, N // 20))
+            rows.append(dict(robot=st.label, call=NJIT_CALL, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
+                             ratio=t_ours / t_pin, err=err))
+    return rows
+
+
 LANE_CALLS = ("rnea", "aba", "mass_matrix (crba)")      # the lane kernels' calls: timed at N = big too
 # the batched calls that take out= (dynamics/route.py): timed writing into one array, as Pinocchio's batch writes into
 # its out and its loop into data; into a new array each call too (fresh_us)

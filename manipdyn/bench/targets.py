@@ -24,6 +24,8 @@ SINGLE_CALLS = ("rnea", "aba", "rnea with f_ext", "aba with f_ext", "mass_matrix
                 "forward_dynamics (cholesky)", "kinetic_energy", "potential_energy", "rnea_derivatives",
                 "aba_derivatives", "joint_torque_regressor")
 PLAIN_CHECKED = ("rnea", "aba", "mass_matrix (crba)")   # Pinocchio's figure held to a plain timeit (sections.PLAIN)
+CONFIG_CALLS = ("integrate", "difference", "neutral", "normalize")   # bench.sections.CONFIG_CALLS, one state
+NJIT_CALL = "rnea, one step of a user's numba.njit loop"               # bench.sections.NJIT_CALL
 LAGRANGE = ("mass_matrix (lagrange)",)        # the chapter's O(n³) route, against Pinocchio's crba
 LANE_ARMS = ("ur5", "aau_arm")                # the lane kernels' targets: these arms, and the 32-link chain
 # our forward-dynamics routes in the hard cases, each against Pinocchio's same algorithm (aba; crba + cholesky.solve)
@@ -50,6 +52,9 @@ TARGETS = (
     Target("single-state mass_matrix (lagrange) ≤ 20× Pinocchio's crba", "latency", "ratio", 20.0, LAGRANGE),
     Target("Pinocchio's single-call figures within 10 % of a plain timeit of its call (rnea, aba, crba)", "latency",
            "pin_deviation", 0.1, PLAIN_CHECKED),
+    Target("configuration operations (one state) ≤ 2× Pinocchio's", "one_state", "ratio", 2.0, CONFIG_CALLS),
+    Target("one rnea step in a user's njit loop ≤ 0.3× Pinocchio's Python call, on ur5", "one_state", "ratio", 0.3,
+           (NJIT_CALL,), where=dict(robot="ur5")),
     Target("SPM constrained_forward_dynamics ≤ 1× Pinocchio's constraintDynamics", "closed_latency", "ratio", 1.0,
            ("constrained_forward_dynamics",)),
     Target("batched call, per state ≤ 1× Pinocchio (InParallel(1) or its loop)", "batched", "ratio", 1.0,

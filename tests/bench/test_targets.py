@@ -7,7 +7,8 @@ import json
 import pytest
 
 from manipdyn.bench import targets
-from manipdyn.bench.targets import HARD_ROUTES, LAGRANGE, PLAIN_CHECKED, SINGLE_CALLS, TARGETS
+from manipdyn.bench.targets import (CONFIG_CALLS, HARD_ROUTES, LAGRANGE, NJIT_CALL, PLAIN_CHECKED, SINGLE_CALLS,
+                                     TARGETS)
 from manipdyn.cli import main
 from manipdyn.errors import InputError
 
@@ -35,7 +36,10 @@ def report(at_limit=True):
     hard += [dict(case=case, route="Pinocchio aba", median=1e-15, p95=1e-14) for case in ("uniform", "heavy root")]
     throughput = [dict(robot="ur5", call=c, N=N, big=N >= 10_000, all_over_one=f(1 / 1.8) if N >= 10_000 else 1.0)
                   for c in ("rnea", "aba", "mass_matrix") for N in (100, 10_000)]     # (N = 100: not a target row)
-    return dict(machine={}, latency=latency, closed_latency=[dict(robot="spm", call="constrained_forward_dynamics",
+    one_state = [dict(robot=rob, call=c, ratio=f(2.0)) for rob in ("ur5", "solo12") for c in CONFIG_CALLS]
+    one_state.append(dict(robot="ur5", call=NJIT_CALL, ratio=f(0.3)))
+    one_state.append(dict(robot="solo12", call=NJIT_CALL, ratio=5.0))      # (not a target row: ur5 only)
+    return dict(machine={}, latency=latency, one_state=one_state, closed_latency=[dict(robot="spm", call="constrained_forward_dynamics",
                                                                   ratio=f(1.0))],
                 batched=batched, floating=floating, throughput=throughput, hard_cases=hard, cold_start=dict(measured=True, total_s=f(10.0)))
 
@@ -159,3 +163,9 @@ def test_check_from_exit_codes(tmp_path, capsys):
     assert main(["bench", "--check", "--from", _write(tmp_path / "m.json", report()), "--out", str(tmp_path)]) == 2
     assert main(["bench", "--check"]) == 2                                   # neither --out nor --from
     assert "--out" in capsys.readouterr().err
+
+
+def test_the_one_state_targets_name_the_sections_rows():
+    from manipdyn.bench import sections
+    assert tuple(sections.CONFIG_CALLS) == CONFIG_CALLS and sections.NJIT_CALL == NJIT_CALL
+    assert set(sections.PLAIN) == set(PLAIN_CHECKED)
