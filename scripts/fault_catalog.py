@@ -1248,16 +1248,12 @@ FAULTS = (
     Fault("fast-path-dtype-unchecked", "route", "manipdyn/dynamics/arguments.py",
           "    if type(q) is _ND and q.dtype is _F64 and type(model) is Model:\n",
           "    if type(q) is _ND and type(model) is Model:\n",
-          ("tests/unit/test_fast_paths.py",), "a one-state call hands the kernel a q of another dtype, read as float64"),
-    Fault("out-shape-unchecked", "route", "manipdyn/dynamics/arguments.py",
-          "    if type(out) is _ND and out.dtype is _F64 and out.shape == shape and out.flags.writeable:\n",
-          "    if type(out) is _ND and out.dtype is _F64 and out.flags.writeable:\n",
-          ("tests/batch/test_out.py",), "out= of the wrong shape is written into"),
+          ("tests/unit/test_one_state_paths.py",), "a one-state call hands the kernel a q of another dtype, read as float64"),
     Fault("model-kernel-stale-by-name", "route", "manipdyn/model.py",
           '        object.__setattr__(self, "kernel", KernelForm.of(self))\n',
           '        object.__setattr__(self, "kernel", KernelForm.of.__func__.__dict__.setdefault(self.name, '
           'KernelForm.of(self)))\n',
-          ("tests/unit/test_fast_paths.py",), "a model made from another of the same name computes with the "
+          ("tests/unit/test_one_state_paths.py",), "a model made from another of the same name computes with the "
           "first one's kernel arrays"),
 )
 

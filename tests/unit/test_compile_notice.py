@@ -19,10 +19,11 @@ import numpy as np
 import manipdyn as md
 m = md.load_urdf({aau!r})
 q = md.neutral(m)
-md.difference(m, q, q)                        # two kernels compile: difference_kernel, integrate_kernel
+md.difference(m, q, q)                        # two kernels compile (difference_one, integrate_one: the one-state
+                                              # forms, each compiling its batch kernel within)
 md.integrate(m, q, np.zeros(m.nv))
 """
-NOTICE = ("manipdyn: compiling the kernel difference_kernel (manipdyn/joints.py) for this machine, once: a kernel's "
+NOTICE = ("manipdyn: compiling the kernel difference_one (manipdyn/joints.py) for this machine, once: a kernel's "
           "first call compiles it (seconds to half a minute each, cached on disk afterwards); `manipdyn warmup` "
           "compiles every kernel ahead of use")
 pytestmark = pytest.mark.skipif(_jit.NOJIT, reason="the kernels run uncompiled: nothing compiles")
@@ -48,4 +49,4 @@ def test_the_notice_follows_the_logger(tmp_path):
     lines = stderr_lines(tmp_path / "b", 'logging.basicConfig(level=logging.INFO, format="%(message)s")')
     assert lines[0] == NOTICE and len(lines) == 3
     assert [re.fullmatch(r"compiled (\w+) in \d+\.\d s", x).group(1) for x in lines[1:]] == \
-        ["difference_kernel", "integrate_kernel"]
+        ["difference_one", "integrate_one"]
