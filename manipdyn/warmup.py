@@ -190,7 +190,7 @@ def cold_start(compile_too=True):
         env = dict(NUMBA_CACHE_DIR=tmp) if compile_too else None
         if compile_too:
             out["warmup_s"] = warmup(2, env)
-        r = _run_python(_GROUP_CODE.format(group=None), env)
+        r = _run_python(_GROUP_CODE.format(group=None, progress=None), env)
     out.update(import_s=r["import_s"], first_calls_s=r["first_calls_s"], total_s=r["import_s"] + r["first_calls_s"],
                calls=len(r["calls"]), slowest_call=max(r["calls"], key=r["calls"].get))
     return out

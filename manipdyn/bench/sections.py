@@ -89,6 +89,8 @@ class Case(NamedTuple):
     as_ours: Callable = np.asarray      # result -> array, for the error only
     as_pin: Callable = np.asarray
     by_cond: bool = False   # a solve: the error is divided by cond(M)
+    call: Callable | None = None  # s -> (Pinocchio's function, its arguments) when its route is one call: timed
+    #                               as functools.partial(function, *arguments), the call as a user writes it
 
 
 def _pin_fext(P, pm, pd, pq, f_ext):
@@ -181,13 +183,30 @@ def cases(P, st, Q, V, A, f_ext=True, threads=None):
                                        "computeJointTorqueRegressor", None,
                                        as_pin=lambda Y: np.reshape(Y, (nv, 10 * nb))),   # eigenpy: 1 × n is (n,)
     }
+    one_call = {"rnea": lambda s: (P.rnea, (pm, pd, PQ[s], V[s], A[s])),
+                "aba": lambda s: (P.aba, (pm, pd, PQ[s], V[s], A[s])),
+                "mass_matrix (crba)": lambda s: (P.crba, (pm, pd, PQ[s])),
+                "mass_matrix (lagrange)": lambda s: (P.crba, (pm, pd, PQ[s])),
+                "coriolis_matrix": lambda s: (P.computeCoriolisMatrix, (pm, pd, PQ[s], V[s])),
+                "gravity_torques": lambda s: (P.computeGeneralizedGravity, (pm, pd, PQ[s])),
+                "nonlinear_effects": lambda s: (P.nonLinearEffects, (pm, pd, PQ[s], V[s])),
+                "frame_jacobian": lambda s: (P.computeFrameJacobian, (pm, pd, PQ[s], fid, LWA)),
+                "kinetic_energy": lambda s: (P.computeKineticEnergy, (pm, pd, PQ[s], V[s])),
+                "potential_energy": lambda s: (P.computePotentialEnergy, (pm, pd, PQ[s])),
+                "forward_dynamics (cholesky)": lambda s: (P.aba, (pm, pd, PQ[s], V[s], A[s])),
+                "rnea_derivatives": lambda s: (P.computeRNEADerivatives, (pm, pd, PQ[s], V[s], A[s])),
+                "aba_derivatives": lambda s: (P.computeABADerivatives, (pm, pd, PQ[s], V[s], A[s])),
+                "joint_torque_regressor": lambda s: (P.computeJointTorqueRegressor, (pm, pd, PQ[s], V[s], A[s]))}
+    out = {name: c._replace(call=one_call.get(name)) for name, c in out.items()}
     if f_ext:
         PF = [_pin_fext(P, pm, pd, pq, fx) for pq in PQ]
         out["rnea with f_ext"] = Case(lambda q, v, a: rnea_(model, q, v, a, f_ext=fx),
                                       lambda s: P.rnea(pm, pd, PQ[s], V[s], A[s], PF[s]), "rnea(fext)", None)
         out["aba with f_ext"] = Case(lambda q, v, a: aba_(model, q, v, a, f_ext=fx),
                                      lambda s: P.aba(pm, pd, PQ[s], V[s], A[s], PF[s]), "aba(fext)", None,
-                                     by_cond=True)
+                                     by_cond=True, call=lambda s: (P.aba, (pm, pd, PQ[s], V[s], A[s], PF[s])))
+        out["rnea with f_ext"] = out["rnea with f_ext"]._replace(
+            call=lambda s: (P.rnea, (pm, pd, PQ[s], V[s], A[s], PF[s])))
     return out, PQ, lambda s: float(np.linalg.cond(_sym(P.crba(pm, pd, PQ[s]))))
 
 
@@ -216,7 +235,8 @@ def latency(sts, quick=False):
         for name, c in table.items():
             err = max(_err(c, c.ours(Q[s], V[s], A[s]), c.theirs(s), conds[s]) for s in range(len(Q)))
             q, v, a = Q[0], V[0], A[0]
-            t_ours, t_pin = per_call_pair(lambda: c.ours(q, v, a), lambda: c.theirs(0), repeat=3 if quick else 7)
+            theirs = functools.partial(c.call(0)[0], *c.call(0)[1]) if c.call else functools.partial(c.theirs, 0)
+            t_ours, t_pin = per_call_pair(functools.partial(c.ours, q, v, a), theirs, repeat=3 if quick else 7)
             rows.append(dict(robot=st.label, call=name, pin_route=c.route, ours_us=t_ours * 1e6, pin_us=t_pin * 1e6,
                              ratio=t_ours / t_pin, err=err, note=ERR_NOTE if c.by_cond else ""))
             if name in PLAIN:                    # Pinocchio's figure against a plain timeit of its call, as written

@@ -43,6 +43,7 @@ def test_bench_quick_writes_a_valid_report(tmp_path, monkeypatch):
     assert {r["states"] for r in data["hard_cases"]} == {12}
     assert main(["bench", "--check", "--from", str(tmp_path / "report.json")]) in (0, 1)
     assert data["closed_latency"][0]["err"] <= 1e-10
+    assert data["cold_start"]["measured"], data["cold_start"]      # quick: the first calls from the package's cache
     text = (tmp_path / "report.md").read_text()
     assert "ratio" in text and "pin" in data["machine"]["versions"]
     assert "## Targets" in text and "## What to use when" in text and "**One state or many.**" in text
