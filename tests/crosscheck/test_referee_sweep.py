@@ -136,10 +136,13 @@ def test_an_http_server_is_not_taken_for_a_scheduler(folder, capsys, monkeypatch
     requests = []
 
     class Handler(http.server.BaseHTTPRequestHandler):
+        timeout = 2                                     # (a client that sends no line: dropped, not waited for)
+
         def handle_one_request(self):
             requests.append(self.rfile.read(1))
             super().handle_one_request()
     srv = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    srv.block_on_close = False
     threading.Thread(target=srv.serve_forever, daemon=True).start()
     try:
         address = f"tcp://127.0.0.1:{srv.server_address[1]}"
