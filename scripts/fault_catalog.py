@@ -1255,6 +1255,20 @@ FAULTS = (
           'KernelForm.of(self)))\n',
           ("tests/unit/test_one_state_paths.py",), "a model made from another of the same name computes with the "
           "first one's kernel arrays"),
+    Fault("route-one-state-v-dtype-unchecked", "route", "manipdyn/dynamics/route.py",
+          "type(v) is _ND and v.dtype is _F64 and", "type(v) is _ND and",
+          ("tests/unit/test_one_state_paths.py",), "a one-state call hands the kernel a v of another dtype (q float64), "
+          "read as float64"),
+    Fault("route-one-state-a-shape-unchecked", "route", "manipdyn/dynamics/route.py",
+          " and a.shape == K.v_shape)", ")",
+          ("tests/unit/test_one_state_paths.py",), "a one-state call hands the kernel an a of another length, read past "
+          "its end"),
+    Fault("route-one-state-q-dtype-unchecked", "route", "manipdyn/dynamics/route.py",
+          "q.dtype is _F64 and q.shape == K.q_shape", "q.shape == K.q_shape",
+          ("tests/unit/test_one_state_paths.py",), "a one-state call of a route hands the kernel a q of another dtype"),
+    Fault("energy-one-state-velocity-dropped", "kinematics", "manipdyn/dynamics/energy.py",
+          "    return energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw)", "    return energy_of(mdl, q, q[:0], Rl, pl, Rw, pw, ww, vw)",
+          (_TERMS,), "kinetic_energy of one state returns the potential energy"),
 )
 
 

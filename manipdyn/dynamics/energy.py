@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import A1, A2, MODEL, entry, njit
-from .forward_kinematics import fk_pass
+from .forward_kinematics import fk_pass, fk_scratch
 from .kernel_inputs import nonfinite_input
 from .model_arrays import kernel_arrays, unpack
 from .arguments import as_batch, fast, fast_shape, raise_kernel_error
@@ -52,8 +52,7 @@ def energy_kernel(I, F, Q, V, out):
     """out[s] = T (V (N, nv)) or V (V with no columns: potential energy) of every state of Q (N, nq). Returns
     its status (dynamics/status.py; a non-finite out[s]: index s)."""
     nb, mdl = I.shape[1], unpack(I, F)
-    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
-    Rl, pl, Rw, pw, ww, vw = R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:]
+    Rl, pl, Rw, pw, ww, vw = fk_scratch(nb)
     for s in range(Q.shape[0]):
         bad = nonfinite_input(Q, V, s)
         if bad >= 0:
@@ -64,13 +63,15 @@ def energy_kernel(I, F, Q, V, out):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def energy_one(I, F, q, v):
-    """The energy of one state q (nq,), v (nv,) or (0,) (potential): ``energy_kernel`` on row views; NaN for a
-    non-finite input or result."""
-    out = np.empty(1)[::1]
-    code = energy_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], out)
-    return out[0] if code == -1 else np.nan
+    """The energy of one state q (nq,), v (nv,) or (0,) (potential): ``energy_of``, as ``energy_kernel`` runs it on
+    a state (without its loop, row views and result array: 0.61 → 0.40 µs a call in a compiled loop, ur5). A
+    non-finite input makes a non-finite energy (no product or sum of the passes drops a NaN or ±inf), on which the
+    public call takes the checked path, which names the input."""
+    nb, mdl = I.shape[1], unpack(I, F)
+    Rl, pl, Rw, pw, ww, vw = fk_scratch(nb)
+    return energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw)
 
 
 @njit(cache=True)

@@ -28,6 +28,13 @@ def fk_pass(mdl, q, v, Rl, pl, Rw, pw, ww, vw):
 
 
 @njit(cache=True, inline="always")
+def fk_scratch(nb):
+    """Scratch of ``fk_pass`` for nb bodies: (Rl, pl, Rw, pw, ww, vw), views of two arrays."""
+    R3, B3 = np.empty((2 * nb, 3, 3)), np.empty((4 * nb, 3))
+    return R3[:nb], B3[:nb], R3[nb:], B3[nb:2 * nb], B3[2 * nb:3 * nb], B3[3 * nb:]
+
+
+@njit(cache=True, inline="always")
 def fk_path(mdl, q, v, tip, path, Rl, pl, Rw, pw, ww, vw):
     """``fk_pass`` for the bodies from the root to body ``tip`` only (its support: what a frame on ``tip``
     depends on; path (nb,) int scratch). Other bodies' entries are left as they were."""

@@ -138,7 +138,7 @@ def gravity_kernel(I, F, Q, tau):
     return bias_kernel(I, F, Q, Q[:, :0], tau)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bias_one(I, F, q, v, tau):
     """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_steps_one`` with zero
     accelerations ((I, F) in z-aligned frames)."""

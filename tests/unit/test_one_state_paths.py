@@ -62,3 +62,26 @@ def test_a_changed_model_is_computed_with_its_own_arrays():
         np.allclose(md.rnea(heavy, q, v, a), md.rnea(heavy, Q, V, A)[0], rtol=1e-14, atol=0)
     assert np.allclose(md.mass_matrix(heavy, q), 2 * md.mass_matrix(MODEL, q), rtol=1e-13, atol=0)
     assert np.array_equal(md.rnea(MODEL, q, v, a), before)                   # the first model unchanged
+
+
+@pytest.mark.parametrize("which", [0, 1, 2])
+@pytest.mark.parametrize("name", ["rnea", "aba", "nonlinear_effects", "frame_jacobian"])
+def test_one_argument_of_another_dtype_gives_the_float64_numbers(name, which):
+    """One of q, v, a of another dtype (the others float64): each is checked on its own before the kernel."""
+    Q, V, A = random_states(MODEL, 1, np.random.default_rng(8))
+    x = [3 * Q[0], 3 * V[0], 3 * A[0]]
+    x[which] = x[which].astype(np.float32)
+    want = CALLS[name](MODEL, *(y.astype(np.float64) for y in x))
+    assert np.array_equal(CALLS[name](MODEL, *x), want)
+
+
+@pytest.mark.parametrize("name, which", [("rnea", "q"), ("rnea", "v"), ("rnea", "a"), ("aba", "q"), ("aba", "v"),
+                                         ("aba", "tau"), ("nonlinear_effects", "q"), ("nonlinear_effects", "v")])
+def test_one_argument_of_another_length_is_named(name, which):
+    """One of q, v, a one entry short (the others right): an InputError naming it, never a kernel reading past it."""
+    Q, V, A = random_states(MODEL, 1, np.random.default_rng(9))
+    x = [Q[0], V[0], A[0]]
+    k = ("q", "v").index(which) if which in ("q", "v") else 2
+    x[k] = x[k][:-1]
+    with pytest.raises(md.InputError, match=rf"^{which} has shape \({x[k].size},\)"):
+        CALLS[name](MODEL, *x)
