@@ -34,11 +34,24 @@ call of ``manipdyn.aba`` runs the same machine code), so the numbers are the pub
     mass_matrix(I, F, q, M)                M(q), (nv, nv), by the CRBA              (``manipdyn.mass_matrix``)
     aba(I, F, q, v, tau, qdd)              q̈ by the articulated-body algorithm      (``manipdyn.aba``)
     integrate(I, q, v, out)                q ⊕ v (unit time; returns OK)            (``manipdyn.integrate``)
+    rnea_fext(I, F, q, v, a, f, n, W, tau) τ with one wrench (f, n) at W's frame     (``manipdyn.rnea``, ``f_ext``)
+    aba_fext(I, F, q, v, tau, f, n, W, qdd) q̈ with one wrench                        (``manipdyn.aba``, ``f_ext``)
+    frame_placement(I, F, q, X, R, p)      the pose of X's frame: R (3, 3), p (3,)  (``manipdyn.frame_placement``)
+    frame_jacobian(I, F, q, X, J)          its Jacobian J (6, nv)                   (``manipdyn.frame_jacobian``)
+    kinetic_energy(I, F, q, v)             T (a float; NaN: not finite)            (``manipdyn.kinetic_energy``)
+    potential_energy(I, F, q)              V                                        (``manipdyn.potential_energy``)
+
+W = ``wrench_row(model, frame, f_ext_frame)`` (14,) and X = ``frame_row(model, frame, reference)`` (5, 3) name a frame
+for compiled code, in the arrays' frames (made once, in Python). The wrench calls take one wrench [force f; moment n]
+(3,) each, applied by the environment on the frame's body about the frame's origin, in the frame's axes ("local") or
+the world's ("world") — the public calls' ``f_ext={frame: (f, n)}``, to the last bit. The frame calls and the
+energies give the public calls' numbers to rounding (1e-15 relative: they run in the z-aligned body frames of
+``arrays``).
 
 q is (nq,) in Pinocchio's order, v, a, τ (nv,); arrays of any strides. The shapes are not checked inside
 compiled code: give arrays of the model's sizes (``check_shapes`` checks them once, in Python). Models with mimic
 joints (``MimicModel``) are refused by ``arrays``; a closed chain's arrays give its spanning tree's dynamics
-(its closures are ``manipdyn.constrained_forward_dynamics``'). External wrenches are not offered here yet.
+(its closures are ``manipdyn.constrained_forward_dynamics``').
 
 Compiling: the kernels come from manipdyn's disk cache (``manipdyn warmup``); your function compiles once with
 them inlined or linked. numba caches a function (``cache=True``) by its own source file only: after upgrading
@@ -49,16 +62,20 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit import njit
-from .dynamics.aba import aba_one
+from .dynamics.aba import aba_fext_one, aba_one
+from .dynamics.arguments import frame_of
 from .dynamics.crba import crba_one
-from .dynamics.rnea import bias_one, gravity_one, rnea_one
+from .dynamics.energy import energy_one
+from .dynamics.kinematics import REFERENCES, jacobian_one, placement_one
+from .dynamics.rnea import bias_one, gravity_one, rnea_fext_one, rnea_one
 from .dynamics.status import OK
 from .errors import InputError, NumericalError
 from .joints import integrate_kernel
 from .model import MimicModel, Model
 
 __all__ = ["OK", "arrays", "check", "check_shapes", "rnea", "nonlinear_effects", "gravity_torques", "mass_matrix",
-           "aba", "integrate"]
+           "aba", "integrate", "rnea_fext", "aba_fext", "frame_placement", "frame_jacobian", "kinetic_energy",
+           "potential_energy", "wrench_row", "frame_row"]
 
 # Each function hands the kernel full slices of its arrays (x[::1], M[:, :]): a view of layout "any strides",
 # the type the kernels are compiled and cached for (_jit's A1, A2), so that a caller's C-ordered arrays reach the
@@ -102,6 +119,42 @@ def integrate(I, q, v, out):
     return OK
 
 
+@njit(inline="always")
+def rnea_fext(I, F, q, v, a, f, n, W, tau):
+    """τ (nv,) into tau with one external wrench [f; n] at the frame of W (``wrench_row``); its status."""
+    return rnea_fext_one(I, F, q[::1], v[::1], a[::1], f[::1], n[::1], W[:13], W[13] > 0.0, tau[::1])
+
+
+@njit(inline="always")
+def aba_fext(I, F, q, v, tau, f, n, W, qdd):
+    """q̈ (nv,) into qdd with one external wrench [f; n] at the frame of W (``wrench_row``); its status."""
+    return aba_fext_one(I, F, q[::1], v[::1], tau[::1], f[::1], n[::1], W[:13], W[13] > 0.0, qdd[::1])
+
+
+@njit(inline="always")
+def frame_placement(I, F, q, X, R, p):
+    """The world pose of the frame of X (``frame_row``): R (3, 3), p (3,), x_world = R x + p; its status."""
+    return placement_one(I, F, q[::1], X[:, :], R[:, :], p[::1])
+
+
+@njit(inline="always")
+def frame_jacobian(I, F, q, X, J):
+    """J (6, nv) into J: the frame of X's velocity [linear; angular] = J q̇ (``frame_row``'s reference); its status."""
+    return jacobian_one(I, F, q[::1], X[:, :], J[:, :])
+
+
+@njit(inline="always")
+def kinetic_energy(I, F, q, v):
+    """T of one state (a float; NaN or ±inf for a non-finite input)."""
+    return energy_one(I, F, q[::1], v[::1])
+
+
+@njit(inline="always")
+def potential_energy(I, F, q):
+    """V of one state (a float; NaN or ±inf for a non-finite input)."""
+    return energy_one(I, F, q[::1], q[:0])
+
+
 def arrays(model):
     """(I, F): the model's arrays as the compiled calls take them — an int64 (5, nb) and a float64 (·, 3, 3) array,
     C-ordered and writable (copies: the kernels never write them), laid out as ``dynamics/model_arrays.py``
@@ -116,8 +169,30 @@ def arrays(model):
     return np.array(I, np.int64, order="C"), np.array(F, np.float64, order="C")
 
 
+def wrench_row(model, frame, f_ext_frame="local"):
+    """W (14,): where ``rnea_fext`` and ``aba_fext`` apply a wrench — the link or frame ``frame``, the wrench given in
+    its axes ("local") or the world's ("world") — for the arrays of ``arrays(model)``."""
+    if f_ext_frame not in ("local", "world"):
+        raise InputError(f"compiled.wrench_row: f_ext_frame must be 'local' or 'world', not {f_ext_frame!r}")
+    P = model.kernel.wrench_rows[frame_of(model, frame).name, f_ext_frame]
+    return np.append(P, 1.0 if f_ext_frame == "world" else 0.0)
+
+
+def frame_row(model, frame, reference="local_world_aligned"):
+    """X (5, 3): the link or frame ``frame`` for ``frame_placement`` and ``frame_jacobian`` (``reference``: the
+    Jacobian's axes, "local_world_aligned" or "local", as the public calls'), for the arrays of ``arrays(model)``."""
+    if reference not in REFERENCES:
+        raise InputError(f"compiled.frame_row: reference must be one of {', '.join(REFERENCES)}, not {reference!r}")
+    b, X = model.kernel.lane_frame_rows[frame_of(model, frame).name]
+    return np.vstack([X, [float(b), 0.0, float(reference == "local")]])
+
+
 _SHAPES = {"rnea": ("q", "v", "a", "tau"), "nonlinear_effects": ("q", "v", "h"), "gravity_torques": ("q", "g"),
-           "mass_matrix": ("q", "M"), "aba": ("q", "v", "tau", "qdd"), "integrate": ("q", "v", "out")}
+           "mass_matrix": ("q", "M"), "aba": ("q", "v", "tau", "qdd"), "integrate": ("q", "v", "out"),
+           "rnea_fext": ("q", "v", "a", "f", "n", "tau"), "aba_fext": ("q", "v", "tau", "f", "n", "qdd"),
+           "frame_placement": ("q", "R", "p"), "frame_jacobian": ("q", "J"), "kinetic_energy": ("q", "v"),
+           "potential_energy": ("q",)}
+_SIZES = {"M": ("nv", "nv"), "J": (6, "nv"), "R": (3, 3), "p": (3,), "f": (3,), "n": (3,), "q": ("nq",), "out": ("nq",)}
 
 
 def check_shapes(model, name, *state):
@@ -129,20 +204,34 @@ def check_shapes(model, name, *state):
     if len(state) != len(names):
         raise InputError(f"compiled.{name} takes {', '.join(names)}: {len(names)} arrays, not {len(state)}")
     for label, x in zip(names, state):
-        want = (model.nv, model.nv) if label == "M" else (model.nq,) if label in ("q", "out") else (model.nv,)
+        want = tuple(getattr(model, d) if isinstance(d, str) else d for d in _SIZES.get(label, ("nv",)))
         if not isinstance(x, np.ndarray) or x.dtype != np.float64 or x.shape != want:
             got = f"{x.dtype} {x.shape}" if isinstance(x, np.ndarray) else type(x).__name__
             raise InputError(f"compiled.{name}: {label} must be a float64 array of shape {want}, not {got}")
 
 
-def check(model, name, status, *state):
+def check(model, name, status, *state, frame=None, f_ext_frame="local", reference="local_world_aligned"):
     """Nothing if ``status`` is ``OK``; else the typed error that the public call ``name`` raises on the same state
-    (the inputs, without the result array): it is made again, in Python, and names the array, entry, joint or
-    result at fault."""
+    (the inputs, without the result array; for ``rnea_fext`` and ``aba_fext`` q, v, a or τ, f, n): it is made again,
+    in Python, and names the array, entry, joint or result at fault. ``frame`` (and ``f_ext_frame``, ``reference``):
+    the frame of a wrench or frame call, as given to ``wrench_row`` or ``frame_row``."""
     if int(status) == OK:
         return
     import manipdyn as md
-    if name not in _SHAPES or name == "integrate":
-        raise InputError(f"compiled.check: no compiled call {name!r} that returns a failing status")
-    getattr(md, name)(model, *state)
-    raise NumericalError(f"compiled.{name} returned status {int(status)} where manipdyn.{name} computes the state")
+    if name not in _SHAPES or name in ("integrate", "kinetic_energy", "potential_energy"):
+        raise InputError(f"compiled.check: no compiled call {name!r} that returns a failing status (the energies "
+                         f"return their value: NaN or ±inf for a non-finite input)")
+    if name in ("rnea_fext", "aba_fext", "frame_placement", "frame_jacobian") and frame is None:
+        raise InputError(f"compiled.check: {name} needs frame=, the frame given to "
+                         f"{'wrench_row' if name.endswith('fext') else 'frame_row'}")
+    if name.endswith("_fext"):
+        q, v, x, f, n = state
+        getattr(md, name[:-5])(model, q, v, x, f_ext={frame: (f, n)}, f_ext_frame=f_ext_frame)
+    elif name == "frame_placement":
+        md.frame_placement(model, *state, frame)
+    elif name == "frame_jacobian":
+        md.frame_jacobian(model, *state, frame, reference)
+    else:
+        getattr(md, name)(model, *state)
+    raise NumericalError(f"compiled.{name} returned status {int(status)} where manipdyn.{name.removesuffix('_fext')} "
+                         f"computes the state")

@@ -1269,6 +1269,14 @@ FAULTS = (
     Fault("energy-one-state-velocity-dropped", "kinematics", "manipdyn/dynamics/energy.py",
           "    return energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw)", "    return energy_of(mdl, q, q[:0], Rl, pl, Rw, pw, ww, vw)",
           (_TERMS,), "kinetic_energy of one state returns the potential energy"),
+    Fault("compiled-aba-fext-world-flag-inverted", "route", "manipdyn/compiled.py",
+          "tau[::1], f[::1], n[::1], W[:13], W[13] > 0.0, qdd[::1])",
+          "tau[::1], f[::1], n[::1], W[:13], W[13] < 0.0, qdd[::1])",
+          ("tests/batch/test_compiled.py",), "compiled.aba_fext reads a wrench in the frame's axes as one in the "
+          "world's, and the reverse"),
+    Fault("compiled-frame-row-reference-inverted", "kinematics", "manipdyn/compiled.py",
+          'float(reference == "local")]])', 'float(reference != "local")]])',
+          ("tests/batch/test_compiled.py",), "compiled.frame_row gives the frame's axes for world-aligned ones"),
 )
 
 

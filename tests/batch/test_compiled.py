@@ -133,3 +133,69 @@ def test_arrays_and_shapes_are_checked_in_python():
         compiled.check_shapes(model, "crba", md.neutral(model))
     with pytest.raises(InputError, match="expected a manipdyn Model, got str"):
         compiled.arrays("aau_arm.urdf")
+
+
+@numba.njit
+def frame_calls(I, F, Q, V, A, f, n, W, X, XL, tau, qdd, R, p, J, JL, E):
+    """The wrench, frame and energy calls on each state; the worst status (E[s] = T, V)."""
+    worst = compiled.OK
+    for s in range(Q.shape[0]):
+        for status in (compiled.rnea_fext(I, F, Q[s], V[s], A[s], f, n, W, tau[s]),
+                       compiled.aba_fext(I, F, Q[s], V[s], A[s], f, n, W, qdd[s]),
+                       compiled.frame_placement(I, F, Q[s], X, R[s], p[s]),
+                       compiled.frame_jacobian(I, F, Q[s], X, J[s]), compiled.frame_jacobian(I, F, Q[s], XL, JL[s])):
+            worst = max(worst, status)
+        E[s, 0], E[s, 1] = compiled.kinetic_energy(I, F, Q[s], V[s]), compiled.potential_energy(I, F, Q[s])
+    return worst
+
+
+@pytest.mark.parametrize("f_ext_frame", ["local", "world"])
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_wrench_frame_and_energy_calls_give_the_public_calls_numbers(name, f_ext_frame):
+    """With one wrench: the public calls' numbers to the last bit (the same kernels, the same wrench row); the frame
+    calls and energies run in the arrays' z-aligned body frames: the public numbers to rounding."""
+    model = MODELS[name]
+    Q, V, A = random_states(model, 10, np.random.default_rng(5))
+    n_, nv, frame = Q.shape[0], model.nv, model.body_names[-1]
+    f, n = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.4])
+    tau, qdd = np.empty((n_, nv)), np.empty((n_, nv))
+    R, p, J, JL, E = np.empty((n_, 3, 3)), np.empty((n_, 3)), np.empty((n_, 6, nv)), np.empty((n_, 6, nv)), np.empty((n_, 2))
+    rows = compiled.wrench_row(model, frame, f_ext_frame), compiled.frame_row(model, frame), \
+        compiled.frame_row(model, frame, "local")
+    assert frame_calls(*compiled.arrays(model), Q, V, A, f, n, *rows, tau, qdd, R, p, J, JL, E) == compiled.OK
+    for s in range(n_):
+        q, v, a, wrench = Q[s], V[s], A[s], {frame: (f, n)}
+        assert np.array_equal(tau[s], md.rnea(model, q, v, a, f_ext=wrench, f_ext_frame=f_ext_frame))
+        assert np.array_equal(qdd[s], md.aba(model, q, v, a, f_ext=wrench, f_ext_frame=f_ext_frame))
+        R0, p0 = md.frame_placement(model, q, frame)
+        assert np.allclose(R[s], R0, rtol=0, atol=1e-14) and np.allclose(p[s], p0, rtol=0, atol=1e-14)
+        for got, reference in ((J[s], "local_world_aligned"), (JL[s], "local")):
+            want = md.frame_jacobian(model, q, frame, reference)
+            assert np.allclose(got, want, rtol=0, atol=1e-14 * max(1.0, np.abs(want).max()))
+        T, Vp = md.kinetic_energy(model, q, v), md.potential_energy(model, q)
+        assert abs(E[s, 0] - T) <= 1e-13 * max(1.0, abs(T)) and abs(E[s, 1] - Vp) <= 1e-13 * max(1.0, abs(Vp))
+
+
+def test_wrench_and_frame_calls_name_their_faults():
+    model = MODELS["aau_arm"]
+    I, F = compiled.arrays(model)
+    frame, q, v = model.body_names[-1], md.neutral(model), np.zeros(model.nv)
+    f, n, tau, J = np.array([np.inf, 0.0, 0.0]), np.zeros(3), np.empty(model.nv), np.empty((6, model.nv))
+    status = compiled.rnea_fext(I, F, q, v, v, f, n, compiled.wrench_row(model, frame), tau)
+    assert status != compiled.OK
+    with pytest.raises(InputError, match=r"f_ext\['" + frame + r"'\]"):
+        compiled.check(model, "rnea_fext", status, q, v, v, f, n, frame=frame)
+    q[1] = np.nan
+    status = compiled.frame_jacobian(I, F, q, compiled.frame_row(model, frame), J)
+    with pytest.raises(InputError, match=r"q\[1\] \(joint 'joint2'\) is nan"):
+        compiled.check(model, "frame_jacobian", status, q, frame=frame)
+    assert np.isnan(compiled.potential_energy(I, F, q))
+    with pytest.raises(InputError, match="needs frame="):
+        compiled.check(model, "frame_jacobian", status, q)
+    with pytest.raises(InputError, match="closest|unknown|no link or frame"):
+        compiled.frame_row(model, "no_such_link")
+    with pytest.raises(InputError, match="f_ext_frame must be 'local' or 'world'"):
+        compiled.wrench_row(model, frame, "body")
+    compiled.check_shapes(model, "frame_jacobian", md.neutral(model), np.zeros((6, model.nv)))
+    with pytest.raises(InputError, match=r"compiled.rnea_fext: n must be a float64 array of shape \(3,\)"):
+        compiled.check_shapes(model, "rnea_fext", md.neutral(model), v, v, np.zeros(3), np.zeros(4), v)
