@@ -40,13 +40,15 @@ call of ``manipdyn.aba`` runs the same machine code), so the numbers are the pub
     frame_jacobian(I, F, q, X, J)          its Jacobian J (6, nv)                   (``manipdyn.frame_jacobian``)
     kinetic_energy(I, F, q, v)             T (a float; NaN: not finite)            (``manipdyn.kinetic_energy``)
     potential_energy(I, F, q)              V                                        (``manipdyn.potential_energy``)
+    rnea_derivatives(I, F, q, v, a, dq, dv, da)   ∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ (nv, nv)     (``manipdyn.rnea_derivatives``)
+    aba_derivatives(I, F, q, v, tau, qdd, dq, dv, Minv)  q̈, ∂q̈/∂q, ∂q̈/∂q̇, M⁻¹  (``manipdyn.aba_derivatives``)
 
 W = ``wrench_row(model, frame, f_ext_frame)`` (14,) and X = ``frame_row(model, frame, reference)`` (5, 3) name a frame
 for compiled code, in the arrays' frames (made once, in Python). The wrench calls take one wrench [force f; moment n]
 (3,) each, applied by the environment on the frame's body about the frame's origin, in the frame's axes ("local") or
-the world's ("world") — the public calls' ``f_ext={frame: (f, n)}``, to the last bit. The frame calls and the
-energies give the public calls' numbers to rounding (1e-15 relative: they run in the z-aligned body frames of
-``arrays``).
+the world's ("world") — the public calls' ``f_ext={frame: (f, n)}``, to the last bit. The frame calls, the
+energies and the derivatives give the public calls' numbers to rounding (they run in the z-aligned body frames of
+``arrays``); the derivatives' matrices are C-ordered (nv, nv) arrays (another layout compiles the kernel anew).
 
 q is (nq,) in Pinocchio's order, v, a, τ (nv,); arrays of any strides. The shapes are not checked inside
 compiled code: give arrays of the model's sizes (``check_shapes`` checks them once, in Python). Models with mimic
@@ -65,6 +67,7 @@ from ._jit import njit
 from .dynamics.aba import aba_fext_one, aba_one
 from .dynamics.arguments import frame_of
 from .dynamics.crba import crba_one
+from .dynamics.derivatives import aba_derivatives_one, rnea_derivatives_one
 from .dynamics.energy import energy_one
 from .dynamics.kinematics import REFERENCES, jacobian_one, placement_one
 from .dynamics.rnea import bias_one, gravity_one, rnea_fext_one, rnea_one
@@ -75,7 +78,7 @@ from .model import MimicModel, Model
 
 __all__ = ["OK", "arrays", "check", "check_shapes", "rnea", "nonlinear_effects", "gravity_torques", "mass_matrix",
            "aba", "integrate", "rnea_fext", "aba_fext", "frame_placement", "frame_jacobian", "kinetic_energy",
-           "potential_energy", "wrench_row", "frame_row"]
+           "potential_energy", "rnea_derivatives", "aba_derivatives", "wrench_row", "frame_row"]
 
 # Each function hands the kernel full slices of its arrays (x[::1], M[:, :]): a view of layout "any strides",
 # the type the kernels are compiled and cached for (_jit's A1, A2), so that a caller's C-ordered arrays reach the
@@ -144,6 +147,18 @@ def frame_jacobian(I, F, q, X, J):
 
 
 @njit(inline="always")
+def rnea_derivatives(I, F, q, v, a, dq, dv, da):
+    """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ = M (nv, nv, C-ordered) into dq, dv, da; its status."""
+    return rnea_derivatives_one(I, F, q[::1], v[::1], a[::1], dq, dv, da)
+
+
+@njit(inline="always")
+def aba_derivatives(I, F, q, v, tau, qdd, dq, dv, Minv):
+    """q̈ (nv,) into qdd, ∂q̈/∂q, ∂q̈/∂q̇ and M⁻¹ (nv, nv, C-ordered) into dq, dv, Minv; its status."""
+    return aba_derivatives_one(I, F, I, F, q[::1], v[::1], tau[::1], qdd[::1], dq, dv, Minv)
+
+
+@njit(inline="always")
 def kinetic_energy(I, F, q, v):
     """T of one state (a float; NaN or ±inf for a non-finite input)."""
     return energy_one(I, F, q[::1], v[::1])
@@ -191,8 +206,10 @@ _SHAPES = {"rnea": ("q", "v", "a", "tau"), "nonlinear_effects": ("q", "v", "h"),
            "mass_matrix": ("q", "M"), "aba": ("q", "v", "tau", "qdd"), "integrate": ("q", "v", "out"),
            "rnea_fext": ("q", "v", "a", "f", "n", "tau"), "aba_fext": ("q", "v", "tau", "f", "n", "qdd"),
            "frame_placement": ("q", "R", "p"), "frame_jacobian": ("q", "J"), "kinetic_energy": ("q", "v"),
-           "potential_energy": ("q",)}
-_SIZES = {"M": ("nv", "nv"), "J": (6, "nv"), "R": (3, 3), "p": (3,), "f": (3,), "n": (3,), "q": ("nq",), "out": ("nq",)}
+           "potential_energy": ("q",), "rnea_derivatives": ("q", "v", "a", "dq", "dv", "da"),
+           "aba_derivatives": ("q", "v", "tau", "qdd", "dq", "dv", "Minv")}
+_SIZES = {**{m: ("nv", "nv") for m in ("M", "dq", "dv", "da", "Minv")}, "J": (6, "nv"), "R": (3, 3), "p": (3,),
+          "f": (3,), "n": (3,), "q": ("nq",), "out": ("nq",)}     # every other array: (nv,)
 
 
 def check_shapes(model, name, *state):

@@ -1277,6 +1277,9 @@ FAULTS = (
     Fault("compiled-frame-row-reference-inverted", "kinematics", "manipdyn/compiled.py",
           'float(reference == "local")]])', 'float(reference != "local")]])',
           ("tests/batch/test_compiled.py",), "compiled.frame_row gives the frame's axes for world-aligned ones"),
+    Fault("compiled-aba-derivatives-swapped", "derivatives", "manipdyn/compiled.py",
+          "qdd[::1], dq, dv, Minv)", "qdd[::1], dv, dq, Minv)",
+          ("tests/batch/test_compiled.py",), "compiled.aba_derivatives writes ∂q̈/∂q̇ into dq and ∂q̈/∂q into dv"),
 )
 
 

@@ -199,3 +199,29 @@ def test_wrench_and_frame_calls_name_their_faults():
     compiled.check_shapes(model, "frame_jacobian", md.neutral(model), np.zeros((6, model.nv)))
     with pytest.raises(InputError, match=r"compiled.rnea_fext: n must be a float64 array of shape \(3,\)"):
         compiled.check_shapes(model, "rnea_fext", md.neutral(model), v, v, np.zeros(3), np.zeros(4), v)
+
+
+@numba.njit
+def derivative_calls(I, F, Q, V, A, Dr, Da, qdd):
+    """rnea_derivatives and aba_derivatives on each state into Dr[s], Da[s] (3, nv, nv); the worst status."""
+    worst = compiled.OK
+    for s in range(Q.shape[0]):
+        worst = max(worst, compiled.rnea_derivatives(I, F, Q[s], V[s], A[s], Dr[s, 0], Dr[s, 1], Dr[s, 2]))
+        worst = max(worst, compiled.aba_derivatives(I, F, Q[s], V[s], A[s], qdd[s], Da[s, 0], Da[s, 1], Da[s, 2]))
+    return worst
+
+
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_derivative_calls_give_the_public_calls_numbers(name):
+    """The derivatives run on the arrays' z-aligned body frames: the public calls' numbers to rounding; q̈ of
+    aba_derivatives is the public aba's to the last bit (the same one-state ABA)."""
+    model = MODELS[name]
+    Q, V, A = random_states(model, 5, np.random.default_rng(6))
+    n, nv = Q.shape[0], model.nv
+    Dr, Da, qdd = np.empty((n, 3, nv, nv)), np.empty((n, 3, nv, nv)), np.empty((n, nv))
+    assert derivative_calls(*compiled.arrays(model), Q, V, A, Dr, Da, qdd) == compiled.OK
+    for s in range(n):
+        q, v, a = Q[s], V[s], A[s]
+        assert np.array_equal(qdd[s], md.aba(model, q, v, a))
+        for got, want in zip([*Dr[s], *Da[s]], [*md.rnea_derivatives(model, q, v, a), *md.aba_derivatives(model, q, v, a)]):
+            assert np.allclose(got, want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
