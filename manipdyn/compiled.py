@@ -33,7 +33,7 @@ call of ``manipdyn.aba`` runs the same machine code), so the numbers are the pub
     gravity_torques(I, F, q, g)            g(q)                                     (``manipdyn.gravity_torques``)
     mass_matrix(I, F, q, M)                M(q), (nv, nv), by the CRBA              (``manipdyn.mass_matrix``)
     aba(I, F, q, v, tau, qdd)              q̈ by the articulated-body algorithm      (``manipdyn.aba``)
-    integrate(I, q, v, out)                q ⊕ v (unit time; returns OK)            (``manipdyn.integrate``)
+    integrate(I, q, v, out)                q ⊕ v (unit time; OK or WRONG_SIZES)     (``manipdyn.integrate``)
     rnea_fext(I, F, q, v, a, f, n, W, tau) τ with one wrench (f, n) at W's frame     (``manipdyn.rnea``, ``f_ext``)
     aba_fext(I, F, q, v, tau, f, n, W, qdd) q̈ with one wrench                        (``manipdyn.aba``, ``f_ext``)
     frame_placement(I, F, q, X, R, p)      the pose of X's frame: R (3, 3), p (3,)  (``manipdyn.frame_placement``)
@@ -50,8 +50,9 @@ the world's ("world") — the public calls' ``f_ext={frame: (f, n)}``, to the la
 energies and the derivatives give the public calls' numbers to rounding (they run in the z-aligned body frames of
 ``arrays``); the derivatives' matrices are C-ordered (nv, nv) arrays (another layout compiles the kernel anew).
 
-q is (nq,) in Pinocchio's order, v, a, τ (nv,); arrays of any strides. The shapes are not checked inside
-compiled code: give arrays of the model's sizes (``check_shapes`` checks them once, in Python). Models with mimic
+q is (nq,) in Pinocchio's order, v, a, τ (nv,); arrays of any strides. Every call checks the sizes of its arrays
+against the model's before it reads one, and returns ``WRONG_SIZES`` (NaN for an energy) for another size (numba
+checks the dtypes and dimensions when your function compiles; ``check_shapes`` names a wrong array, in Python). Models with mimic
 joints (``MimicModel``) are refused by ``arrays``; a closed chain's arrays give its spanning tree's dynamics
 (its closures are ``manipdyn.constrained_forward_dynamics``').
 
@@ -71,18 +72,38 @@ from .dynamics.derivatives import aba_derivatives_one, rnea_derivatives_one
 from .dynamics.energy import energy_one
 from .dynamics.kinematics import REFERENCES, jacobian_one, placement_one
 from .dynamics.rnea import bias_one, gravity_one, rnea_fext_one, rnea_one
-from .dynamics.status import OK
+from .dynamics.kernel_inputs import model_sizes, q_sized, sized
+from .dynamics.status import OK, WRONG_SIZES
 from .errors import InputError, NumericalError
 from .joints import integrate_kernel
 from .model import MimicModel, Model
 
-__all__ = ["OK", "arrays", "check", "check_shapes", "rnea", "nonlinear_effects", "gravity_torques", "mass_matrix",
-           "aba", "integrate", "rnea_fext", "aba_fext", "frame_placement", "frame_jacobian", "kinetic_energy",
+__all__ = ["OK", "WRONG_SIZES", "arrays", "check", "check_shapes", "rnea", "nonlinear_effects", "gravity_torques",
+           "mass_matrix", "aba", "integrate", "rnea_fext", "aba_fext", "frame_placement", "frame_jacobian", "kinetic_energy",
            "potential_energy", "rnea_derivatives", "aba_derivatives", "wrench_row", "frame_row"]
 
 # Each function hands the kernel full slices of its arrays (x[::1], M[:, :]): a view of layout "any strides",
 # the type the kernels are compiled and cached for (_jit's A1, A2), so that a caller's C-ordered arrays reach the
 # cached machine code instead of compiling the kernels again for another layout.
+
+
+@njit(inline="always")
+def square(I, M):
+    """True for an (nv, nv) matrix of the model of I."""
+    nv = model_sizes(I)[1]
+    return M.shape[0] == nv and M.shape[1] == nv
+
+
+@njit(inline="always")
+def frame_fits(I, X):
+    """True for a frame row X (5, 3) of ``frame_row`` on a body of the model of I (or its base, −1)."""
+    return X.shape[0] == 5 and X.shape[1] == 3 and -1 <= X[4, 0] < I.shape[1]
+
+
+@njit(inline="always")
+def row_fits(I, W, n, at):
+    """True for a row W (n,) of ``wrench_row`` whose body (W[at]) is one of the model of I (or its base, −1)."""
+    return W.shape[0] == n and -1 <= W[at] < I.shape[1]
 
 
 @njit(inline="always")
@@ -117,7 +138,9 @@ def aba(I, F, q, v, tau, qdd):
 
 @njit(inline="always")
 def integrate(I, q, v, out):
-    """out (nq,) = q ⊕ v (Pinocchio's integrate, unit time: pass dt · v for a step); OK."""
+    """out (nq,) = q ⊕ v (Pinocchio's integrate, unit time: pass dt · v for a step); OK (WRONG_SIZES)."""
+    if not (sized(I, q, (v,)) and out.shape[0] == q.shape[0]):
+        return WRONG_SIZES
     integrate_kernel(I[1], I[2], I[3], q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])
     return OK
 
@@ -125,48 +148,64 @@ def integrate(I, q, v, out):
 @njit(inline="always")
 def rnea_fext(I, F, q, v, a, f, n, W, tau):
     """τ (nv,) into tau with one external wrench [f; n] at the frame of W (``wrench_row``); its status."""
+    if not row_fits(I, W, 14, 12):
+        return WRONG_SIZES
     return rnea_fext_one(I, F, q[::1], v[::1], a[::1], f[::1], n[::1], W[:13], W[13] > 0.0, tau[::1])
 
 
 @njit(inline="always")
 def aba_fext(I, F, q, v, tau, f, n, W, qdd):
     """q̈ (nv,) into qdd with one external wrench [f; n] at the frame of W (``wrench_row``); its status."""
+    if not row_fits(I, W, 14, 12):
+        return WRONG_SIZES
     return aba_fext_one(I, F, q[::1], v[::1], tau[::1], f[::1], n[::1], W[:13], W[13] > 0.0, qdd[::1])
 
 
 @njit(inline="always")
 def frame_placement(I, F, q, X, R, p):
     """The world pose of the frame of X (``frame_row``): R (3, 3), p (3,), x_world = R x + p; its status."""
+    if not (frame_fits(I, X) and q_sized(I, q) and R.shape[0] == 3 and R.shape[1] == 3 and p.shape[0] == 3):
+        return WRONG_SIZES
     return placement_one(I, F, q[::1], X[:, :], R[:, :], p[::1])
 
 
 @njit(inline="always")
 def frame_jacobian(I, F, q, X, J):
     """J (6, nv) into J: the frame of X's velocity [linear; angular] = J q̇ (``frame_row``'s reference); its status."""
+    if not (frame_fits(I, X) and q_sized(I, q) and J.shape[0] == 6 and J.shape[1] == model_sizes(I)[1]):
+        return WRONG_SIZES
     return jacobian_one(I, F, q[::1], X[:, :], J[:, :])
 
 
 @njit(inline="always")
 def rnea_derivatives(I, F, q, v, a, dq, dv, da):
     """∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈ = M (nv, nv, C-ordered) into dq, dv, da; its status."""
+    if not (sized(I, q, (v, a)) and square(I, dq) and square(I, dv) and square(I, da)):
+        return WRONG_SIZES
     return rnea_derivatives_one(I, F, q[::1], v[::1], a[::1], dq, dv, da)
 
 
 @njit(inline="always")
 def aba_derivatives(I, F, q, v, tau, qdd, dq, dv, Minv):
     """q̈ (nv,) into qdd, ∂q̈/∂q, ∂q̈/∂q̇ and M⁻¹ (nv, nv, C-ordered) into dq, dv, Minv; its status."""
+    if not (sized(I, q, (v, tau, qdd)) and square(I, dq) and square(I, dv) and square(I, Minv)):
+        return WRONG_SIZES
     return aba_derivatives_one(I, F, I, F, q[::1], v[::1], tau[::1], qdd[::1], dq, dv, Minv)
 
 
 @njit(inline="always")
 def kinetic_energy(I, F, q, v):
-    """T of one state (a float; NaN or ±inf for a non-finite input)."""
+    """T of one state (a float; NaN or ±inf for a non-finite input, NaN for arrays of other sizes)."""
+    if not sized(I, q, (v,)):
+        return np.nan
     return energy_one(I, F, q[::1], v[::1])
 
 
 @njit(inline="always")
 def potential_energy(I, F, q):
-    """V of one state (a float; NaN or ±inf for a non-finite input)."""
+    """V of one state (a float; NaN or ±inf for a non-finite input, NaN for a q of another size)."""
+    if not q_sized(I, q):
+        return np.nan
     return energy_one(I, F, q[::1], q[:0])
 
 
@@ -235,12 +274,24 @@ def check(model, name, status, *state, frame=None, f_ext_frame="local", referenc
     if int(status) == OK:
         return
     import manipdyn as md
-    if name not in _SHAPES or name in ("integrate", "kinetic_energy", "potential_energy"):
+    if name not in _SHAPES or name in ("kinetic_energy", "potential_energy") or \
+            (name == "integrate" and int(status) != WRONG_SIZES):
         raise InputError(f"compiled.check: no compiled call {name!r} that returns a failing status (the energies "
                          f"return their value: NaN or ±inf for a non-finite input)")
     if name in ("rnea_fext", "aba_fext", "frame_placement", "frame_jacobian") and frame is None:
         raise InputError(f"compiled.check: {name} needs frame=, the frame given to "
                          f"{'wrench_row' if name.endswith('fext') else 'frame_row'}")
+    if int(status) == WRONG_SIZES:
+        _public(md, name, model, state, frame, f_ext_frame, reference)       # names a state array of another size
+        raise InputError(f"compiled.{name}: an array is not of the model's sizes (the result, or the frame's or "
+                         f"wrench's row); compiled.check_shapes names it")
+    _public(md, name, model, state, frame, f_ext_frame, reference)
+    raise NumericalError(f"compiled.{name} returned status {int(status)} where manipdyn.{name.removesuffix('_fext')} "
+                         f"computes the state")
+
+
+def _public(md, name, model, state, frame, f_ext_frame, reference):
+    """The public call of compiled call ``name`` on a state (check's)."""
     if name.endswith("_fext"):
         q, v, x, f, n = state
         getattr(md, name[:-5])(model, q, v, x, f_ext={frame: (f, n)}, f_ext_frame=f_ext_frame)
@@ -250,5 +301,3 @@ def check(model, name, status, *state, frame=None, f_ext_frame="local", referenc
         md.frame_jacobian(model, *state, frame, reference)
     else:
         getattr(md, name)(model, *state)
-    raise NumericalError(f"compiled.{name} returned status {int(status)} where manipdyn.{name.removesuffix('_fext')} "
-                         f"computes the state")

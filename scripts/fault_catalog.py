@@ -1259,12 +1259,18 @@ FAULTS = (
           "type(v) is _ND and v.dtype is _F64 and", "type(v) is _ND and",
           ("tests/unit/test_one_state_paths.py",), "a one-state call hands the kernel a v of another dtype (q float64), "
           "read as float64"),
-    Fault("route-one-state-a-shape-unchecked", "route", "manipdyn/dynamics/route.py",
-          " and a.shape == K.v_shape)", ")",
-          ("tests/unit/test_one_state_paths.py",), "a one-state call hands the kernel an a of another length, read past "
+    Fault("route-one-state-a-length-unchecked", "route", "manipdyn/dynamics/rnea.py",
+          "    if not sized(I, q, (v, a, tau)):\n        return WRONG_SIZES\n    X, xb, xp, world = no_wrenches(I, F)",
+          "    if not sized(I, q, (v, tau)):\n        return WRONG_SIZES\n    X, xb, xp, world = no_wrenches(I, F)",
+          ("tests/unit/test_one_state_paths.py",), "rnea's one-state kernel takes an a of another length and reads past "
           "its end"),
+    Fault("kernel-sizes-nq-of-one", "route", "manipdyn/dynamics/kernel_inputs.py",
+          "    return I[2, nb - 1] + NQ[I[1, nb - 1]], I[3, nb - 1] + I[4, nb - 1]",
+          "    return I[2, nb - 1] + 1, I[3, nb - 1] + I[4, nb - 1]",
+          ("tests/unit/test_one_state_paths.py",), "the one-state kernels' size check counts one configuration entry for "
+          "the last joint: a model ending in a free flyer or a ball refuses every state"),
     Fault("route-one-state-q-dtype-unchecked", "route", "manipdyn/dynamics/route.py",
-          "q.dtype is _F64 and q.shape == K.q_shape", "q.shape == K.q_shape",
+          "q.dtype is _F64 and q.ndim == 1", "q.ndim == 1",
           ("tests/unit/test_one_state_paths.py",), "a one-state call of a route hands the kernel a q of another dtype"),
     Fault("energy-one-state-velocity-dropped", "kinematics", "manipdyn/dynamics/energy.py",
           "    return energy_of(mdl, q, v, Rl, pl, Rw, pw, ww, vw)", "    return energy_of(mdl, q, q[:0], Rl, pl, Rw, pw, ww, vw)",

@@ -43,7 +43,7 @@ from ..model import FRICTION_EPS, MimicModel
 from . import mimic
 from ..spatial import (SINCOS_MAX, add, cholesky, cholesky_solve, first_nonfinite, force_cross, force_up,
                        inertia_motion, inertia_up, motion_cross, motion_down, mul3, mul3t, scale)
-from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
+from .kernel_inputs import finite_state, no_wrenches, sized, wrench_rows_of
 from .lanes import (LANES, add_sym3, external_lane, external_lanes, gather_lanes, get3, get6, get_rotation, get_sym3,
                     inertial_model, lane_record, motion_model, multi_model, multi_rates, on_lanes, one_lane,
                     placement_lanes, placement_model, planar_placement_lane, quat_model, quat_placement_lane,
@@ -53,7 +53,7 @@ from .model_arrays import unpack
 from .crba import crba, crba_lanes, crba_steps_one
 from .rnea import rnea, rnea_lanes, rnea_steps_one, steps_scratch
 from .route import route
-from .status import OK, bad_input, bad_result, shift, singular_joint, singular_row
+from .status import OK, WRONG_SIZES, bad_input, bad_result, shift, singular_joint, singular_row
 
 
 @njit(cache=True, inline="always")
@@ -521,6 +521,8 @@ def acceleration_lane(am, B, par, QDD, l, L):
 def aba_one(I, F, q, v, tau, out):
     """One state (nq,), (nv,) without external wrenches: ``aba_steps_one`` ((I, F) in z-aligned frames,
     ``Model.kernel.lane_arrays``)."""
+    if not sized(I, q, (v, tau, out)):
+        return WRONG_SIZES
     X, xb, xp, world = no_wrenches(I, F)
     return aba_steps_one(I, F, q, v, tau, X[0], xb, xp, world, out)
 
@@ -529,6 +531,8 @@ def aba_one(I, F, q, v, tau, out):
 def aba_fext_one(I, F, q, v, tau, f, m, P, world, out):
     """One state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned frames, as
     (I, F)): ``aba_steps_one``."""
+    if not (sized(I, q, (v, tau, out)) and f.shape[0] == 3 and m.shape[0] == 3 and P.shape[0] == 13):
+        return WRONG_SIZES
     X, xb, xp = wrench_rows_of(f, m, P)
     return aba_steps_one(I, F, q, v, tau, X[0], xb, xp, world, out)
 
@@ -680,6 +684,8 @@ def cholesky_states(I, F, Q, V, Tau, X, body, point, world, out, lanes):
 def cholesky_one(I, F, q, v, tau, out):
     """One state without external wrenches: cholesky_states with N = 1, by the one-lane drivers ((I, F) in z-aligned
     frames, ``Model.kernel.lane_arrays``)."""
+    if not sized(I, q, (v, tau, out)):
+        return WRONG_SIZES
     X, xb, xp, world = no_wrenches(I, F)
     return cholesky_states(I, F, q[np.newaxis, :], v[np.newaxis, :], tau[np.newaxis, :], X, xb, xp, world,
                            out[np.newaxis, :], np.bool_(False))

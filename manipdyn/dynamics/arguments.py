@@ -292,6 +292,9 @@ def raise_kernel_error(model, code, names, batches, call="", out_name="", out=No
     for name, x in zip(names, batches):          # a bad input is the cause to report first
         check_finite(name, x, model.q_names if is_config(name) else model.v_names)
     what, k = reading(code, nb)
+    if what == "sizes":                          # a kernel that disagrees with the Python checks: never expected
+        raise NumericalError(f"{call}: the kernel refused the arrays' sizes, which are the model's (nq = {model.nq}, "
+                             f"nv = {model.nv}): an inconsistency inside manipdyn, please report it")
     if what == "result":
         res = out[None] if batches[0].ndim == 1 else out
         idx = np.unravel_index(k, res.shape)

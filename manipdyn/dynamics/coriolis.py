@@ -29,10 +29,10 @@ import numpy as np
 from .._jit import A1, A2, A3, MODEL, entry, njit
 from ..spatial import add_force_cross, dot6, first_nonfinite_entry, force_cross, motion_cross, row6, sandwich3
 from .forward_kinematics import fk_pass
-from .kernel_inputs import nonfinite_input
+from .kernel_inputs import model_sizes, nonfinite_input, sized
 from .model_arrays import unpack
 from .route import route
-from .status import OK, bad_result
+from .status import OK, WRONG_SIZES, bad_result
 
 
 @njit(cache=True)
@@ -142,6 +142,9 @@ def coriolis_kernel(I, F, Q, V, C):
 @njit(cache=True)
 def coriolis_one(I, F, q, v, C):
     """One state: q (nq,), v (nv,), C (nv, nv), through coriolis_kernel."""
+    nv = model_sizes(I)[1]
+    if not (sized(I, q, (v,)) and C.shape[0] == nv and C.shape[1] == nv):
+        return WRONG_SIZES
     return coriolis_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], C[np.newaxis, :, :])
 
 

@@ -35,7 +35,8 @@ from .lanes import (LANES, add_sym3, gather_lanes, get3, get_rotation, get_sym3,
 from .model_arrays import unpack
 from .lagrange import lagrange_mass_matrix
 from .route import route, thread_count
-from .status import OK, bad_input, bad_result, shift
+from .kernel_inputs import model_sizes, q_sized
+from .status import OK, WRONG_SIZES, bad_input, bad_result, shift
 
 
 @njit(cache=True, inline="always")
@@ -61,6 +62,9 @@ def merge_weights(parent, mass, mC, W):
 def crba_one(I, F, q, M):
     """One state: q (nq,), M (nv, nv), through the lane kernel's steps for one lane (``crba_steps_one``; (I, F) in
     z-aligned frames, ``Model.kernel.lane_arrays``)."""
+    nv = model_sizes(I)[1]
+    if not (q_sized(I, q) and M.shape[0] == nv and M.shape[1] == nv):
+        return WRONG_SIZES
     return crba_steps_one(I, F, q, M)
 
 

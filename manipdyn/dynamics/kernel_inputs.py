@@ -7,8 +7,37 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
+from ..joints import NQ
 from ..spatial import first_nonfinite
 from .status import OK, bad_input
+
+
+@njit(cache=True, inline="always")
+def model_sizes(I):
+    """(nq, nv) of the model whose kernel ints are I (model_arrays' layout: joints in q order, so the last joint's
+    first entries of q and v plus its sizes, joints.NQ)."""
+    nb = I.shape[1]
+    if nb == 0:
+        return 0, 0
+    return I[2, nb - 1] + NQ[I[1, nb - 1]], I[3, nb - 1] + I[4, nb - 1]
+
+
+@njit(cache=True, inline="always")
+def q_sized(I, q):
+    """True when q has the model's nq entries (``sized`` without other arrays)."""
+    return q.shape[0] == model_sizes(I)[0]
+
+
+@njit(cache=True, inline="always")
+def sized(I, q, vs):
+    """True when q has the model's nq entries and every array of the tuple vs (states, a vector result) nv: the
+    check a one-state kernel makes before it reads anything (status.WRONG_SIZES otherwise; a matrix result's kernel
+    checks its shape too). vs holds one array at least (numba iterates no empty tuple)."""
+    nq, nv = model_sizes(I)
+    ok = q.shape[0] == nq
+    for x in vs:
+        ok &= x.shape[0] == nv
+    return ok
 
 
 @njit(cache=True, inline="always")

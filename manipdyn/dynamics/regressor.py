@@ -50,7 +50,8 @@ from .model_arrays import unpack
 from .rnea import RECORD, outward_one, steps_scratch
 from .route import route
 from .arguments import as_real, check_finite, check_model
-from .status import bad_input, bad_result
+from .kernel_inputs import model_sizes, sized
+from .status import WRONG_SIZES, bad_input, bad_result
 
 NP = 10                                          # dynamic parameters per body
 PARAMETER_NAMES = ("m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
@@ -110,6 +111,8 @@ def model_with_parameters(model, pi, *, tol=1e-12):
 @njit(cache=True)
 def regressor_one(I, F, q, v, a, Y):
     """Y (nv, 10 nb) of one state q (nq,), v, a (nv,): ``regressor_kernel`` with N = 1."""
+    if not (sized(I, q, (v, a)) and Y.shape[0] == model_sizes(I)[1] and Y.shape[1] == 10 * I.shape[1]):
+        return WRONG_SIZES
     return regressor_kernel(I, F, q[np.newaxis, :], v[np.newaxis, :], a[np.newaxis, :], Y[np.newaxis, :, :])
 
 

@@ -37,7 +37,7 @@ from .._jit import A1, A2, A3, CONTRACT, FLAG, I1, MODEL, entry, njit
 from ..joints import HELICAL, PLANAR
 from . import mimic
 from ..spatial import SINCOS_MAX, add, cross, first_nonfinite, mul3, mul3t, put, rot_t, scale, sub, vec
-from .kernel_inputs import finite_state, no_wrenches, wrench_rows_of
+from .kernel_inputs import finite_state, no_wrenches, sized, wrench_rows_of
 from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, get_rotation, inertial_model, lane_record,
                     motion_model, multi_model, multi_rates, on_lanes, one_lane, placement_lane, placement_lanes,
                     placement_model, planar_placement_lane, quat_model, quat_placement_lane, quat_placement_lanes,
@@ -45,7 +45,7 @@ from .lanes import (LANES, external_lane, external_lanes, gather_lanes, get3, ge
 from .model_arrays import unpack
 from .route import route
 from .arguments import as_batch, check_output, quiet, raise_kernel_error, unbatch, wrench_rows
-from .status import OK, bad_input, bad_result, shift
+from .status import OK, WRONG_SIZES, bad_input, bad_result, shift
 
 TERMS = ("w", "dw", "v", "dv", "acc", "dvc", "fc", "nc", "f", "n")   # 3-vectors per link, then R (3, 3)
 NT = 3 * len(TERMS) + 9                                            # columns of the per-link terms array
@@ -109,6 +109,8 @@ def steps_scratch(nb, nq, nv):
 def rnea_one(I, F, q, v, a, tau):
     """τ (nv,) of one state q (nq,), v, a (nv,), no external wrench, into tau: the lane kernel's steps driven for one
     state (``rnea_steps_one``; (I, F) in z-aligned frames, ``Model.kernel.lane_arrays``)."""
+    if not sized(I, q, (v, a, tau)):
+        return WRONG_SIZES
     X, xb, xp, world = no_wrenches(I, F)
     return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau,
                           steps_scratch(I.shape[1], q.shape[0], v.shape[0]))
@@ -118,6 +120,8 @@ def rnea_one(I, F, q, v, a, tau):
 def rnea_fext_one(I, F, q, v, a, f, m, P, world, tau):
     """τ (nv,) of one state with one external wrench in ``arguments.fast_wrenches``' form (the wrench in z-aligned
     frames, as (I, F)): ``rnea_steps_one``."""
+    if not (sized(I, q, (v, a, tau)) and f.shape[0] == 3 and m.shape[0] == 3 and P.shape[0] == 13):
+        return WRONG_SIZES
     X, xb, xp = wrench_rows_of(f, m, P)
     return rnea_steps_one(I, F, q, v, a, X[0], xb, xp, world, tau,
                           steps_scratch(I.shape[1], q.shape[0], tau.shape[0]))
@@ -138,8 +142,16 @@ def gravity_kernel(I, F, Q, tau):
     return bias_kernel(I, F, Q, Q[:, :0], tau)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def bias_one(I, F, q, v, tau):
+    """One state q (nq,), v, tau (nv,): ``bias_steps``."""
+    if not sized(I, q, (v, tau)):
+        return WRONG_SIZES
+    return bias_steps(I, F, q, v, tau)
+
+
+@njit(cache=True, inline="always")
+def bias_steps(I, F, q, v, tau):
     """One state q (nq,), v (nv,) — or v with no entries: rnea(q, 0, 0) —, tau (nv,): ``rnea_steps_one`` with zero
     accelerations ((I, F) in z-aligned frames)."""
     Z = np.zeros((1, tau.shape[0]))[:, :][0]         # (a view of any layout, as the entry's arrays: one signature)
@@ -150,8 +162,10 @@ def bias_one(I, F, q, v, tau):
 
 @njit(cache=True)
 def gravity_one(I, F, q, tau):
-    """One state q (nq,), tau (nv,): ``bias_one`` without velocities."""
-    return bias_one(I, F, q, q[:0], tau)
+    """One state q (nq,), tau (nv,): ``bias_steps`` without velocities."""
+    if not sized(I, q, (tau,)):
+        return WRONG_SIZES
+    return bias_steps(I, F, q, q[:0], tau)
 
 
 @njit(cache=True, inline="always")

@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import InputError, ManipdynError
 from ..extras import require
 from ..model import MimicModel, Model
-from .status import OK, shift
+from .status import OK, WRONG_SIZES, shift
 from .arguments import (as_batch, check_f_ext, check_out, fast, fast_shape, fast_wrenches, is_config,
                         raise_kernel_error, unbatch, wrench_rows)
 
@@ -169,10 +169,13 @@ def route(call, names, result, shape, one, batch, **options):
     """Decorator: the public function below it — its signature and docstring — runs the path of
     ``Route(call, names, result, shape, one, batch, **options)`` (its body is not run: write the docstring only).
     Step 1 in its common form — one float64 state of a plain Model, nothing else given — runs inside the returned
-    function itself, its checks written out (``arguments.fast``'s, without the call: ~70 ns), with its arguments by
-    name (q [, v [, a]]), so that a one-state call costs one Python frame and no argument packing; everything else
-    goes on to ``Route.general``. (Measured on ur5, rnea, a plain timeit: 1.86 µs through ``Route.general``, 1.72
-    µs through this; the kernel call alone, 1.26 µs with its result array.)"""
+    function itself, with its arguments by name (q [, v [, a]]), so that a one-state call costs one Python frame and
+    no argument packing; everything else goes on to ``Route.general``. Its checks are those numba's unboxing needs
+    (numpy.ndarray, float64, one dimension): the one-state kernels check the lengths themselves
+    (``kernel_inputs.sized``), and an array of another length comes back as status.WRONG_SIZES, on which the call
+    goes on to the checked path, which names it. (Measured on ur5, rnea, a plain timeit: 1.86 µs through
+    ``Route.general``, 1.72 µs with ``arguments.fast``'s checks written out here, 1.63 µs with the lengths checked
+    in the kernel; the kernel call alone, 1.26 µs with its result array.)"""
     r = Route(call, names, result, shape, one, batch, **options)
     no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
     one_lanes = r.one_lanes
@@ -185,16 +188,17 @@ def route(call, names, result, shape, one, batch, **options):
             if type(model) is Model and f_ext is None and out is None and threads is None and tau is _MISSING \
                     and f_ext_frame == "local":
                 K = model.kernel
-                if type(q) is _ND and q.dtype is _F64 and q.shape == K.q_shape and K.v_shape != _NO_V and \
-                        (v is _MISSING if no_v else type(v) is _ND and v.dtype is _F64 and v.shape == K.v_shape) and \
-                        (a is _MISSING if no_a else type(a) is _ND and a.dtype is _F64 and a.shape == K.v_shape):
-                    I, F = K.lane_arrays if one_lanes else K.arrays      # 1. one float64 state: straight in
-                    out = np.empty(K.result_shapes[shape])
+                if type(q) is _ND and q.dtype is _F64 and q.ndim == 1 and K.v_shape != _NO_V and \
+                        (v is _MISSING if no_v else type(v) is _ND and v.dtype is _F64 and v.ndim == 1) and \
+                        (a is _MISSING if no_a else type(a) is _ND and a.dtype is _F64 and a.ndim == 1):
+                    I, F = K.lane_arrays if one_lanes else K.arrays      # 1. one float64 state: straight in (the
+                    out = np.empty(K.result_shapes[shape])              # kernel checks the lengths: WRONG_SIZES)
                     code = one.call(I, F, q, out) if no_v else one.call(I, F, q, v, out) if no_a else \
                         one.call(I, F, q, v, a, out)
                     if code == -1:
                         return out
-                    r.fail(model, code, r.given(q, v, a), out)
+                    if code != WRONG_SIZES:
+                        r.fail(model, code, r.given(q, v, a), out)
             return r.general(model, q, v, a, tau, f_ext, f_ext_frame, threads, out)
         path = functools.wraps(public)(path)
         path.route, r.public = r, path

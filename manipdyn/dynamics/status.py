@@ -12,6 +12,9 @@ Coriolis matrix, the energies, the frame kernels, forward kinematics, the closur
                     joint of a row of M)
   bad_result(nb, k) −2 − nb − k: entry k (flat index) of the call's result in batch form is not finite: an
                     intermediate overflowed; for a call with several results, k runs through them in order
+  WRONG_SIZES       2⁶²: an array of a one-state kernel has another length than the model's (nq, nv: the
+                    kernel checks this before it reads anything, ``kernel_inputs.sized``; Python checks the types
+                    and dimensions, which numba's unboxing needs)
 
 A batch cut into chunks (threads, lane blocks, Dask) reads a chunk's status as the whole batch's with
 ``shift``; ``reading`` turns a status back into (what, index) for the error.
@@ -21,6 +24,7 @@ from __future__ import annotations
 from .._jit import njit
 
 OK = -1
+WRONG_SIZES = 2 ** 62
 
 
 @njit(cache=True, inline="always")
@@ -63,10 +67,13 @@ def shift(status, s0, nb, size):
 
 
 def reading(status, nb):
-    """(what, index): ("ok", -1), ("input", state), ("joint", joint index) or ("result", flat index)."""
+    """(what, index): ("ok", -1), ("sizes", -1), ("input", state), ("joint", joint index) or ("result", flat
+    index)."""
     status = int(status)
     if status == OK:
         return "ok", -1
+    if status == WRONG_SIZES:
+        return "sizes", -1
     if status >= 0:
         return "input", status
     if status >= -1 - nb:

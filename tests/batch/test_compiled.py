@@ -225,3 +225,44 @@ def test_derivative_calls_give_the_public_calls_numbers(name):
         assert np.array_equal(qdd[s], md.aba(model, q, v, a))
         for got, want in zip([*Dr[s], *Da[s]], [*md.rnea_derivatives(model, q, v, a), *md.aba_derivatives(model, q, v, a)]):
             assert np.allclose(got, want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
+
+
+@numba.njit
+def sized_calls(I, F, q, v, a, tau, M, W, X, R, p, J, D):
+    """Every compiled call on the given arrays: their statuses (the energies: 0 finite, 1 NaN)."""
+    return (compiled.rnea(I, F, q, v, a, tau), compiled.nonlinear_effects(I, F, q, v, tau),
+            compiled.gravity_torques(I, F, q, tau), compiled.mass_matrix(I, F, q, M), compiled.aba(I, F, q, v, a, tau),
+            compiled.integrate(I, q, v, q.copy()), compiled.rnea_fext(I, F, q, v, a, p, p, W, tau),
+            compiled.aba_fext(I, F, q, v, a, p, p, W, tau), compiled.frame_placement(I, F, q, X, R, p),
+            compiled.frame_jacobian(I, F, q, X, J), compiled.rnea_derivatives(I, F, q, v, a, D[0], D[1], D[2]),
+            compiled.aba_derivatives(I, F, q, v, a, tau, D[0], D[1], D[2]), int(np.isnan(compiled.kinetic_energy(I, F, q, v))),
+            int(np.isnan(compiled.potential_energy(I, F, q))))
+
+
+def test_arrays_of_other_sizes_are_refused_before_they_are_read():
+    """A state, a result, a frame's or a wrench's row of another size: WRONG_SIZES (NaN for an energy) from every
+    compiled call, before the kernel reads past an array's end; check names the array."""
+    model = MODELS["solo12_free_flyer"]
+    I, F = compiled.arrays(model)
+    frame, nv = model.body_names[-1], model.nv
+    q, v = md.neutral(model), np.zeros(nv)
+    W, X = compiled.wrench_row(model, frame), compiled.frame_row(model, frame)
+    good = dict(q=q, v=v, a=v, tau=np.empty(nv), M=np.empty((nv, nv)), W=W, X=X, R=np.empty((3, 3)), p=np.zeros(3),
+                J=np.empty((6, nv)), D=np.empty((3, nv, nv)))
+    assert sized_calls(I, F, *good.values()) == (compiled.OK,) * 12 + (0, 0)
+    bad_body = X.copy()
+    bad_body[4, 0] = model.njoints                          # a body the model does not have
+    for name, x in (("q", q[:-1]), ("v", np.zeros(nv + 1)), ("tau", np.empty(nv - 1)), ("X", bad_body),
+                    ("W", W[:13]), ("D", np.empty((3, nv, nv - 1)))):
+        statuses = sized_calls(I, F, *{**good, name: x}.values())
+        users = {"q": range(14), "v": (0, 1, 4, 5, 6, 7, 10, 11, 12), "tau": (0, 1, 2, 4, 6, 7, 11),
+                 "X": (8, 9), "W": (6, 7), "D": (10, 11)}[name]
+        for k, status in enumerate(statuses):
+            want = (1 if k >= 12 else compiled.WRONG_SIZES) if k in users else (0 if k >= 12 else compiled.OK)
+            assert status == want, (name, k, status)
+    tau = np.empty(nv - 1)
+    status = compiled.rnea(I, F, q, v, v, tau)
+    with pytest.raises(InputError, match="an array is not of the model's sizes"):
+        compiled.check(model, "rnea", status, q, v, v)
+    with pytest.raises(InputError, match=rf"^v has shape \({nv - 1},\)"):
+        compiled.check(model, "rnea", status, q, v[:-1], v)

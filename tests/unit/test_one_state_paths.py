@@ -85,3 +85,19 @@ def test_one_argument_of_another_length_is_named(name, which):
     x[k] = x[k][:-1]
     with pytest.raises(md.InputError, match=rf"^{which} has shape \({x[k].size},\)"):
         CALLS[name](MODEL, *x)
+
+
+@pytest.mark.parametrize("kinds", ["HHB", "B"])
+def test_a_model_ending_in_a_ball_joint_takes_the_one_state_kernels(kinds, tmp_path):
+    """The one-state kernels check the arrays' lengths against the model's nq, nv, counted from its last joint in q
+    order: with a ball joint there (4 entries of q, 3 of v), one state gives the batch's numbers."""
+    from ball_models import random_tree
+    path = tmp_path / "tree.xml"
+    path.write_text(random_tree(3, kinds))
+    model = md.load_mjcf(path)
+    assert model.kind[-1] == 3 and model.nq == model.nv + kinds.count("B")
+    Q, V, A = random_states(model, 3, np.random.default_rng(10))
+    for name in ("rnea", "aba", "mass_matrix", "gravity_torques", "nonlinear_effects"):
+        batch = CALLS[name](model, Q, V, A)
+        for s in range(3):
+            assert np.allclose(CALLS[name](model, Q[s], V[s], A[s]), batch[s], rtol=1e-12, atol=1e-12), (name, s)
