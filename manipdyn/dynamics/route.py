@@ -173,8 +173,8 @@ def route(call, names, result, shape, one, batch, **options):
     no argument packing; everything else goes on to ``Route.general``. Its checks are those numba's unboxing needs
     (numpy.ndarray, float64, one dimension): the one-state kernels check the lengths themselves
     (``kernel_inputs.sized``), and an array of another length comes back as status.WRONG_SIZES, on which the call
-    goes on to the checked path, which names it. (Measured on ur5, rnea, a plain timeit: 1.86 µs through
-    ``Route.general``, 1.72 µs with ``arguments.fast``'s checks written out here, 1.63 µs with the lengths checked
+    goes on to the checked path, which names it. (Measured on ur5, rnea, a plain timeit, A/B: 1.85 µs through
+    ``Route.general``, 1.75 µs with ``arguments.fast``'s checks written out here, 1.72 µs with the lengths checked
     in the kernel; the kernel call alone, 1.26 µs with its result array.)"""
     r = Route(call, names, result, shape, one, batch, **options)
     no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
