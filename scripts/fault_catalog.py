@@ -248,8 +248,8 @@ FAULTS = (
           "Z if V.shape[1] == 0 else V, Z if V.shape[1] == 0 else V, X, xb, xp, world,",
           (_TERMS,), "nonlinear_effects = rnea(q, q̇, q̇) instead of rnea(q, q̇, 0)"),
     Fault("route-one-state-error-codes-returned", "rnea", "manipdyn/dynamics/route.py",
-          "                    if code == -1:\n                        return out\n",
-          "                    if code <= -1:\n                        return out\n",
+          "                        if code == -1:\n                            return out\n",
+          "                        if code <= -1:\n                            return out\n",
           ("tests/robustness/test_api_outputs.py", "tests/robustness/test_api_inputs.py"),
           "the one-state path returns the result whatever the kernel's code: a non-finite input, a singular "
           "joint or an overflowed result comes back as numbers"),

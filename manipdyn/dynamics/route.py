@@ -168,38 +168,51 @@ def lazy(call, names, public, model, x, f_ext, shape):
 def route(call, names, result, shape, one, batch, **options):
     """Decorator: the public function below it — its signature and docstring — runs the path of
     ``Route(call, names, result, shape, one, batch, **options)`` (its body is not run: write the docstring only).
-    Step 1 in its common form — one float64 state of a plain Model, nothing else given — runs inside the returned
-    function itself, with its arguments by name (q [, v [, a]]), so that a one-state call costs one Python frame and
-    no argument packing; everything else goes on to ``Route.general``. Its checks are those numba's unboxing needs
-    (numpy.ndarray, float64, one dimension): the one-state kernels check the lengths themselves
+    Steps 1 and 2 run inside the returned function itself, with its arguments by name (q [, v [, a]]), so that a
+    one-state call costs one Python frame and no argument packing. Step 1's checks are those numba's unboxing needs
+    (numpy.ndarray, float64, one dimension), written out: the one-state kernels check the lengths themselves
     (``kernel_inputs.sized``), and an array of another length comes back as status.WRONG_SIZES, on which the call
-    goes on to the checked path, which names it. (Measured on ur5, rnea, a plain timeit, A/B: 1.85 µs through
-    ``Route.general``, 1.75 µs with ``arguments.fast``'s checks written out here, 1.72 µs with the lengths checked
-    in the kernel; the kernel call alone, 1.26 µs with its result array.)"""
+    goes on to the checked path, which names it. (Measured on ur5, rnea, a plain timeit, A/B: 1.85 µs with
+    ``arguments.fast``'s checks, 1.75 µs with them written out here, 1.72 µs with the lengths checked in the kernel;
+    the kernel call alone, 1.26 µs with its result array.)"""
     r = Route(call, names, result, shape, one, batch, **options)
     no_v, no_a, shape = len(r.names) < 2, len(r.names) < 3, SHAPES.index(r.shape)
-    one_lanes = r.one_lanes
+    wrench_one, one_lanes = r.wrench_one, r.one_lanes    # (every route with wrench_one has three states)
 
     def bind(public):
         def path(model, q=_MISSING, v=_MISSING, a=_MISSING, tau=_MISSING, f_ext=None, f_ext_frame="local",
                  threads=None, out=None):
             # (no keyword-only parameters: their defaults cost a dict lookup each per call; the public signature,
             # which inspect and the docs show, is the decorated function's)
-            if type(model) is Model and f_ext is None and out is None and threads is None and tau is _MISSING \
-                    and f_ext_frame == "local":
+            if tau is not _MISSING:                             # the third state by its name in aba's calls
+                a = r.by_name(a, tau)
+            if threads is not None:
+                thread_count(threads, r.call)                   # (checked for one state too)
+            if type(model) is Model:
                 K = model.kernel
-                if type(q) is _ND and q.dtype is _F64 and q.ndim == 1 and K.v_shape != _NO_V and \
-                        (v is _MISSING if no_v else type(v) is _ND and v.dtype is _F64 and v.ndim == 1) and \
-                        (a is _MISSING if no_a else type(a) is _ND and a.dtype is _F64 and a.ndim == 1):
-                    I, F = K.lane_arrays if one_lanes else K.arrays      # 1. one float64 state: straight in (the
-                    out = np.empty(K.result_shapes[shape])              # kernel checks the lengths: WRONG_SIZES)
-                    code = one.call(I, F, q, out) if no_v else one.call(I, F, q, v, out) if no_a else \
-                        one.call(I, F, q, v, a, out)
-                    if code == -1:
-                        return out
-                    if code != WRONG_SIZES:
-                        r.fail(model, code, r.given(q, v, a), out)
-            return r.general(model, q, v, a, tau, f_ext, f_ext_frame, threads, out)
+                if f_ext is None and f_ext_frame == "local":
+                    if type(q) is _ND and q.dtype is _F64 and q.ndim == 1 and K.v_shape != _NO_V and \
+                            (v is _MISSING if no_v else type(v) is _ND and v.dtype is _F64 and v.ndim == 1) and \
+                            (a is _MISSING if no_a else type(a) is _ND and a.dtype is _F64 and a.ndim == 1):
+                        I, F = K.lane_arrays if one_lanes else K.arrays    # 1. one float64 state: straight in
+                        out = np.empty(K.result_shapes[shape]) if out is None else \
+                            check_out(r.call, r.result, out, K.result_shapes[shape])
+                        code = one.call(I, F, q, out) if no_v else one.call(I, F, q, v, out) if no_a else \
+                            one.call(I, F, q, v, a, out)
+                        if code == -1:
+                            return out
+                        if code != WRONG_SIZES:                 # (other lengths: the checked path names them)
+                            r.fail(model, code, r.given(q, v, a), out)
+                elif wrench_one is not None and v is not _MISSING and a is not _MISSING:
+                    k = fast(model, q, v, a)
+                    w = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
+                    if w is not None:                           # 2. one state, one wrench: straight in
+                        I, F = K.lane_arrays                    # (every route with wrench_one has one_lanes)
+                        out = np.empty(K.result_shapes[shape]) if out is None else \
+                            check_out(r.call, r.result, out, K.result_shapes[shape])
+                        if wrench_one.call(I, F, q, v, a, w[0], w[1], w[2], f_ext_frame == "world", out) == -1:
+                            return out                          # else the checked path says what is wrong
+            return r.checked(model, r.given(q, v, a), f_ext, f_ext_frame, threads, out)
         path = functools.wraps(public)(path)
         path.route, r.public = r, path
         return path
@@ -237,37 +250,6 @@ class Route:
         if wrench_one is not None and not one_lanes:
             raise ValueError(f"{call}: a wrench entry takes the lane arrays (Model.kernel.wrench_rows' frames): "
                              f"one_lanes=True")
-
-    def general(self, model, q, v, a, tau, f_ext, f_ext_frame, threads, out):
-        """The path of a call that ``route``'s own step 1 does not take: steps 1 (with ``out=`` or ``threads``) and 2
-        (one state, one wrench), then ``checked``."""
-        if tau is not _MISSING:                             # the third state by its name in aba's calls
-            a = self.by_name(a, tau)
-        if threads is not None:
-            thread_count(threads, self.call)                # (checked for one state too)
-        no_v, no_a, shape = len(self.names) < 2, len(self.names) < 3, SHAPES.index(self.shape)
-        if f_ext is None and f_ext_frame == "local" and (v is _MISSING) is no_v and (a is _MISSING) is no_a:
-            k = fast(model, q, v, a)
-            if k is not None:                               # 1. one float64 state: straight in
-                if self.one_lanes:
-                    k = model.kernel.lane_arrays
-                out = np.empty(model.kernel.result_shapes[shape]) if out is None else \
-                    check_out(self.call, self.result, out, model.kernel.result_shapes[shape])
-                code = self.one.call(k[0], k[1], q, out) if no_v else self.one.call(k[0], k[1], q, v, out) if no_a \
-                    else self.one.call(k[0], k[1], q, v, a, out)
-                if code == -1:
-                    return out
-                self.fail(model, code, self.given(q, v, a), out)
-        elif self.wrench_one is not None and v is not _MISSING and a is not _MISSING:
-            k = fast(model, q, v, a)
-            w = fast_wrenches(model, f_ext, f_ext_frame) if k is not None else None
-            if w is not None:                               # 2. one state, one wrench: straight in
-                k = model.kernel.lane_arrays                # (every route with wrench_one has one_lanes)
-                out = np.empty(model.kernel.result_shapes[shape]) if out is None else \
-                    check_out(self.call, self.result, out, model.kernel.result_shapes[shape])
-                if self.wrench_one.call(k[0], k[1], q, v, a, w[0], w[1], w[2], f_ext_frame == "world", out) == -1:
-                    return out                              # else the checked path says what is wrong
-        return self.checked(model, self.given(q, v, a), f_ext, f_ext_frame, threads, out)
 
     def by_name(self, a, tau):
         """The third state argument given as ``tau=...`` (aba's and forward_dynamics' name for it)."""
