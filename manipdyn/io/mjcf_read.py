@@ -51,9 +51,9 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   MuJoCo's positions are relative to qpos0, i.e. ``ref``) -> "coupling" with ratio c1, when the two joints hang
   from the same body (each alone on its side of their common ancestor: the closure model's coupling row); without
   ``joint2`` (or c1 = 0), joint1 = 0. ``class`` defaults (``<default><equality>``) give active, solref, solimp.
-- ``<include file>``: the included file's children replace the element; paths are relative to the main
-  file's folder and must resolve (symlinks too) inside it; depth and count are bounded, their bytes count
-  towards ``max_bytes``.
+- ``<include file>``: the included file's children replace the element (its root is ``<mujoco>``, or
+  ``<mujocoinclude>`` as in files written for MuJoCo before 2.1); paths are relative to the main file's folder and
+  must resolve (symlinks too) inside it; depth and count are bounded, their bytes count towards ``max_bytes``.
 
 Read and applied: a joint's ``armature``, ``damping``, ``frictionloss`` (≥ 0) become the model's ``armature``,
 ``damping`` and ``friction`` of each of its velocities (docs/design.md §3, Joint dynamics: M + diag(armature) as
@@ -113,6 +113,7 @@ __all__ = ["load_mjcf", "load_mjcf_string", "MAX_BODIES", "MAX_INCLUDES", "MAX_I
 MAX_BODIES = 100_000       # bodies + joints + geoms + sites of one file
 MAX_INCLUDES = 256         # <include> elements, all files together
 MAX_INCLUDE_DEPTH = 8      # an included file including another ... this deep at most
+INCLUDE_ROOTS = ("mujoco", "mujocoinclude")   # an included file's root: <mujocoinclude> in files for MuJoCo < 2.1
 MAX_DENSITY = 1e6          # kg/m³ (osmium: 2.26e4)
 DEFAULT_DENSITY = 1000.0   # MuJoCo's geom density
 
@@ -235,7 +236,8 @@ def _confined(name, base_dir, source):
 
 
 def _expand_includes(xml, source, base_dir, budget):
-    """Every <include file> replaced by the children of the included file's <mujoco> (iteratively); bounded depth,
+    """Every <include file> replaced by the children of the included file's <mujoco> or <mujocoinclude> root
+    (iteratively); bounded depth,
     count and bytes (``budget``: what is left of max_bytes)."""
     pending = [(e, 1) for e in xml.iter("include")]
     count = 0
@@ -254,7 +256,10 @@ def _expand_includes(xml, source, base_dir, budget):
         if budget < 0:
             raise MJCFError(f"{source}: with <include file={show(inc.get('file'))}> the model exceeds the size "
                             f"limit (pass max_bytes=... to raise it)")
-        sub = parse_xml(data, f"{source}: include {inc.get('file')!r}", None, root_tag="mujoco", error=MJCFError)
+        sub = parse_xml(data, f"{source}: include {inc.get('file')!r}", None, root_tag=None, error=MJCFError)
+        if sub.tag not in INCLUDE_ROOTS:
+            raise MJCFError(f"{source}: include {inc.get('file')!r}: root element is <{str(sub.tag)[:40]}>, expected "
+                            f"<mujoco> (or <mujocoinclude>, older MuJoCo's root of an included file)")
         parent, at = inc.getparent(), inc.getparent().index(inc)
         parent.remove(inc)
         children = [c for c in sub if isinstance(c.tag, str)]

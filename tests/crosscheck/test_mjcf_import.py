@@ -486,6 +486,28 @@ def test_includes_inside_the_folder(tmp_path):
     assert mujoco_errors(ours, m) <= MJ
 
 
+def test_an_included_file_rooted_at_mujocoinclude_loads_as_one_rooted_at_mujoco(tmp_path):
+    """Files written for MuJoCo before 2.1 root an included file at <mujocoinclude>: read as a <mujoco> root (the
+    same model, which MuJoCo compiles from the <mujoco> form); any other root is refused by name."""
+    (tmp_path / "parts").mkdir()
+    arm = ('<body name="upper" pos="0 0 0.2"><joint name="shoulder" axis="0 1 0"/><geom type="box" size="0.05 0.05 '
+           '0.1" mass="1.3"/><body name="lower" pos="0 0 0.3"><joint name="elbow" axis="1 0 0"/><geom type="capsule" '
+           'fromto="0 0 0 0 0 0.25" size="0.03"/></body></body>')
+    main = '<mujoco><worldbody><body name="base"><include file="parts/arm.xml"/></body></worldbody></mujoco>'
+    models = {}
+    for root in ("mujoco", "mujocoinclude"):
+        folder = tmp_path / root
+        (folder / "parts").mkdir(parents=True)
+        (folder / "parts" / "arm.xml").write_text(f"<{root}>{arm}</{root}>")
+        models[root] = quiet(md.load_mjcf, _write(folder, "main", main))
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "mujoco" / "main.xml"))
+    assert models["mujocoinclude"].joint_names == ("shoulder", "elbow")
+    assert mujoco_errors(models["mujocoinclude"], m) <= MJ
+    (tmp_path / "mujoco" / "parts" / "arm.xml").write_text(f"<robot>{arm}</robot>")
+    with pytest.raises(md.MJCFError, match=r"root element is <robot>, expected <mujoco> \(or <mujocoinclude>"):
+        md.load_mjcf(tmp_path / "mujoco" / "main.xml")
+
+
 # ---- random MJCF: every feature drawn at random, MuJoCo the reference -------------------------------------------
 
 def _f(x):
