@@ -37,7 +37,9 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   through it, as MuJoCo does (a frame is not a body: nothing of it remains in the model).
 - Sites, and every named body, become frames of the model (``Model.frames``; ``frame_placement`` of a body's
   name is MuJoCo's ``xpos``/``xmat``). Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``,
-  ``site<id>`` with MuJoCo's ids. The world is the fixed base, named "world".
+  ``site<id>`` with MuJoCo's ids. The world is the fixed base, named "world". Bodies, joints and sites have name
+  spaces of their own, as in MuJoCo: a site that shares a body's name is the frame ``site:<name>`` (``SITE_PREFIX``),
+  the body's frame keeps the plain name.
 - ``<equality>`` -> the model's closures (``Model.constraints``, model.Constraint, as the URDF reader's), in file
   order, as MuJoCo's compiler and ``mj_equalityAnchors`` read them:
   ``connect`` with ``body1`` and ``anchor`` (body semantic: the anchor in body1's frame; body2, default the world,
@@ -113,6 +115,7 @@ __all__ = ["load_mjcf", "load_mjcf_string", "MAX_BODIES", "MAX_INCLUDES", "MAX_I
 MAX_BODIES = 100_000       # bodies + joints + geoms + sites of one file
 MAX_INCLUDES = 256         # <include> elements, all files together
 MAX_INCLUDE_DEPTH = 8      # an included file including another ... this deep at most
+SITE_PREFIX = "site:"        # the frame name of a site that shares a body's name
 INCLUDE_ROOTS = ("mujoco", "mujocoinclude")   # an included file's root: <mujocoinclude> in files for MuJoCo < 2.1
 MAX_DENSITY = 1e6          # kg/m³ (osmium: 2.26e4)
 DEFAULT_DENSITY = 1000.0   # MuJoCo's geom density
@@ -524,7 +527,7 @@ class _Reader:
     def build(self, gravity, non_psd_inertia):
         src = self.source
         joints, parts, frames, merged = [], {-1: []}, {}, {"world": []}
-        self.names, self.jnames = {"world": "body"}, set()
+        self.names, self.jnames, self.site_frames = {"body": {"world": "body"}, "site": {}}, set(), {}
         frames["world"] = Frame("world", -1, np.eye(3), np.zeros(3))
         self.ids = {"body": 0, "joint": 0, "site": 0}            # MuJoCo's ids: depth-first, file order
         stack = []
@@ -578,7 +581,7 @@ class _Reader:
             k = self.total / m_all
             parts = {b: [(k * m, c, k * I) for m, c, I in ps] for b, ps in parts.items()}
         constraints = self.equalities(joints, frames)
-        return self.assemble(joints, parts, frames, merged, gravity, non_psd_inertia, constraints)
+        return self.assemble(joints, parts, self.with_sites(frames), merged, gravity, non_psd_inertia, constraints)
 
     def expand(self, e, cc, where):
         """The children of a body (or the world) with <frame> elements flattened, in file order: [(element, R, p,
@@ -614,7 +617,7 @@ class _Reader:
             name = self.unique(s.get("name") or f"site{self.ids['site'] - 1}", "site")
             cls = self.cls(s, cc)
             Rs, ps = self.fromto(s, cls, f"site {name!r}", *self.frame(s, cls, f"site {name!r}"))
-            frames[name] = Frame(name, b, R @ Rf @ Rs, p + R @ (pf + Rf @ ps))
+            self.site_frames[name] = Frame(name, b, R @ Rf @ Rs, p + R @ (pf + Rf @ ps))
 
     def joint(self, j, Rf, pf, k, n, body, cls, joints, b, R, p, anchor):
         """Joint k of n in MJCF body ``body`` whose frame is (R, p) in our body b, the joint placed through (Rf, pf)
@@ -673,11 +676,23 @@ class _Reader:
         return len(joints) - 1, np.eye(3), -a, a
 
     def unique(self, name, what):
-        if name in self.names:
-            raise MJCFError(f"{self.source}: {what} name {name!r} is used twice (also a {self.names[name]}): "
-                            f"manipdyn's frames need unique body and site names")
-        self.names[name] = what
+        """``name`` of a body (``what`` names how it came to be) or a site, once in its name space (MuJoCo's)."""
+        space = self.names["site" if what == "site" else "body"]
+        if name in space:
+            raise MJCFError(f"{self.source}: {what} name {name!r} is used twice (also a {space[name]})")
+        space[name] = what
         return name
+
+    def with_sites(self, frames):
+        """The bodies' frames and the sites' (a site sharing a body's name as SITE_PREFIX + its name)."""
+        out = dict(frames)
+        for name, f in self.site_frames.items():
+            key = name if name not in frames else SITE_PREFIX + name
+            if key in out:
+                raise MJCFError(f"{self.source}: site {name!r} shares a body's name, and {key!r} is a body's name "
+                                f"too: rename one of them (manipdyn names such a site's frame {SITE_PREFIX}<name>)")
+            out[key] = Frame(key, f.body, f.R, f.p)
+        return out
 
     def fromto(self, e, cls, where, R, p):
         ft = self.num(e, "fromto", cls, where, (6,))
@@ -779,9 +794,9 @@ class _Reader:
             if required:
                 raise MJCFError(f"{self.source}: {where}: needs {key}")
             return frames["world"]
-        if self.names.get(n) != kind:
+        if n not in self.names[kind]:
             raise MJCFError(f"{self.source}: {where}: {key}={show(n)}: no such {kind}")
-        return frames[n]
+        return self.site_frames[n] if kind == "site" else frames[n]
 
     def body_equality(self, c, name, where, frames, poses, point_only, get):
         """A connect (spherical closure) or weld (fixed; spherical with torquescale 0) as MuJoCo's compiler and

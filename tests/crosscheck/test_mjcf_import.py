@@ -508,6 +508,27 @@ def test_an_included_file_rooted_at_mujocoinclude_loads_as_one_rooted_at_mujoco(
         md.load_mjcf(tmp_path / "mujoco" / "main.xml")
 
 
+def test_bodies_and_sites_have_name_spaces_of_their_own(tmp_path):
+    """A site may share a body's name, as in MuJoCo: the body's frame keeps the name, the site's is 'site:<name>';
+    both placed as MuJoCo places them (xpos/xmat, site_xpos/site_xmat) at a random configuration."""
+    main = _write(tmp_path, "main", '<mujoco><worldbody><body name="arm" pos="0 0 0.5"><joint name="j1" axis="0 1 0"/>'
+                  '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/><site name="arm" pos="0.3 0.02 0" '
+                  'euler="0.1 0.2 0.3"/><body name="hand" pos="0.3 0 0"><joint name="j2" axis="0 0 1"/>'
+                  '<geom type="sphere" size="0.05"/><site name="tip" pos="0.05 0 0"/></body></body></worldbody>'
+                  '</mujoco>')
+    ours = quiet(md.load_mjcf, main)
+    assert {"arm", "site:arm", "hand", "tip"} <= set(ours.frames)
+    m = mujoco.MjModel.from_xml_path(str(main))
+    d = mujoco.MjData(m)
+    q = np.array([0.7, -1.1])
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    for frame, (R_mj, p_mj) in {"arm": (d.xmat[1], d.xpos[1]), "site:arm": (d.site_xmat[0], d.site_xpos[0]),
+                                "tip": (d.site_xmat[1], d.site_xpos[1])}.items():
+        R, p = md.frame_placement(ours, q, frame)
+        assert np.allclose(R, R_mj.reshape(3, 3), rtol=0, atol=1e-15) and np.allclose(p, p_mj, rtol=0, atol=1e-15), frame
+
+
 # ---- random MJCF: every feature drawn at random, MuJoCo the reference -------------------------------------------
 
 def _f(x):

@@ -107,7 +107,8 @@ def test_unsupported_features_are_named():
     refused(doc(body='<body name="c" quat="1 0 0 0" euler="0 0 1"><joint/></body>'), "several orientations")
     refused(doc(body='<body name="c"><joint class="nope"/></body>'), "no such default class")
     refused(doc(body='<body name="b"><joint/></body>'), "'b'", "used twice")
-    refused(doc(body='<site name="b"/>'), "'b'", "used twice")
+    refused(doc(body='<site name="s"/><site name="s" pos="1 0 0"/>'), "site name 's'", "used twice")
+    refused(doc(body='<site name="b"/><body name="site:b"/>'), "site 'b' shares a body's name", "'site:b'")
     refused(doc(joint='<joint name="j"/><joint name="k"/>', body='<body name="b:j"/>'), "'b:j'", "used twice")
 
 
