@@ -297,9 +297,19 @@ def load_robot(path, args, mimic=False):
             raise InputError(f"{path}: an MJCF file: its free joints and joint equalities are in the file "
                              f"(no --root-joint or --mimic)")
         from .io.mjcf_read import load_mjcf
-        return load_mjcf(path, **reduction(args))
+        return load_mjcf(path, asset_root=getattr(args, "asset_root", None), **reduction(args))
+    if getattr(args, "asset_root", None):
+        raise InputError(f"{path}: --asset-root grants an MJCF file's includes a folder tree; a URDF's meshes are "
+                         f"read from --package-dir folders")
     from .io.urdf import load_urdf
     return load_urdf(path, root_joint=args.root_joint, **(dict(mimic=args.mimic) if mimic else {}), **reduction(args))
+
+
+def add_asset_root_option(p):
+    """--asset-root DIR: an MJCF file's includes may come from DIR's tree (load_mjcf's asset_root)."""
+    p.add_argument("--asset-root", metavar="DIR",
+                   help="MJCF: a folder holding the model's, whose tree <include> files may come from (suites that "
+                        "share assets across folders: ../common/...); default: the model's own folder only")
 
 
 def add_mimic_option(p):
@@ -553,6 +563,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_mimic_option(i)
     add_root_joint_option(i)
     add_reduction_options(i)
+    add_asset_root_option(i)
     i.set_defaults(func=_inspect)
     x = sub.add_parser("export", help="write the model in another format (MuJoCo MJCF)")
     x.add_argument("urdf", help="a URDF or MJCF file (the reader chosen by its root element)")
@@ -562,6 +573,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_mimic_option(x)
     add_root_joint_option(x)
     add_reduction_options(x)
+    add_asset_root_option(x)
     x.set_defaults(func=_export)
     pl = sub.add_parser("play", help="3-D playback in the browser (meshcat): live, or one HTML file")
     pl.add_argument("urdf", help="a URDF or MJCF file (the reader chosen by its root element)")
@@ -573,6 +585,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "URDF's folder, or in an installed example-robot-data")
     add_reduction_options(pl)
     add_root_joint_option(pl)
+    add_asset_root_option(pl)
     pl.set_defaults(func=_play)
     e = sub.add_parser("example", help="the chapter's examples: figures (PNG) and data (CSV)")
     e.add_argument("name", choices=["aau", "spm", "identify"],

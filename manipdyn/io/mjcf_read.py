@@ -163,7 +163,7 @@ _ATTRS = {
 
 def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=None, tips=None, prune=False,
               max_bytes: int = MAX_BYTES, zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse",
-              joint_dynamics=None):
+              joint_dynamics=None, asset_root=None):
     """Read an MJCF file into a Model (see the module docstring for what is read, refused and converted).
 
     Parameters as ``load_urdf`` where they apply: gravity (3,) in the world frame (None: the file's ``<option
@@ -172,7 +172,10 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
     file and its includes together; zero_mass_inertia "keep" | "drop", non_psd_inertia "refuse" | "keep" as in
     load_urdf; joint_dynamics ``{joint: dict(armature=, damping=, friction=)}`` overrides the file's armature, damping
     and frictionloss of those joints (``model.with_joint_dynamics``). A free joint in the file makes a free flyer
-    (no ``root_joint`` keyword: the file says).
+    (no ``root_joint`` keyword: the file says). asset_root: a folder (holding the model's) whose tree the
+    ``<include>`` files may come from, as suites that share assets across folders need (``../common/…``); by
+    default only the model's own folder. Paths stay relative to the model's folder; absolute paths, and paths or
+    symlinks that leave the granted tree, are refused as before.
     Raises MJCFError naming the file and element at fault, ModelError for a non-physical body.
     """
     path = os.fspath(path)
@@ -182,7 +185,8 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
         data = fh.read(max_bytes + 1)
     model = load_mjcf_string(data, source=path, gravity=gravity, strict=strict, max_bytes=max_bytes,
                              zero_mass_inertia=zero_mass_inertia, non_psd_inertia=non_psd_inertia,
-                             base_dir=os.path.dirname(os.path.abspath(path)), joint_dynamics=joint_dynamics)
+                             base_dir=os.path.dirname(os.path.abspath(path)), joint_dynamics=joint_dynamics,
+                             asset_root=asset_root)
     if locked or root or tips or prune:
         from ..reduce import reduce
         model = reduce(model, locked=locked, root=root, tips=tips, prune=prune)
@@ -191,9 +195,9 @@ def load_mjcf(path, *, gravity=None, strict: bool = False, locked=None, root=Non
 
 def load_mjcf_string(text, *, source="<string>", gravity=None, strict=False, max_bytes: int = MAX_BYTES,
                      zero_mass_inertia: str = "keep", non_psd_inertia: str = "refuse", base_dir=None,
-                     joint_dynamics=None):
+                     joint_dynamics=None, asset_root=None):
     """Same as load_mjcf for MJCF text (str or bytes); ``source`` names it in messages; ``<include>`` files are
-    read from ``base_dir`` (None: includes are refused)."""
+    read from ``base_dir`` (None: includes are refused), inside ``asset_root``'s tree (default: base_dir's)."""
     from .urdf import _check_policy
     _check_policy(zero_mass_inertia, non_psd_inertia, False, source)
     data = text.encode() if isinstance(text, str) else bytes(text)
@@ -201,7 +205,8 @@ def load_mjcf_string(text, *, source="<string>", gravity=None, strict=False, max
         raise MJCFError(f"{source}: larger than the size limit of {max_bytes} bytes (pass max_bytes=... to raise it)")
     quirks = []
     xml = parse_xml(data, source, quirks, root_tag="mujoco", error=MJCFError)
-    _expand_includes(xml, source, base_dir, max_bytes - len(data))
+    tree = _granted(asset_root, base_dir, source)
+    _expand_includes(xml, source, base_dir, max_bytes - len(data), tree)
     reader = _Reader(xml, source, strict, zero_mass_inertia, quirks)
     g = reader.gravity() if gravity is None else check_gravity(gravity, source)
     model = with_joint_dynamics(reader.build(g, non_psd_inertia), joint_dynamics, source)
@@ -221,8 +226,28 @@ def _warn(model, source):
 
 # ---- includes -------------------------------------------------------------------------------------------------
 
-def _confined(name, base_dir, source):
-    """The real path of an <include file=...> inside base_dir; MJCFError for absolute paths and escapes."""
+def _granted(asset_root, base_dir, source):
+    """The real path of the folder tree includes may come from: base_dir's, or ``asset_root`` (an existing folder
+    that holds base_dir); None without a base_dir."""
+    if asset_root is None:
+        return None if base_dir is None else os.path.realpath(base_dir)
+    try:
+        tree = os.path.realpath(os.fspath(asset_root))
+    except TypeError:
+        raise MJCFError(f"{source}: asset_root must be a folder path, not {type(asset_root).__name__}") from None
+    if not os.path.isdir(tree):
+        raise MJCFError(f"{source}: asset_root {show(str(asset_root))}: no such folder")
+    if base_dir is None:
+        raise MJCFError(f"{source}: asset_root needs the model's folder (load_mjcf of a file, or base_dir= for text)")
+    base = os.path.realpath(base_dir)
+    if os.path.commonpath([base, tree]) != tree:
+        raise MJCFError(f"{source}: asset_root {show(str(asset_root))} does not hold the model's folder {base!r}")
+    return tree
+
+
+def _confined(name, base_dir, source, tree=None):
+    """The real path of an <include file=...> (relative to base_dir) inside the granted folder tree (``_granted``:
+    base_dir's by default); MJCFError for absolute paths and escapes."""
     if base_dir is None:
         raise MJCFError(f"{source}: <include file={show(name or '')}>: includes need a folder (load_mjcf of a file, "
                         f"or base_dir= for text)")
@@ -230,15 +255,18 @@ def _confined(name, base_dir, source):
         raise MJCFError(f"{source}: <include file={show(name or '')}>: an absolute, URL or empty path is refused "
                         f"(includes are relative to the model's folder)")
     base = os.path.realpath(base_dir)
+    tree = base if tree is None else tree
     real = os.path.realpath(os.path.join(base, name))
-    if os.path.commonpath([real, base]) != base or real == base:
-        raise MJCFError(f"{source}: <include file={show(name)}>: resolves outside the model's folder {base!r}")
+    if os.path.commonpath([real, tree]) != tree or real == tree:
+        where = f"the model's folder {base!r}" if tree == base else f"the granted folder {tree!r} (asset_root)"
+        hint = "; load_mjcf(..., asset_root=FOLDER) (CLI: --asset-root) grants a wider tree" if tree == base else ""
+        raise MJCFError(f"{source}: <include file={show(name)}>: resolves outside {where}{hint}")
     if not os.path.isfile(real):
         raise MJCFError(f"{source}: <include file={show(name)}>: no such file in the model's folder")
     return real
 
 
-def _expand_includes(xml, source, base_dir, budget):
+def _expand_includes(xml, source, base_dir, budget, tree=None):
     """Every <include file> replaced by the children of the included file's <mujoco> or <mujocoinclude> root
     (iteratively); bounded depth,
     count and bytes (``budget``: what is left of max_bytes)."""
@@ -252,7 +280,7 @@ def _expand_includes(xml, source, base_dir, budget):
         if depth > MAX_INCLUDE_DEPTH:
             raise MJCFError(f"{source}: <include file={show(inc.get('file') or '')}>: includes nested deeper "
                             f"than {MAX_INCLUDE_DEPTH}")
-        path = _confined(inc.get("file"), base_dir, source)
+        path = _confined(inc.get("file"), base_dir, source, tree)
         with open(path, "rb") as fh:
             data = fh.read(max(budget, 0) + 1)
         budget -= len(data)

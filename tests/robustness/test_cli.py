@@ -49,6 +49,8 @@ def files(tmp_path_factory):
     (d / "empty.urdf").write_bytes(b"")
     (d / "binary.urdf").write_bytes(bytes(range(256)) * 8)
     (d / "bad.csv").write_text("t,q_joint1\n0,abc\n")
+    (d / "model.xml").write_text('<mujoco><worldbody><body name="b"><joint name="j" axis="0 1 0"/><geom type="sphere" '
+                                 'size="0.1"/></body></worldbody></mujoco>')
     text = AAU.read_text()                        # the AAU arm with link2's mass 20 % heavier
     i = text.index("<mass value=", text.index('<link name="link2"'))
     j = text.index('"', i + len('<mass value="'))
@@ -84,6 +86,10 @@ SUBPROCESS = [   # id, argv (with {d} = the files folder), command, fragment of 
     ("inspect-not-urdf", ["inspect", "{d}/file.txt"], "inspect", "malformed XML", False),
     ("inspect-binary", ["inspect", "{d}/binary.urdf"], "inspect", "binary.urdf", False),
     ("inspect-tips-unknown", ["inspect", AAU, "--tips", "nolink"], "inspect", "nolink", False),
+    ("inspect-asset-root-on-urdf", ["inspect", AAU, "--asset-root", "{d}/folder"], "inspect", "--asset-root grants",
+     False),
+    ("inspect-asset-root-missing", ["inspect", "{d}/model.xml", "--asset-root", "{d}/nowhere"], "inspect",
+     "no such folder", False),
     ("example-samples-0", ["example", "aau", "--samples", "0", "--out", "{d}/ex"], "example", "--samples",
      True),
     ("example-out-is-file", ["example", "aau", "--out", "{d}/file.txt"], "example", "is a file", False),
@@ -322,3 +328,18 @@ def test_validate_mimic_exit_codes(files, capsys):
     assert_refused(code, capsys.readouterr().err, "validate", "Pinocchio cannot build a reference model")
     code = main(["inspect", str(PANDA), "--mimic", "--lock", "panda_joint1=0"])
     assert_refused(code, capsys.readouterr().err, "inspect", "cannot yet be combined with mimic=True")
+
+
+def test_asset_root_lets_inspect_read_a_suites_shared_include(tmp_path):
+    """inspect on an MJCF file that includes ../common/defaults.xml: refused by default, naming --asset-root; read
+    with --asset-root on the suite's folder (exit 0)."""
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "common").mkdir()
+    (tmp_path / "common" / "defaults.xml").write_text('<mujoco><compiler angle="radian"/></mujoco>')
+    main = tmp_path / "robots" / "arm.xml"
+    main.write_text('<mujoco><include file="../common/defaults.xml"/><worldbody><body name="b"><joint name="j" '
+                    'axis="0 1 0"/><geom type="sphere" size="0.1"/></body></worldbody></mujoco>')
+    r = run_cli("inspect", main, cwd=tmp_path)
+    assert r.returncode == 2 and "--asset-root" in r.stderr and "Traceback" not in r.stderr, r.stderr
+    r = run_cli("inspect", main, "--asset-root", tmp_path, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr

@@ -200,3 +200,54 @@ def test_include_depth_count_and_bytes_are_bounded(tmp_path):
 
 def test_includes_in_text_need_a_folder():
     refused(doc(top='<include file="part.xml"/>'), "includes need a folder")
+
+
+# ---- asset_root: a granted folder tree for includes ------------------------------------------------------------
+
+def _suite(tmp_path):
+    """A suite's layout: robots/arm/main.xml includes ../../common/defaults.xml; outside.xml beside the suite."""
+    (tmp_path / "suite" / "robots" / "arm").mkdir(parents=True)
+    (tmp_path / "suite" / "common").mkdir()
+    (tmp_path / "suite" / "common" / "defaults.xml").write_text('<mujoco><compiler angle="radian"/></mujoco>')
+    (tmp_path / "outside.xml").write_text('<mujoco><compiler angle="radian"/></mujoco>')
+    return _main(tmp_path / "suite" / "robots" / "arm", "../../common/defaults.xml")
+
+
+def test_a_granted_tree_lets_includes_leave_the_models_folder(tmp_path):
+    main = _suite(tmp_path)
+    with pytest.raises(MJCFError, match=r"outside the model's folder .*asset_root=FOLDER.*--asset-root"):
+        load_mjcf(main)
+    assert load_mjcf(main, asset_root=tmp_path / "suite").nv == 1
+    with pytest.raises(MJCFError, match="outside the granted folder"):      # a tree that holds the model, not the
+        load_mjcf(main, asset_root=str(tmp_path / "suite" / "robots"))      # shared folder
+
+
+@pytest.mark.parametrize("include,words", [
+    ("../../../outside.xml", ("outside the granted folder", "(asset_root)")),
+    ("/etc/hostname", ("absolute",)),
+    ("../../common/missing.xml", ("no such file",)),
+])
+def test_the_granted_tree_keeps_every_other_rule(tmp_path, include, words):
+    _suite(tmp_path)
+    main = _main(tmp_path / "suite" / "robots" / "arm", include, "other.xml")
+    with pytest.raises(MJCFError) as exc:
+        load_mjcf(main, asset_root=tmp_path / "suite")
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+
+
+def test_a_symlink_out_of_the_granted_tree_is_refused(tmp_path):
+    _suite(tmp_path)
+    os.symlink(tmp_path / "outside.xml", tmp_path / "suite" / "common" / "link.xml")
+    main = _main(tmp_path / "suite" / "robots" / "arm", "../../common/link.xml", "linked.xml")
+    with pytest.raises(MJCFError, match="outside the granted folder"):
+        load_mjcf(main, asset_root=tmp_path / "suite")
+
+
+@pytest.mark.parametrize("root,words", [("missing", "no such folder"), ("elsewhere", "does not hold the model's folder")])
+def test_an_asset_root_must_be_a_folder_holding_the_models(tmp_path, root, words):
+    main = _suite(tmp_path)
+    (tmp_path / "elsewhere").mkdir()
+    with pytest.raises(MJCFError, match=words):
+        load_mjcf(main, asset_root=tmp_path / root)
+    with pytest.raises(MJCFError, match="folder path"):
+        load_mjcf(main, asset_root=3.5)
