@@ -1286,6 +1286,10 @@ FAULTS = (
     Fault("compiled-aba-derivatives-swapped", "derivatives", "manipdyn/compiled.py",
           "qdd[::1], dq, dv, Minv)", "qdd[::1], dv, dq, Minv)",
           ("tests/batch/test_compiled.py",), "compiled.aba_derivatives writes ∂q̈/∂q̇ into dq and ∂q̈/∂q into dv"),
+    Fault("mjcf-tendon-coupling-ratio-sign", "loader", "manipdyn/io/mjcf_read.py",
+          'p0 / a, -rest[0][1] / a if rest else 0.0, "tendon")', 'p0 / a, rest[0][1] / a if rest else 0.0, "tendon")',
+          ("tests/crosscheck/test_mjcf_equality.py",), "a fixed tendon a q1 + b q2 couples q1 = (b/a) q2 instead of "
+          "−(b/a) q2"),
 )
 
 

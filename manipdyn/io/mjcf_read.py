@@ -52,7 +52,9 @@ What is read (MuJoCo's XML reference, "MJCF"; each number in the URDF reader's g
   ``torquescale="0"`` (no orientation rows) -> "spherical". ``joint``: ``joint1 = c0 + c1 joint2`` (``polycoef``;
   MuJoCo's positions are relative to qpos0, i.e. ``ref``) -> "coupling" with ratio c1, when the two joints hang
   from the same body (each alone on its side of their common ancestor: the closure model's coupling row); without
-  ``joint2`` (or c1 = 0), joint1 = 0. ``class`` defaults (``<default><equality>``) give active, solref, solimp.
+  ``joint2`` (or c1 = 0), joint1 = 0. ``tendon`` on one fixed tendon L = a q_a + b q_b (``<tendon><fixed>``, the
+  four-bar grippers' finger couplings): L − L₀ = c0 is q_a − q_a₀ = c0/a − (b/a)(q_b − q_b₀), the joint equality's
+  coupling with ratio −b/a (a tendon of one joint: q_a − q_a₀ = c0/a). ``class`` defaults (``<default><equality>``) give active, solref, solimp.
 - ``<include file>``: the included file's children replace the element (its root is ``<mujoco>``, or
   ``<mujocoinclude>`` as in files written for MuJoCo before 2.1); paths are relative to the main file's folder and
   must resolve (symlinks too) inside it; depth and count are bounded, their bytes count towards ``max_bytes``.
@@ -76,7 +78,9 @@ Ignored (no effect on M or on the inverse dynamics τ of mj_rne): ``<asset>``, `
 and lights, a geom's contact and visual attributes, geoms that do not give mass, fixed tendons without armature.
 
 Refused (MJCFError naming the file, the element and what is not supported): a free joint below a body or beside
-another joint, a free joint's ``align`` (or ``<compiler alignfree>``), ``tendon`` and ``flex`` equalities (and any other but connect, weld, joint), a joint equality with
+another joint, a free joint's ``align`` (or ``<compiler alignfree>``), ``flex`` equalities (and any other but connect, weld,
+joint, tendon), a tendon equality between two tendons or on a spatial tendon or a fixed one of more than two joints,
+a joint equality with
 quadratic or higher ``polycoef`` terms, with an offset (c0 + ref1 − c1 ref2 ≠ 0: the coupling row has none), between
 joints that do not hang from the same body, or on a free or ball joint, an equality whose two sides are one rigid body,
 tendons with ``armature``, ``mesh``, ``hfield``,
@@ -126,7 +130,7 @@ _REFUSED_BODY_CHILDREN = {"composite", "flexcomp", "replicate", "attach", "plugi
 _TOP = {"compiler", "option", "size", "visual", "statistic", "default", "extension", "custom", "asset",
         "worldbody", "contact", "equality", "deformable", "tendon", "actuator", "sensor", "keyframe"}
 _MASS_GEOMS = ("sphere", "capsule", "cylinder", "box", "ellipsoid")
-_EQUALITIES = ("connect", "weld", "joint")
+_EQUALITIES = ("connect", "weld", "joint", "tendon")
 _APPLIED = ("armature", "damping", "frictionloss")    # → Model.armature, damping, friction (each dof of the joint)
 _DYNAMICS = ("stiffness", "springref")                # read, quirked, not applied
 
@@ -150,6 +154,7 @@ _ATTRS = {
     "weld": {"name", "class", "active", "solref", "solimp", "body1", "body2", "anchor", "relpose", "site1", "site2",
              "torquescale"},
     "joint_eq": {"name", "class", "active", "solref", "solimp", "joint1", "joint2", "polycoef"},
+    "tendon_eq": {"name", "class", "active", "solref", "solimp", "tendon1", "tendon2", "polycoef"},
     "compiler": {"autolimits", "boundmass", "boundinertia", "settotalmass", "balanceinertia", "strippath",
                  "coordinate", "angle", "fitaabb", "eulerseq", "meshdir", "texturedir", "assetdir", "discardvisual",
                  "usethread", "fusestatic", "inertiafromgeom", "inertiagrouprange", "saveinertial", "alignfree",
@@ -474,21 +479,33 @@ class _Reader:
         for e in self.xml.findall("equality"):
             for c in e:
                 if isinstance(c.tag, str) and c.tag not in _EQUALITIES:
-                    why = (f"a {c.tag} equality constrains {'tendon lengths' if c.tag == 'tendon' else 'a flex'}, "
-                           f"not rigid bodies or joints: not supported" if c.tag in ("tendon", "flex", "flexvert")
-                           else "not an equality manipdyn knows (connect, weld, joint)")
+                    why = ("a flex equality constrains a flex, not rigid bodies or joints: not supported"
+                           if c.tag in ("flex", "flexvert") else "not an equality manipdyn knows (connect, weld, "
+                           "joint, tendon)")
                     raise MJCFError(f"{src}: <equality><{c.tag} name={show(c.get('name') or '')}>: {why}")
+        self.tendons = {}                           # fixed tendons: name -> [(joint name, coef)]; spatial: None
         for t in self.xml.findall("tendon"):
             for c in t:
                 if not isinstance(c.tag, str):
                     continue
                 name = c.get("name") or f"<{c.tag}>"
+                if c.get("name") is not None:
+                    self.tendons[c.get("name")] = None if c.tag != "fixed" else [
+                        (j.get("joint"), self.coef(j, f"tendon {name!r}"))
+                        for j in c if isinstance(j.tag, str) and j.tag == "joint"]
                 if c.get("armature") is not None and float(self.nums(c, "armature", (1,), f"tendon {name!r}")[0]):
                     raise MJCFError(f"{src}: tendon {name!r}: armature (adds to M): not supported yet")
                 for k in ("stiffness", "damping"):
                     x = self.nums(c, k, (1,), f"tendon {name!r}") if c.get(k) is not None else None
                     if x is not None and x[0] != 0:
                         self.quirks.append(Quirk("passive_force", name, f"tendon {k} {x[0]:g}: not applied"))
+
+    def coef(self, j, where):
+        """A fixed tendon's <joint coef> (required, as MuJoCo's)."""
+        x = self.nums(j, "coef", (1,), where)
+        if x is None:
+            raise MJCFError(f"{self.source}: {where}: <joint joint={show(j.get('joint') or '')}> needs coef")
+        return float(x[0])
 
     def cls(self, e, inherited):
         name = e.get("class", inherited)
@@ -789,7 +806,7 @@ class _Reader:
                 if name in names:
                     raise MJCFError(f"{self.source}: {where}: the name is used twice")
                 names.add(name)
-                self.known(c, where, "joint_eq" if c.tag == "joint" else c.tag)
+                self.known(c, where, {"joint": "joint_eq", "tendon": "tendon_eq"}.get(c.tag, c.tag))
                 cls = self.cls(c, "main")
                 get = lambda key: c.get(key, self.classes[cls].get("equality", {}).get(key))  # noqa: E731
                 active = get("active") or "true"
@@ -800,8 +817,13 @@ class _Reader:
                                              f"of the model (MuJoCo starts with it off)"))
                     continue
                 soft = [f"{key}={show(get(key))}" for key in ("solref", "solimp") if get(key) is not None]
-                if c.tag == "joint":
-                    out.append(self.joint_equality(c, name, where, joints, get))
+                if c.tag in ("joint", "tendon"):
+                    out.append((self.joint_equality if c.tag == "joint" else self.tendon_equality)(
+                        c, name, where, joints, get))
+                    if soft:
+                        self.quirks.append(Quirk("equality_softness", name, f"{where}: {', '.join(soft)}: MuJoCo's "
+                                                 f"constraint softness, not a model parameter; the closure is rigid "
+                                                 f"here"))
                     continue
                 if poses is None:
                     poses = _poses_at_qpos0(joints)
@@ -868,30 +890,67 @@ class _Reader:
         return "world" if b < 0 else self.joint_bodies[b]
 
     def joint_equality(self, c, name, where, joints, get):
-        """q1 − q1₀ = c₀ + c₁ (q2 − q2₀) (MuJoCo's joint equality, q₀ = qpos0) as a coupling row: linear, without
-        offset, and the two joints each alone on their side of a common ancestor (model.Constraint)."""
+        """q1 − q1₀ = c₀ + c₁ (q2 − q2₀) (MuJoCo's joint equality, q₀ = qpos0) as a coupling row (``coupling``)."""
+        i1, i2 = (self.joint_id(c.get(key), key, where, joints, key == "joint1") for key in ("joint1", "joint2"))
+        poly = self.polycoef(c, where, get)
+        return self.coupling(name, where, joints, i1, i2, poly[0], poly[1], "joint")
+
+    def tendon_equality(self, c, name, where, joints, get):
+        """L − L₀ = c₀ (MuJoCo's tendon equality on one fixed tendon L = a q_a + b q_b, L₀ its length at qpos0):
+        q_a − q_a₀ = c₀ / a − (b / a)(q_b − q_b₀), a coupling row (``coupling``); a tendon of one joint fixes it.
+        Refused by name: an equality between two tendons, a spatial tendon, more than two joints."""
+        t = c.get("tendon1")
+        if t is None:
+            raise MJCFError(f"{self.source}: {where}: needs tendon1")
+        if t not in self.tendons:
+            raise MJCFError(f"{self.source}: {where}: tendon1={show(t)}: no such tendon")
+        if c.get("tendon2") is not None:
+            raise MJCFError(f"{self.source}: {where}: tendon2={show(c.get('tendon2'))}: an equality between two "
+                            f"tendons' lengths: not supported (one fixed tendon of one or two joints is)")
+        terms = self.tendons[t]
+        if terms is None or not 1 <= len(terms) <= 2:
+            what = "a spatial tendon" if terms is None else f"a fixed tendon of {len(terms)} joints"
+            raise MJCFError(f"{self.source}: {where}: tendon {t!r} is {what}: not supported (a coupling relates one "
+                            f"or two joints: a fixed tendon of one or two)")
+        poly = self.nums(c, "polycoef", (5,), where, get("polycoef"))     # c₁ … c₄ multiply tendon2's length: none
+        p0 = 0.0 if poly is None else float(poly[0])
+        (n1, a), *rest = terms
+        if a == 0 or not np.isfinite(a):
+            raise MJCFError(f"{self.source}: {where}: tendon {t!r}: coef {a:g} of joint {n1!r}: not a coupling")
+        i1 = self.joint_id(n1, "tendon joint", where, joints, True)
+        i2 = self.joint_id(rest[0][0], "tendon joint", where, joints, True) if rest else None
+        return self.coupling(name, where, joints, i1, i2, p0 / a, -rest[0][1] / a if rest else 0.0, "tendon")
+
+    def joint_id(self, n, key, where, joints, required):
+        """The index in ``joints`` of joint n (attribute key), a hinge or slide; None for a missing optional one."""
+        if n is None:
+            if required:
+                raise MJCFError(f"{self.source}: {where}: needs {key}")
+            return None
         idx = {j["name"]: i for i, j in enumerate(joints)}
-        ids = []
-        for key in ("joint1", "joint2"):
-            n = c.get(key)
-            if n is None:
-                if key == "joint1":
-                    raise MJCFError(f"{self.source}: {where}: needs joint1")
-                ids.append(None)
-                continue
-            if n not in idx:
-                raise MJCFError(f"{self.source}: {where}: {key}={show(n)}: no such joint")
-            if joints[idx[n]]["kind"] in (FREEFLYER, BALL):
-                raise MJCFError(f"{self.source}: {where}: {key}={show(n)} is a "
-                                f"{'free' if joints[idx[n]]['kind'] == FREEFLYER else 'ball'} joint; a joint equality "
-                                f"relates hinge and slide joints")
-            ids.append(idx[n])
-        i1, i2 = ids
+        if n not in idx:
+            raise MJCFError(f"{self.source}: {where}: {key}={show(n)}: no such joint")
+        if joints[idx[n]]["kind"] in (FREEFLYER, BALL):
+            raise MJCFError(f"{self.source}: {where}: {key}={show(n)} is a "
+                            f"{'free' if joints[idx[n]]['kind'] == FREEFLYER else 'ball'} joint; a coupling relates "
+                            f"hinge and slide joints")
+        return idx[n]
+
+    def polycoef(self, c, where, get):
+        """A joint equality's polycoef (5,) (default 0 1 0 0 0); its quadratic and higher terms refused by name (the
+        closure model's coupling is linear)."""
         poly = self.nums(c, "polycoef", (5,), where, get("polycoef"))
         poly = np.array([0.0, 1.0, 0, 0, 0]) if poly is None else poly
         if np.any(poly[2:]):
             raise MJCFError(f"{self.source}: {where}: polycoef={show(get('polycoef'))}: a polynomial coupling "
                             f"(quadratic or higher terms): not supported (the closure model's coupling is linear)")
+        return poly
+
+    def coupling(self, name, where, joints, i1, i2, p0, c1, source):
+        """q1 − q1₀ = p0 + c1 (q2 − q2₀) (q₀ = qpos0; i2 None: q1 − q1₀ = p0) as a coupling row: linear, without
+        offset, and the two joints each alone on their side of a common ancestor (model.Constraint; source: the
+        equality's tag)."""
+        poly = (p0, c1)
         b1 = i1
         if i2 is None or poly[1] == 0:                      # q1 = 0: the coupling of body1's parent and body1
             a = joints[i1]["parent"]
@@ -912,7 +971,7 @@ class _Reader:
             raise MJCFError(f"{self.source}: {where}: ratio {c1:g} beyond the bound {MAX_MASS:g}")
         I3, z = np.eye(3), np.zeros(3)
         return Constraint(name, "coupling", a, self.body_name(a), I3, z, z, b1, self.body_name(b1), I3, z, z,
-                          ratio=float(c1) if a == i2 else 0.0, source="joint")
+                          ratio=float(c1) if a == i2 else 0.0, source=source)
 
     # -- mass ------------------------------------------------------------------------------------------------
     def body_inertia(self, e, items, where):

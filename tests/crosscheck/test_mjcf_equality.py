@@ -1,4 +1,4 @@
-"""MJCF <equality> read as the model's closures (io/mjcf_read.py): connect, weld and joint equalities.
+"""MJCF <equality> read as the model's closures (io/mjcf_read.py): connect, weld, joint and tendon equalities.
 
 References: (1) the closed-chain models the project has (urdf/spm.urdf, urdf/fourbar.urdf, tests/data/loops/*),
 written by to_mjcf and read back — the closures (type, bodies, frames, axes, ratio) and the constrained forward
@@ -261,7 +261,7 @@ def test_closures_hold_at_qpos0():
 
 
 @pytest.mark.parametrize("eq, words", [
-    ('<tendon name="t" tendon1="x"/>', ("tendon", "not supported")),
+    ('<tendon name="t" tendon1="x"/>', ("tendon1='x'", "no such tendon")),
     ('<flex name="f" flex="x"/>', ("flex", "not supported")),
     ('<joint name="p" joint1="j6" joint2="j7" polycoef="0 1 0.5 0 0"/>', ("'p'", "polynomial")),
     ('<joint name="o" joint1="j6" joint2="j7" polycoef="0.1 1 0 0 0"/>', ("'o'", "offset")),
@@ -278,3 +278,72 @@ def test_refused_by_name(eq, words):
         _quiet(load_mjcf_string, text)
     for w in words:
         assert w in str(e.value), str(e.value)
+
+
+# ---- tendon equalities: one fixed tendon coupling two fingers ------------------------------------------------
+
+def _fingers(coupling, refs=("0", "0")):
+    """A palm on a slide with two sibling finger hinges (refs: their ref), coupled by ``coupling`` (XML)."""
+    return (f'<mujoco><compiler angle="radian"/><worldbody><body name="palm" pos="0 0 0.3"><joint name="lift" type="slide" axis="0 0 1"/>'
+            f'<geom type="box" size="0.05 0.05 0.02" mass="0.8"/>'
+            f'<body name="left" pos="0.04 0 0"><joint name="f1" axis="0 1 0" ref="{refs[0]}"/>'
+            f'<geom type="capsule" fromto="0 0 0 0 0 -0.08" size="0.01" mass="0.05"/></body>'
+            f'<body name="right" pos="-0.04 0 0"><joint name="f2" axis="0 1 0" ref="{refs[1]}"/>'
+            f'<geom type="capsule" fromto="0 0 0 0 0 -0.08" size="0.01" mass="0.07"/></body></body></worldbody>'
+            f'{coupling}</mujoco>')
+
+
+@pytest.mark.parametrize("coefs, c0, refs", [((1.0, -1.0), 0.0, ("0", "0")), ((2.0, 3.0), 0.0, ("0", "0")),
+                                             ((2.0, 2.0), 0.0, ("0.2", "-0.2")), ((1.0, -1.0), 0.5, ("0", "0.5")),
+                                             ((1.5, -0.5), 0.25, ("0.5", "0.5"))])
+def test_a_fixed_tendon_equality_is_the_joint_equality_and_mujocos_row(coefs, c0, refs):
+    """L = a q_f1 + b q_f2, L − L₀ = c0 (a tendon equality on it): the coupling q_f1 − q_f1₀ = c0/a − (b/a)(q_f2 −
+    q_f2₀), the closure the equivalent joint equality gives; Φ and Φ_q proportional to MuJoCo's efc_pos and efc_J
+    (one row) at random configurations; the constrained q̈ against MuJoCo's (test_mjcf_export's measure)."""
+    a, b = coefs
+    tendon = (f'<tendon><fixed name="grip"><joint joint="f1" coef="{a!r}"/><joint joint="f2" coef="{b!r}"/></fixed>'
+              f'</tendon><equality><tendon name="sync" tendon1="grip" polycoef="{c0!r} 0 0 0 0"/></equality>')
+    joint = f'<equality><joint name="sync" joint1="f1" joint2="f2" polycoef="{c0 / a!r} {-b / a!r} 0 0 0"/></equality>'
+    if c0 / a + float(refs[0]) + (b / a) * float(refs[1]) != 0:       # an offset: refused alike
+        for text in (_fingers(tendon, refs), _fingers(joint, refs)):
+            with pytest.raises(MJCFError, match="a coupling with an offset"):
+                _quiet(load_mjcf_string, text)
+        return
+    ours, twin = (_quiet(load_mjcf_string, _fingers(x, refs)) for x in (tendon, joint))
+    (c,), (t,) = ours.constraints, twin.constraints
+    assert (c.type, c.parent, c.child, c.ratio, c.source) == (t.type, t.parent, t.child, t.ratio, "tendon")
+    m = mujoco.MjModel.from_xml_string(_fingers(tendon, refs))
+    d = mujoco.MjData(m)
+    rng, worst = np.random.default_rng(11), 0.0
+    for _ in range(5):
+        q = rng.uniform(-1, 1, ours.nq)
+        d.qpos[:] = _mj_state(ours, m, q)
+        mujoco.mj_forward(m, d)
+        Phi, J = closure_terms(ours, q)[:2]
+        row, = np.flatnonzero(d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY)   # (contacts aside)
+        Jmj = d.efc_J.reshape(d.nefc, m.nv)[row]
+        s = Jmj @ J[0] / (J[0] @ J[0])                   # MuJoCo's row = s · ours (s = ±a)
+        worst = max(worst, err(Jmj, s * J[0]), abs(d.efc_pos[row] - s * Phi[0]) / max(1.0, abs(s)))
+    print(f"\nMuJoCo's tendon equality row against Φ, Φ_q: {worst:.1e}")
+    assert worst <= ROWS
+    r = -b / a                                           # q_f1 = r q_f2 (no offset): assembled states
+    states = [(np.array([0.1, 0.4 * r, 0.4]), np.array([0.3, -1.2 * r, -1.2])),
+              (np.array([-0.2, -0.7 * r, -0.7]), np.zeros(3))]
+    _check_closed(f"tendon {a:g} {b:g}", ours, states)   # MuJoCo's constrained q̈, rigid-extrapolated, and ours
+
+
+@pytest.mark.parametrize("tendon, eq, words", [
+    ('<spatial name="t"><site site="s1"/><site site="s2"/></spatial>', '<tendon tendon1="t"/>', "a spatial tendon"),
+    ('<fixed name="t"><joint joint="f1" coef="1"/><joint joint="f2" coef="1"/><joint joint="lift" coef="1"/></fixed>',
+     '<tendon tendon1="t"/>', "a fixed tendon of 3 joints"),
+    ('<fixed name="t"><joint joint="f1" coef="1"/></fixed><fixed name="u"><joint joint="f2" coef="1"/></fixed>',
+     '<tendon tendon1="t" tendon2="u"/>', "between two tendons"),
+    ('<fixed name="t"><joint joint="f1"/></fixed>', '<tendon tendon1="t"/>', "needs coef"),
+    ('<fixed name="t"><joint joint="nope" coef="1"/><joint joint="f2" coef="1"/></fixed>', '<tendon tendon1="t"/>',
+     "no such joint"),
+])
+def test_tendon_equalities_beyond_a_coupling_are_refused_by_name(tendon, eq, words):
+    text = _fingers(f"<tendon>{tendon}</tendon><equality>{eq}</equality>").replace(
+        '<geom type="box"', '<site name="s1"/><site name="s2" pos="0 0 0.1"/><geom type="box"')
+    with pytest.raises(MJCFError, match=words):
+        _quiet(load_mjcf_string, text)

@@ -93,7 +93,7 @@ def test_joint_types_by_name():
 
 
 def test_unsupported_features_are_named():
-    refused(doc(top='<equality><tendon tendon1="t"/></equality>'), "<equality><tendon", "not supported")
+    refused(doc(top='<equality><tendon tendon1="t"/></equality>'), "<equality><tendon", "tendon1='t': no such tendon")
     refused(doc(top='<tendon><fixed name="t" armature="0.1"><joint joint="j" coef="1"/></fixed></tendon>'),
             "tendon 't'", "armature")
     refused(doc(top='<asset><mesh name="m" file="m.stl"/></asset>', geom='<geom type="mesh" mesh="m"/>'),
