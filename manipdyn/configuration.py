@@ -25,7 +25,7 @@ import numba
 from .errors import InputError
 from ._jit import A1, A2, entry
 from .joints import (BALL, FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, difference_kernel, difference_one,
-                     integrate_kernel, integrate_one, normalize_kernel)
+                     integrate_kernel, integrate_one, normalize_kernel, normalize_one)
 from .dynamics.arguments import as_batch, check_model, check_scalar, unbatch
 from .model import QUAT_TOL, Model
 
@@ -49,6 +49,7 @@ C1 = numba.types.Array(numba.int64, 1, "C")              # KernelForm.config_one
 INTEGRATE_ONE = entry(integrate_one, C1, A1, A1, A1)
 DIFFERENCE_ONE = entry(difference_one, C1, A1, A1, A1)
 NORMALIZE = entry(normalize_kernel, C1, A2, A2)
+NORMALIZE_ONE = entry(normalize_one, C1, A1, A1)
 
 
 def _unit_name(model, k, n):
@@ -86,12 +87,12 @@ def integrate(model, q, v) -> np.ndarray:
     v = [linear; angular] in the body frame (SE(3) exponential, Lie group integration as Pinocchio's integrate).
     q (nq,) or (N, nq), v (nv,) or (N, nv).
     """
-    if type(model) is Model and type(q) is _ND and type(v) is _ND and q.dtype is _F64 and v.dtype is _F64:
+    if type(model) is Model and type(q) is _ND and type(v) is _ND and q.dtype is _F64 and v.dtype is _F64 and \
+            q.ndim == 1 and v.ndim == 1:                # (the kernel checks the lengths: False, then the checked path)
         k = model.kernel
-        if q.shape == k.q_shape and v.shape == k.v_shape:
-            out = np.empty(k.q_shape)
-            if INTEGRATE_ONE.call(k.config_one, q, v, out):
-                return out
+        out = np.empty(k.q_shape)
+        if INTEGRATE_ONE.call(k.config_one, q, v, out):
+            return out
     (Q, V), single = as_batch(model, q=q, v=v)
     check_quaternions(model, Q)
     kind, _, iq, iv = _arrays(model)
@@ -106,12 +107,12 @@ def difference(model, q0, q1) -> np.ndarray:
     1-dof joints q1 − q0 (continuous joints wrapped into [−π, π]); a ball joint log(quat0⁻¹ quat1); a free flyer
     log6(M(q0)⁻¹ M(q1)); rotations of angle ≤ π (at exactly π either direction is a solution).
     """
-    if type(model) is Model and type(q0) is _ND and type(q1) is _ND and q0.dtype is _F64 and q1.dtype is _F64:
+    if type(model) is Model and type(q0) is _ND and type(q1) is _ND and q0.dtype is _F64 and q1.dtype is _F64 and \
+            q0.ndim == 1 and q1.ndim == 1:
         k = model.kernel
-        if q0.shape == k.q_shape and q1.shape == k.q_shape:
-            out = np.empty(k.v_shape)
-            if DIFFERENCE_ONE.call(k.config_one, q0, q1, out):
-                return out
+        out = np.empty(k.v_shape)
+        if DIFFERENCE_ONE.call(k.config_one, q0, q1, out):
+            return out
     (Q0, Q1), single = as_batch(model, q0=q0, q1=q1)
     check_quaternions(model, Q0, "q0")
     check_quaternions(model, Q1, "q1")
@@ -171,9 +172,10 @@ def normalize(model, q) -> np.ndarray:
     by its norm (the rest unchanged).
 
     InputError for a block of norm 0 (it names no rotation)."""
-    if type(model) is Model and type(q) is _ND and q.dtype is _F64 and q.shape == model.kernel.q_shape:
-        out = np.empty(q.shape)
-        if NORMALIZE.call(model.kernel.config_one, q[None], out[None]) < 0:
+    if type(model) is Model and type(q) is _ND and q.dtype is _F64 and q.ndim == 1:
+        k = model.kernel
+        out = np.empty(k.q_shape)
+        if NORMALIZE_ONE.call(k.config_one, q, out) < 0:
             return out
     (Q,), single = as_batch(model, q=q)
     if type(model) is Model:

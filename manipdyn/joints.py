@@ -462,12 +462,24 @@ def state_ok(q, units, v):
     return True
 
 
+@njit(cache=True, inline="always")
+def config_sizes(kind, iq, iv):
+    """(nq, nv) of a model from its joints' kinds and first entries of q and v (joints in q order: the last joint's
+    first entries plus its sizes, NQ and NV)."""
+    nb = kind.shape[0]
+    if nb == 0:
+        return 0, 0
+    return iq[nb - 1] + NQ[kind[nb - 1]], iv[nb - 1] + NV[kind[nb - 1]]
+
+
 @njit(cache=True)
 def integrate_one(C, q, v, out):
-    """One state: out (nq,) = q ⊕ v (``integrate_kernel``) if ``state_ok(q, units, v)`` (C: ``config_views``);
-    whether it did (else the checked path names the fault)."""
+    """One state: out (nq,) = q ⊕ v (``integrate_kernel``) if the arrays have the model's sizes (``config_sizes``:
+    Python checks only their types and dimensions) and ``state_ok(q, units, v)`` (C: ``config_views``); whether it
+    did (else the checked path names the fault)."""
     kind, _, iq, iv, units = config_views(C)
-    if not state_ok(q, units, v):
+    nq, nv = config_sizes(kind, iq, iv)
+    if not (q.shape[0] == nq and v.shape[0] == nv and out.shape[0] == nq and state_ok(q, units, v)):
         return False
     integrate_kernel(kind, iq, iv, q[np.newaxis, :], v[np.newaxis, :], out[np.newaxis, :])
     return True
@@ -475,12 +487,26 @@ def integrate_one(C, q, v, out):
 
 @njit(cache=True)
 def difference_one(C, q0, q1, out):
-    """One state: out (nv,) = q1 ⊖ q0 (``difference_kernel``) if both pass ``state_ok``; whether it did."""
+    """One state: out (nv,) = q1 ⊖ q0 (``difference_kernel``) if the arrays have the model's sizes and both pass
+    ``state_ok``; whether it did."""
     kind, continuous, iq, iv, units = config_views(C)
-    if not (state_ok(q0, units, q1) and state_ok(q1, units, q0[:0])):
+    nq, nv = config_sizes(kind, iq, iv)
+    if not (q0.shape[0] == nq and q1.shape[0] == nq and out.shape[0] == nv and state_ok(q0, units, q1)
+            and state_ok(q1, units, q0[:0])):
         return False
     difference_kernel(kind, continuous, iq, iv, q0[np.newaxis, :], q1[np.newaxis, :], out[np.newaxis, :])
     return True
+
+
+@njit(cache=True)
+def normalize_one(C, q, out):
+    """One state q (nq,) into out: ``normalize_kernel`` on row views if both have the model's size; −1 when it is
+    done (else the checked path names the fault)."""
+    kind, _, iq, iv, _ = config_views(C)
+    nq = config_sizes(kind, iq, iv)[0]
+    if not (q.shape[0] == nq and out.shape[0] == nq):
+        return 0
+    return normalize_kernel(C, q[np.newaxis, :], out[np.newaxis, :])
 
 
 @njit(cache=True)

@@ -1239,8 +1239,8 @@ FAULTS = (
           ("tests/crosscheck/test_floating_base.py",), "the one-state integrate and difference take a quaternion of "
           "any norm"),
     Fault("config-difference-one-checks-q0-only", "loader", "manipdyn/joints.py",
-          "    if not (state_ok(q0, units, q1) and state_ok(q1, units, q0[:0])):\n",
-          "    if not state_ok(q0, units, q1):\n",
+          "            and state_ok(q1, units, q0[:0])):\n",
+          "            and True):\n",
           ("tests/crosscheck/test_floating_base.py",), "the one-state difference checks q1's quaternion norm not at all"),
     Fault("config-normalize-kernel-divides-not", "loader", "manipdyn/joints.py",
           "                out[s, k] = Q[s, k] / n\n", "                out[s, k] = Q[s, k]\n",
@@ -1264,9 +1264,9 @@ FAULTS = (
           "    if not sized(I, q, (v, tau)):\n        return WRONG_SIZES\n    X, xb, xp, world = no_wrenches(I, F)",
           ("tests/unit/test_one_state_paths.py",), "rnea's one-state kernel takes an a of another length and reads past "
           "its end"),
-    Fault("kernel-sizes-nq-of-one", "route", "manipdyn/dynamics/kernel_inputs.py",
-          "    return I[2, nb - 1] + NQ[I[1, nb - 1]], I[3, nb - 1] + I[4, nb - 1]",
-          "    return I[2, nb - 1] + 1, I[3, nb - 1] + I[4, nb - 1]",
+    Fault("kernel-sizes-nq-of-one", "route", "manipdyn/joints.py",
+          "    return iq[nb - 1] + NQ[kind[nb - 1]], iv[nb - 1] + NV[kind[nb - 1]]",
+          "    return iq[nb - 1] + 1, iv[nb - 1] + NV[kind[nb - 1]]",
           ("tests/unit/test_one_state_paths.py",), "the one-state kernels' size check counts one configuration entry for "
           "the last joint: a model ending in a free flyer or a ball refuses every state"),
     Fault("route-one-state-q-dtype-unchecked", "route", "manipdyn/dynamics/route.py",
@@ -1290,6 +1290,10 @@ FAULTS = (
           'p0 / a, -rest[0][1] / a if rest else 0.0, "tendon")', 'p0 / a, rest[0][1] / a if rest else 0.0, "tendon")',
           ("tests/crosscheck/test_mjcf_equality.py",), "a fixed tendon a q1 + b q2 couples q1 = (b/a) q2 instead of "
           "−(b/a) q2"),
+    Fault("config-integrate-one-v-length-unchecked", "loader", "manipdyn/joints.py",
+          "    if not (q.shape[0] == nq and v.shape[0] == nv and out.shape[0] == nq and state_ok(q, units, v)):",
+          "    if not (q.shape[0] == nq and out.shape[0] == nq and state_ok(q, units, v)):",
+          ("tests/unit/test_one_state_paths.py",), "the one-state integrate reads a v of another length past its end"),
 )
 
 

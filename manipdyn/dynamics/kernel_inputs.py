@@ -7,19 +7,16 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..joints import NQ
+from ..joints import config_sizes
 from ..spatial import first_nonfinite
 from .status import OK, bad_input
 
 
 @njit(cache=True, inline="always")
 def model_sizes(I):
-    """(nq, nv) of the model whose kernel ints are I (model_arrays' layout: joints in q order, so the last joint's
-    first entries of q and v plus its sizes, joints.NQ)."""
-    nb = I.shape[1]
-    if nb == 0:
-        return 0, 0
-    return I[2, nb - 1] + NQ[I[1, nb - 1]], I[3, nb - 1] + I[4, nb - 1]
+    """(nq, nv) of the model whose kernel ints are I (model_arrays' layout: rows kind, idx_q, idx_v are 1–3;
+    joints.config_sizes)."""
+    return config_sizes(I[1], I[2], I[3])
 
 
 @njit(cache=True, inline="always")

@@ -101,3 +101,15 @@ def test_a_model_ending_in_a_ball_joint_takes_the_one_state_kernels(kinds, tmp_p
         batch = CALLS[name](model, Q, V, A)
         for s in range(3):
             assert np.allclose(CALLS[name](model, Q[s], V[s], A[s]), batch[s], rtol=1e-12, atol=1e-12), (name, s)
+
+
+@pytest.mark.parametrize("name, which", [("integrate", "q"), ("integrate", "v"), ("difference", "q0"),
+                                         ("difference", "q1"), ("normalize", "q")])
+def test_a_configuration_argument_of_another_length_is_named(name, which):
+    """The one-state configuration kernels check the lengths (Python checks types and dimensions): one argument
+    one entry short is named by the checked path, never read past its end."""
+    Q, V, _ = random_states(MODEL, 2, np.random.default_rng(12))
+    args = {"integrate": {"q": Q[0], "v": V[0]}, "difference": {"q0": Q[0], "q1": Q[1]}, "normalize": {"q": Q[0]}}[name]
+    args[which] = args[which][:-1]
+    with pytest.raises(md.InputError, match=rf"^{which} has shape \({args[which].size},\)"):
+        getattr(md, name)(MODEL, *args.values())
