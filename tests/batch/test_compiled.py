@@ -192,7 +192,7 @@ def test_wrench_and_frame_calls_name_their_faults():
     assert np.isnan(compiled.potential_energy(I, F, q))
     with pytest.raises(InputError, match="needs frame="):
         compiled.check(model, "frame_jacobian", status, q)
-    with pytest.raises(InputError, match="closest|unknown|no link or frame"):
+    with pytest.raises(InputError, match="has no link or frame named 'no_such_link'; closest: "):
         compiled.frame_row(model, "no_such_link")
     with pytest.raises(InputError, match="f_ext_frame must be 'local' or 'world'"):
         compiled.wrench_row(model, frame, "body")
